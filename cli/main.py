@@ -1,0 +1,71 @@
+"""Entry point of the ``seamless-usd`` command: sub-command dispatch and error mapping.
+
+Exit codes: 0 success; 1 some items failed or did not pass (the rest were done); 2 usage error or
+unreadable input; 3 internal error (the traceback goes to a log file named in the message).
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import tempfile
+import traceback
+from collections.abc import Sequence
+
+from seamless_usd import __version__
+from seamless_usd.errors import SeamlessUsdError
+
+__all__ = ["main", "EXIT_OK", "EXIT_FAILED_ITEMS", "EXIT_USAGE", "EXIT_INTERNAL"]
+
+EXIT_OK = 0
+EXIT_FAILED_ITEMS = 1
+EXIT_USAGE = 2
+EXIT_INTERNAL = 3
+
+# Sub-command name -> module with ``add_arguments(parser)`` and ``run(args) -> int``.
+COMMANDS: dict[str, str] = {}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="seamless-usd",
+        description="Make the textures of USD / MaterialX materials seamlessly tileable.",
+    )
+    parser.add_argument("--version", action="version", version=f"seamless-usd {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name, module_name in COMMANDS.items():
+        module = importlib.import_module(module_name)
+        p = sub.add_parser(name, help=module.__doc__.strip().splitlines()[0], description=module.__doc__)
+        module.add_arguments(p)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
+        return int(exc.code or 0)
+    try:
+        return int(args._run(args))
+    except SeamlessUsdError as exc:
+        print(f"seamless-usd: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("seamless-usd: interrupted", file=sys.stderr)
+        return 130
+    except Exception:  # noqa: BLE001 - the one place unexpected errors are turned into a log file
+        with tempfile.NamedTemporaryFile(
+            "w", prefix="seamless-usd-crash-", suffix=".log", delete=False
+        ) as log:
+            traceback.print_exc(file=log)
+        print(
+            f"seamless-usd: internal error; the traceback is in {log.name} (please report it)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,73 @@
+#!/usr/bin/env python3
+"""Set up a virtual environment and run the project's main jobs.
+
+    python3 dev.py demo      # set up, then process the bundled sample scene
+    python3 dev.py tests     # set up, then run the test suite
+    python3 dev.py setup     # set up only
+
+Needs only Python 3.11+. The environment lives in ``.venv`` beside this file
+(``SEAMLESS_USD_VENV`` overrides it). PyTorch is installed first, pinned to a CPU
+build, so that no dependency drags in a multi-gigabyte CUDA build.
+"""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = Path(os.environ.get("SEAMLESS_USD_VENV", ROOT / ".venv"))
+TORCH = "torch==2.13.0"
+DEMO_SCENE = ROOT / "sample_assets" / "brick" / "scene.usda"
+DEMO_OUT = ROOT / "out" / "demo"
+
+
+def _bin(name: str) -> Path:
+    return VENV / ("Scripts" if os.name == "nt" else "bin") / name
+
+
+def _run(*cmd: object) -> None:
+    print("+", " ".join(str(c) for c in cmd), flush=True)
+    subprocess.run([str(c) for c in cmd], check=True)
+
+
+def setup() -> None:
+    """Create the venv and install torch (CPU) first, then the project with its test extras."""
+    if not _bin("python").exists():
+        venv.EnvBuilder(with_pip=True).create(VENV)
+    py = _bin("python")
+    probe = subprocess.run([py, "-c", "import torch"], capture_output=True)
+    if probe.returncode != 0:
+        _run(py, "-m", "pip", "install", "--disable-pip-version-check", "-q", TORCH)
+    _run(py, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-e", f"{ROOT}[test]")
+
+
+def demo(extra: list[str]) -> int:
+    setup()
+    cmd = [_bin("seamless-usd"), "scan", DEMO_SCENE, *extra]
+    print("+", " ".join(str(c) for c in cmd), flush=True)
+    return subprocess.run([str(c) for c in cmd]).returncode
+
+
+def tests(extra: list[str]) -> int:
+    setup()
+    cmd = [_bin("python"), "-m", "pytest", "-q", str(ROOT / "tests"), *extra]
+    print("+", " ".join(str(c) for c in cmd), flush=True)
+    return subprocess.run([str(c) for c in cmd], cwd=ROOT).returncode
+
+
+def main(argv: list[str]) -> int:
+    if not argv or argv[0] not in {"setup", "demo", "tests"}:
+        print(__doc__)
+        return 2
+    action, extra = argv[0], argv[1:]
+    if action == "setup":
+        setup()
+        return 0
+    return demo(extra) if action == "demo" else tests(extra)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

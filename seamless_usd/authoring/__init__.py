@@ -1,0 +1,1 @@
+"""authoring step (see DESIGN.md)."""

@@ -1,0 +1,220 @@
+"""Plain values produced by discovery: where each texture is, how it is used, how it is grouped.
+
+No pixels here. Every later step (imaging, synthesis, authoring, pipeline) takes these values,
+so they are frozen dataclasses with a JSON form (``to_dict``).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass, field
+from enum import Enum
+
+from seamless_usd.findings import Finding
+
+__all__ = [
+    "ColorSpace",
+    "Origin",
+    "AuthoredAt",
+    "RoleUse",
+    "UVTransform",
+    "UVChain",
+    "ImageInfo",
+    "TextureMap",
+    "TextureStack",
+    "ScanResult",
+]
+
+
+class ColorSpace(str, Enum):
+    """How a map's stored values encode what the shader reads."""
+
+    SRGB = "sRGB"  # sRGB transfer function: colour maps (albedo, emission)
+    RAW = "raw"  # linear / data: normals, roughness, metallic, occlusion, displacement, float EXR
+
+
+class Origin(str, Enum):
+    USD = "usd"  # a shader prim in a composed USD stage
+    MTLX = "mtlx"  # a node in a MaterialX document read with the MaterialX package
+
+
+@dataclass(frozen=True)
+class AuthoredAt:
+    """Where a value is actually authored (after following connections and interface inputs).
+
+    For USD: ``prim`` is the prim path of the attribute's owner, ``attribute`` its full name
+    (``inputs:file``) and ``layer`` the identifier of the strongest layer holding the opinion
+    (relative asset paths resolve against it). For MaterialX: ``prim`` is the element's path
+    inside the document (``NG_brick/image_color``), ``attribute`` the input name (``file``) and
+    ``layer`` the ``.mtlx`` file.
+    """
+
+    prim: str
+    attribute: str
+    layer: str
+
+
+@dataclass(frozen=True)
+class RoleUse:
+    """One use of a map by a surface shader input."""
+
+    role: str  # surface input name without namespace: "diffuseColor", "normal", "roughness", "base_color"
+    channels: str  # which channels of the file this role reads: "rgb", "r", "g", "b", "a", "rgba", "rg"
+    shader_input: str  # "</Mat/Surface.inputs:roughness>" style full property path of the consumer
+
+
+@dataclass(frozen=True)
+class UVTransform:
+    """An existing 2D texture-coordinate transform in a map's UV chain.
+
+    ``kind`` is ``UsdTransform2d`` (in * scale, rotate by ``rotation`` degrees, + translation),
+    ``place2d`` (MaterialX: pivot, scale, rotate, offset, operationorder) or ``uvtiling``
+    (MaterialX ``tiledimage`` uvtiling / uvoffset inputs on the image node itself).
+    ``authored`` lists, per input name, where the value is authored when it is not on the node
+    itself (a Material interface input, say), so authoring edits it there.
+    """
+
+    node: str
+    kind: str
+    scale: tuple[float, float] = (1.0, 1.0)
+    rotation: float = 0.0
+    translation: tuple[float, float] = (0.0, 0.0)
+    pivot: tuple[float, float] = (0.0, 0.0)
+    operation_order: int = 0
+    authored: tuple[tuple[str, AuthoredAt], ...] = ()
+
+
+@dataclass(frozen=True)
+class UVChain:
+    """What feeds a texture node's texture coordinates, nearest-to-the-texture last.
+
+    ``reader`` is the primvar reader prim (or MaterialX texcoord node) and ``primvar`` the name it
+    reads (``st``); ``transforms`` the transform nodes between the reader and the texture, in
+    evaluation order (first applied first). ``connected_from`` is the attribute the texture's
+    ``st``/``texcoord`` input is connected to: maps with the same ``key`` share a UV chain.
+    """
+
+    primvar: str | None
+    reader: str | None
+    transforms: tuple[UVTransform, ...] = ()
+    connected_from: str | None = None
+
+    @property
+    def key(self) -> str:
+        return json.dumps(
+            [self.primvar, self.reader, [t.node for t in self.transforms], self.connected_from]
+        )
+
+
+@dataclass(frozen=True)
+class ImageInfo:
+    """What the file header says (read with OpenImageIO, no pixels decoded)."""
+
+    width: int
+    height: int
+    channels: int
+    dtype: str  # "uint8", "uint16", "half", "float" (OpenImageIO base type names)
+    file_format: str  # OpenImageIO format name: "png", "jpeg", "openexr", "tiff", ...
+    channel_names: tuple[str, ...] = ()
+    color_space: str | None = None  # "oiio:ColorSpace" or equivalent header metadata, if any
+
+
+@dataclass(frozen=True)
+class TextureMap:
+    """One image file as used by one material (a packed ORM file is one map with three roles)."""
+
+    material: str  # "</World/Looks/Brick>" material prim path (or mtlx material name)
+    node: str  # texture node: prim path of the UsdUVTexture, or mtlx node path
+    node_type: str  # "UsdUVTexture", "ND_image_color3", "ND_tiledimage_vector3", ...
+    origin: Origin
+    asset: str  # asset path exactly as authored ("textures/brick_albedo.png")
+    resolved: str  # absolute path on disk ("" when unresolved; then the map is skipped instead)
+    file_at: AuthoredAt  # where the asset value is authored
+    roles: tuple[RoleUse, ...]
+    color_space: ColorSpace
+    color_space_reason: str  # why: "inputs:sourceColorSpace", "colorSpace metadata", "auto: 8-bit RGB"...
+    scale: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    bias: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    wrap_s: str = "useMetadata"
+    wrap_t: str = "useMetadata"
+    uv: UVChain = field(default_factory=lambda: UVChain(None, None))
+    image: ImageInfo | None = None
+    document: str | None = None  # the .mtlx file for Origin.MTLX maps
+    in_package: bool = False  # inside a .usdz (readable through Ar, not editable in place)
+
+    @property
+    def is_normal(self) -> bool:
+        return any(r.role in NORMAL_ROLES for r in self.roles)
+
+    @property
+    def channels_used(self) -> str:
+        """Union of the channels the roles read, in rgba order ("rgb", "r", "rgba", ...)."""
+        used = set()
+        for r in self.roles:
+            used.update(r.channels)
+        return "".join(c for c in "rgba" if c in used)
+
+    def to_dict(self) -> dict:
+        return _jsonable(asdict(self))
+
+
+NORMAL_ROLES = frozenset({"normal", "normalmap", "geometry_normal", "coat_normal"})
+
+
+@dataclass(frozen=True)
+class TextureStack:
+    """The maps of one material that share a UV chain: trained and sampled together."""
+
+    material: str
+    uv: UVChain
+    maps: tuple[TextureMap, ...]
+    duplicate_of: str | None = None  # id of an identical stack found earlier (processed once)
+
+    @property
+    def id(self) -> str:
+        """Stable id of this stack within a scan: material plus UV chain."""
+        h = hashlib.sha1(f"{self.material}|{self.uv.key}".encode()).hexdigest()[:10]
+        return f"{self.material.strip('<>').strip('/').replace('/', '_') or 'material'}-{h}"
+
+    @property
+    def content_key(self) -> str:
+        """Identity for de-duplication: same files, channels and colour spaces."""
+        parts = sorted(
+            json.dumps([m.resolved, m.channels_used, m.color_space.value, list(m.scale), list(m.bias)])
+            for m in self.maps
+        )
+        return hashlib.sha1("\n".join(parts).encode()).hexdigest()
+
+    def to_dict(self) -> dict:
+        d = _jsonable(asdict(self))
+        d["id"] = self.id
+        d["content_key"] = self.content_key
+        return d
+
+
+@dataclass
+class ScanResult:
+    """Everything a scan found: stacks to process and findings to report."""
+
+    sources: list[str] = field(default_factory=list)  # stages / documents scanned
+    stacks: list[TextureStack] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)
+    materials: list[str] = field(default_factory=list)  # every material seen, even with no stack
+
+    def to_dict(self) -> dict:
+        return {
+            "sources": list(self.sources),
+            "materials": list(self.materials),
+            "stacks": [s.to_dict() for s in self.stacks],
+            "findings": [f.to_dict() for f in self.findings],
+        }
+
+
+def _jsonable(obj):
+    if isinstance(obj, Enum):
+        return obj.value
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    return obj

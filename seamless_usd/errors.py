@@ -1,0 +1,19 @@
+"""The project's one expected-error type, mapped by the CLI to a clean message and exit code."""
+from __future__ import annotations
+
+__all__ = ["SeamlessUsdError", "InputError", "UsageError"]
+
+
+class SeamlessUsdError(Exception):
+    """An expected failure with a one-line message for the user.
+
+    The message names the prim as ``<path>`` or the asset as ``@path@`` and says what to do.
+    """
+
+
+class InputError(SeamlessUsdError):
+    """A stage, document or image that cannot be read (CLI exit code 2)."""
+
+
+class UsageError(SeamlessUsdError):
+    """Options that contradict each other or name something unknown (CLI exit code 2)."""

@@ -1,0 +1,39 @@
+"""Findings: warnings, skipped items and errors collected while working, printed at the edge."""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from enum import Enum
+
+__all__ = ["Severity", "Finding", "prim_ref", "asset_ref"]
+
+
+class Severity(str, Enum):
+    WARNING = "warning"  # work went on; the user should look (e.g. roughness tagged sRGB)
+    SKIPPED = "skipped"  # an item was left out on purpose, with the reason (e.g. UDIM, missing file)
+    ERROR = "error"  # an item failed; the rest of the run went on
+
+
+@dataclass(frozen=True)
+class Finding:
+    severity: Severity
+    code: str  # stable machine-readable kind, e.g. "missing-file", "udim", "colorspace-mismatch"
+    where: str  # USD notation: "<prim/path>" or "@asset/path@" (or both, space separated)
+    message: str  # one line: what is wrong and what to do
+
+    def __str__(self) -> str:
+        return f"{self.severity.value}: {self.where}: {self.message}"
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["severity"] = self.severity.value
+        return d
+
+
+def prim_ref(path: object) -> str:
+    """``<path>``: how USD tools name a prim or property in messages."""
+    return f"<{path}>"
+
+
+def asset_ref(path: object) -> str:
+    """``@path@``: how USD tools name an asset in messages."""
+    return f"@{path}@"

@@ -1,0 +1,1 @@
+"""hooks step (see DESIGN.md)."""

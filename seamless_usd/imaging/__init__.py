@@ -1,0 +1,1 @@
+"""imaging step (see DESIGN.md)."""

@@ -1,0 +1,1 @@
+"""report step (see DESIGN.md)."""

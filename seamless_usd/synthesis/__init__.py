@@ -1,0 +1,1 @@
+"""synthesis step (see DESIGN.md)."""
