@@ -1,0 +1,146 @@
+"""The run report: what was processed, how well, what was written, and the exit code it implies."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+import numpy as np
+
+from seamless_usd.findings import Finding, Severity
+
+__all__ = ["StackStatus", "MapReport", "Previews", "StackReport", "Report"]
+
+
+class StackStatus(str, Enum):
+    PASSED = "passed"  # trained, sampled, Q passed, maps written
+    NOT_PASSED = "not-passed"  # maps written from the best candidate, but Q did not pass
+    FAILED = "failed"  # an error stopped this stack; nothing of it was written
+    REUSED = "reused"  # identical to a stack processed earlier in the run (or cached)
+    PLANNED = "planned"  # dry run: would be processed
+
+
+@dataclass
+class MapReport:
+    node: str  # texture node prim path / mtlx node path
+    asset: str  # source asset as authored
+    output: str | None  # written tileable file (absolute), None in a dry run or on failure
+    roles: list[str]
+    channels: str
+    color_space: str
+    metrics: dict[str, float] = field(default_factory=dict)  # seam/detail metrics of the new tile
+    source_metrics: dict[str, float] = field(default_factory=dict)  # the same for the source tiled as is
+
+
+@dataclass
+class Previews:
+    """Display images for the HTML report (uint8 arrays); never in the JSON."""
+
+    source_2x2: dict[str, np.ndarray] = field(default_factory=dict)  # map node -> source tiled 2x2
+    tile_2x2: dict[str, np.ndarray] = field(default_factory=dict)  # map node -> new tile tiled 2x2
+    discriminator: np.ndarray | None = None  # D map with the seam bands drawn
+
+
+@dataclass
+class StackReport:
+    id: str
+    material: str
+    source: str  # the stage or document the stack was found in
+    status: StackStatus
+    message: str = ""
+    maps: list[MapReport] = field(default_factory=list)
+    duplicate_of: str | None = None
+    crop_size: tuple[int, int] | None = None  # (c_h, c_w) input crop of the chosen candidate
+    tile_size: tuple[int, int] | None = None  # (H, W) pixels of the written tile
+    working_size: tuple[int, int] | None = None  # (W, H) working resolution of the stack
+    resampled: dict[str, Any] = field(default_factory=dict)  # working-resolution policy applied
+    uv_scale: tuple[float, float] | None = None
+    q: dict[str, Any] = field(default_factory=dict)  # passed, tau, band minima
+    candidates: int = 0
+    timings: dict[str, float] = field(default_factory=dict)
+    model_hash: str = ""
+    device: str = ""
+    precision: str = ""
+    previews: Previews = field(default_factory=Previews, repr=False)
+
+    def to_dict(self) -> dict:
+        return {
+            "id": self.id,
+            "material": self.material,
+            "source": self.source,
+            "status": self.status.value,
+            "message": self.message,
+            "duplicate_of": self.duplicate_of,
+            "crop_size": list(self.crop_size) if self.crop_size else None,
+            "tile_size": list(self.tile_size) if self.tile_size else None,
+            "working_size": list(self.working_size) if self.working_size else None,
+            "resampled": self.resampled,
+            "uv_scale": list(self.uv_scale) if self.uv_scale else None,
+            "q": self.q,
+            "candidates": self.candidates,
+            "timings": self.timings,
+            "model_hash": self.model_hash,
+            "device": self.device,
+            "precision": self.precision,
+            "maps": [dict(vars(m)) for m in self.maps],
+        }
+
+
+@dataclass
+class Report:
+    """One run of ``process``. The report owns the exit code."""
+
+    sources: list[str] = field(default_factory=list)
+    stacks: list[StackReport] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)
+    layers_written: list[str] = field(default_factory=list)
+    backups: list[str] = field(default_factory=list)
+    plan: list[str] = field(default_factory=list)  # human-readable edits (dry run)
+    options: dict[str, Any] = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)
+    tool_version: str = ""
+
+    @property
+    def ok(self) -> bool:
+        """True when every stack was done and passed Q and nothing failed."""
+        bad = {StackStatus.FAILED, StackStatus.NOT_PASSED}
+        return not any(s.status in bad for s in self.stacks) and not any(
+            f.severity is Severity.ERROR for f in self.findings
+        )
+
+    @property
+    def exit_code(self) -> int:
+        """0 when all stacks passed, 1 when some failed or did not pass (the rest were written)."""
+        return 0 if self.ok else 1
+
+    def counts(self) -> dict[str, int]:
+        out = {s.value: 0 for s in StackStatus}
+        for s in self.stacks:
+            out[s.status.value] += 1
+        return out
+
+    def merge(self, other: "Report") -> None:
+        """Add another run's results (one report per library run)."""
+        self.sources += other.sources
+        self.stacks += other.stacks
+        self.findings += other.findings
+        self.layers_written += other.layers_written
+        self.backups += other.backups
+        self.plan += other.plan
+        for k, v in other.timings.items():
+            self.timings[k] = self.timings.get(k, 0.0) + v
+
+    def to_dict(self) -> dict:
+        return {
+            "tool_version": self.tool_version,
+            "exit_code": self.exit_code,
+            "counts": self.counts(),
+            "sources": self.sources,
+            "options": self.options,
+            "stacks": [s.to_dict() for s in self.stacks],
+            "findings": [f.to_dict() for f in self.findings],
+            "layers_written": self.layers_written,
+            "backups": self.backups,
+            "plan": self.plan,
+            "timings": self.timings,
+        }
