@@ -1,0 +1,191 @@
+"""Atomic file writing and output-path confinement, shared by every step that writes files.
+
+A reader never sees a half-written file: data go to a temporary file in the target's directory
+(same file system), are flushed and fsynced, then ``os.replace`` moves them over the target in
+one step. On any failure the temporary file is removed and an existing target is left intact.
+
+Example
+-------
+>>> import tempfile
+>>> from pathlib import Path
+>>> d = Path(tempfile.mkdtemp())
+>>> atomic_write_text(d / "hello.txt", "hi\\n").read_text()
+'hi\\n'
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+from seamless_usd.errors import InputError
+from seamless_usd.findings import asset_ref
+
+__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine"]
+
+_UMASK = os.umask(0o022)  # read once at import (os.umask can only be read by setting it)
+os.umask(_UMASK)
+
+
+def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None]) -> Path:
+    """Write ``path`` atomically by calling ``writer`` on a temporary path beside it.
+
+    Parameters
+    ----------
+    path
+        The file to create or replace. Its directory must exist.
+    writer
+        Called once with the temporary path; it must create that file (it may write it by name,
+        e.g. an image library choosing the format from the extension: the temporary name keeps
+        the target's suffix, ``.name.<random>.tmp.png``).
+
+    Returns
+    -------
+    Path
+        ``path`` as a :class:`~pathlib.Path`, now holding the complete new content.
+
+    Raises
+    ------
+    InputError
+        When the directory does not exist or is not writable (names the file as ``@path@``).
+    Exception
+        Whatever ``writer`` raised; the temporary file is removed and the old target, if any,
+        is unchanged.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> d = Path(tempfile.mkdtemp())
+    >>> atomic_write(d / "a.bin", lambda tmp: tmp.write_bytes(b"ok")).read_bytes()
+    b'ok'
+    """
+    target = Path(path)
+    directory = target.parent if str(target.parent) else Path(".")
+    if not directory.is_dir():
+        raise InputError(
+            f"{asset_ref(target)}: cannot write, the folder {asset_ref(directory)} does not exist; "
+            "create it or choose another output folder"
+        )
+    suffix = "".join(target.suffixes[-1:])  # keep ".png" so format-by-extension writers work
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".tmp{suffix}", dir=directory)
+    except OSError as exc:
+        raise InputError(
+            f"{asset_ref(target)}: cannot write in {asset_ref(directory)} ({exc.strerror}); "
+            "check its permissions or choose another output folder"
+        ) from exc
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        writer(tmp)
+        if not tmp.is_file():
+            raise RuntimeError(f"the writer for {asset_ref(target)} did not create its file")
+        _fsync_file(tmp)
+        _keep_mode(tmp, target)
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    _fsync_dir(directory)
+    return target
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically (see :func:`atomic_write`).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> atomic_write_bytes(Path(tempfile.mkdtemp()) / "x.bin", b"\\x00\\x01").stat().st_size
+    2
+    """
+    return atomic_write(path, lambda tmp: tmp.write_bytes(data))
+
+
+def atomic_write_text(path: str | os.PathLike, text: str, encoding: str = "utf-8") -> Path:
+    """Write ``text`` to ``path`` atomically (see :func:`atomic_write`); newlines kept as given.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> atomic_write_text(Path(tempfile.mkdtemp()) / "r.json", "{}").read_text()
+    '{}'
+    """
+    data = text.encode(encoding)
+    return atomic_write(path, lambda tmp: tmp.write_bytes(data))
+
+
+def confine(path: str | os.PathLike, root: str | os.PathLike) -> Path:
+    """``path`` resolved, checked to lie inside the folder ``root``.
+
+    A relative ``path`` is taken relative to ``root``. Symbolic links and ``..`` are resolved
+    before the check, so ``../../etc/passwd`` or a link pointing outside are refused.
+
+    Parameters
+    ----------
+    path
+        An output file name or path (e.g. built from an asset name found in a stage).
+    root
+        The output folder everything must stay in.
+
+    Returns
+    -------
+    Path
+        The absolute, resolved path inside ``root``.
+
+    Raises
+    ------
+    InputError
+        When the path would land outside ``root``.
+
+    Examples
+    --------
+    >>> confine("maps/a.png", "/out").as_posix()
+    '/out/maps/a.png'
+    """
+    base = Path(root).resolve()
+    candidate = Path(path)
+    if not candidate.is_absolute():
+        candidate = base / candidate
+    resolved = candidate.resolve()
+    if resolved != base and base not in resolved.parents:
+        raise InputError(
+            f"{asset_ref(path)}: refusing to write outside the output folder {asset_ref(base)}; "
+            "use a name without '..' or absolute parts"
+        )
+    return resolved
+
+
+def _fsync_file(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _fsync_dir(directory: Path) -> None:
+    """Persist the rename itself (POSIX); a no-op where directories cannot be opened."""
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _keep_mode(tmp: Path, target: Path) -> None:
+    """Give the new file the old file's permissions, or the usual umask-based ones."""
+    try:
+        mode = target.stat().st_mode & 0o7777
+    except FileNotFoundError:
+        mode = 0o666 & ~_UMASK
+    os.chmod(tmp, mode)
