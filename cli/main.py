@@ -23,7 +23,9 @@ EXIT_USAGE = 2
 EXIT_INTERNAL = 3
 
 # Sub-command name -> module with ``add_arguments(parser)`` and ``run(args) -> int``.
-COMMANDS: dict[str, str] = {}
+COMMANDS: dict[str, str] = {
+    "scan": "seamless_usd_cli.scan",
+}
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -141,6 +141,8 @@ class TextureMap:
     image: ImageInfo | None = None
     document: str | None = None  # the .mtlx file for Origin.MTLX maps
     in_package: bool = False  # inside a .usdz (readable through Ar, not editable in place)
+    normal_y_flip: bool = False  # the file's green channel stores -Y (DirectX convention):
+    # UsdUVTexture scale.y < 0, or a MaterialX normalmap with a negative y scale
 
     @property
     def is_normal(self) -> bool:

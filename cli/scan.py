@@ -1,0 +1,107 @@
+"""List the texture stacks of USD stages and MaterialX documents, and what would be skipped.
+
+For each material: its maps, their roles and channels, colour space, size and UV chain; then the
+skipped items and warnings with their reasons. ``--json`` prints the scan as JSON following
+``schemas/scan.schema.json``. Exit code 0 when the scan ran (even with skipped items), 2 for a
+stage or document that cannot be read.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from seamless_usd.discover import ScanResult, TextureMap, TextureStack, UVChain, scan_paths
+
+__all__ = ["add_arguments", "run", "render"]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("paths", nargs="+", metavar="PATH", help="USD stage (.usd/.usda/.usdc/.usdz) or .mtlx document")
+    parser.add_argument("--json", action="store_true", help="print the scan as JSON (schemas/scan.schema.json)")
+
+
+def run(args: argparse.Namespace) -> int:
+    result = scan_paths(args.paths)
+    if args.json:
+        print(json.dumps(result.to_dict(), indent=2))
+    else:
+        # A pipe or file gets a wide table rather than rich's 80-column fallback.
+        width = None if sys.stdout.isatty() else 160
+        render(result, Console(file=sys.stdout, width=width, soft_wrap=False))
+    return 0
+
+
+def _uv_text(uv: UVChain) -> str:
+    parts = [f"primvar {uv.primvar}" if uv.primvar else ("default UVs" if uv.reader is None else "reader")]
+    for t in uv.transforms:
+        parts.append(f"{t.kind} scale {t.scale[0]:g},{t.scale[1]:g}" + (" (interface)" if t.authored else ""))
+    return " > ".join(parts)
+
+
+def _roles_text(m: TextureMap) -> str:
+    return ", ".join(f"{r.role} ({r.channels})" for r in m.roles)
+
+
+def _size_text(m: TextureMap) -> str:
+    if m.image is None:
+        return "?"
+    return f"{m.image.width}x{m.image.height} {m.image.channels}ch {m.image.dtype} {m.image.file_format}"
+
+
+def _stack_table(stack: TextureStack) -> Table:
+    title = escape(f"{stack.material}  stack {stack.id}")
+    if stack.duplicate_of:
+        title += f"  (same as {stack.duplicate_of})"
+    table = Table(title=title, title_justify="left", caption=escape(f"UV: {_uv_text(stack.uv)}"), caption_justify="left")
+    table.add_column("map", no_wrap=True)
+    table.add_column("roles (channels)")
+    for col in ("colour space", "size", "wrap", "notes"):
+        table.add_column(col, overflow="fold")
+    for m in stack.maps:
+        notes = []
+        if m.scale != (1.0, 1.0, 1.0, 1.0) or m.bias != (0.0, 0.0, 0.0, 0.0):
+            notes.append(f"scale {','.join(f'{v:g}' for v in m.scale)} bias {','.join(f'{v:g}' for v in m.bias)}")
+        if m.normal_y_flip:
+            notes.append("Y-flipped normal")
+        if m.in_package:
+            notes.append("inside package")
+        if m.file_at.prim != m.node:
+            notes.append(f"file set on <{m.file_at.prim}>")
+        cells = (
+            f"@{m.asset}@",
+            _roles_text(m),
+            f"{m.color_space.value}: {m.color_space_reason}",
+            _size_text(m),
+            f"{m.wrap_s}/{m.wrap_t}",
+            "; ".join(notes),
+        )
+        table.add_row(*(escape(c) for c in cells))
+    return table
+
+
+def render(result: ScanResult, console: Console) -> None:
+    """Print a scan as tables: one per stack, then materials without stacks, then findings."""
+    console.print(f"[bold]scanned[/bold] {escape(', '.join(result.sources))}")
+    with_stacks = {s.material for s in result.stacks}
+    for stack in result.stacks:
+        console.print(_stack_table(stack))
+    bare = [m for m in result.materials if m not in with_stacks]
+    if bare:
+        console.print(escape(f"materials without texture stacks: {', '.join(bare)}"))
+    if result.findings:
+        table = Table(title="skipped and warnings", title_justify="left")
+        for col in ("severity", "code", "where", "reason"):
+            table.add_column(col, overflow="fold")
+        for f in result.findings:
+            table.add_row(*(escape(c) for c in (f.severity.value, f.code, f.where, f.message)))
+        console.print(table)
+    n_dup = sum(1 for s in result.stacks if s.duplicate_of)
+    console.print(
+        f"{len(result.materials)} material(s), {len(result.stacks)} stack(s) ({n_dup} duplicate), "
+        f"{sum(len(s.maps) for s in result.stacks)} map(s), {len(result.findings)} finding(s)"
+    )

@@ -1,0 +1,150 @@
+"""From texture uses found in a material to maps, or to skip findings with a reason.
+
+Traversal (``usd.py``, ``mtlx.py``) reports one :class:`TextureUse` per (material, texture node,
+surface input). Here the uses of one node are merged into one :class:`TextureMap` (a packed ORM
+node becomes one map with three roles), its file is checked and its header read, and its colour
+space resolved.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from seamless_usd.discover.colorspace import Label, mismatch_finding, resolve_color_space
+from seamless_usd.discover.images import ImageReadError, is_package_path, read_image_info, udim_tiles
+from seamless_usd.discover.tokens import MIN_IMAGE_SIZE, UDIM_TOKEN, Codes, ShaderIds
+from seamless_usd.discover.types import AuthoredAt, ImageInfo, Origin, RoleUse, TextureMap, UVChain
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
+
+__all__ = ["TextureUse", "build_maps", "HeaderCache"]
+
+
+@dataclass
+class TextureUse:
+    """One surface input reading one texture node of one material."""
+
+    material: str
+    node: str
+    node_type: str
+    origin: Origin
+    asset: str  # as authored; "" when no file is authored
+    resolved: str  # resolved path ("" when it does not resolve)
+    udim_pattern: str  # absolute path with <UDIM> left in (for listing tiles), else ""
+    file_at: AuthoredAt | None
+    role: RoleUse
+    expected: str = ""  # where the file was looked for (for messages)
+    labels: list[Label] = field(default_factory=list)  # colour-space labels, precedence order
+    scale: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    bias: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    wrap_s: str = "useMetadata"
+    wrap_t: str = "useMetadata"
+    uv: UVChain | None = None  # None: the node has no texture-coordinate input (swatch)
+    document: str | None = None
+    normal_y_flip: bool = False
+
+
+class HeaderCache(dict):
+    """Resolved path -> ImageInfo or the error text, so each file's header is read once."""
+
+    def get_info(self, resolved: str) -> ImageInfo | str:
+        if resolved not in self:
+            try:
+                self[resolved] = read_image_info(resolved)
+            except (OSError, ImageReadError) as exc:
+                self[resolved] = str(exc) or type(exc).__name__
+        return self[resolved]
+
+
+def build_maps(uses: list[TextureUse], cache: HeaderCache | None = None) -> tuple[list[TextureMap], list[Finding]]:
+    """Merge uses per (material, node), check files, read headers, resolve colour spaces."""
+    cache = HeaderCache() if cache is None else cache
+    grouped: dict[tuple[str, str], list[TextureUse]] = {}
+    for use in uses:
+        grouped.setdefault((use.material, use.node), []).append(use)
+    maps: list[TextureMap] = []
+    findings: list[Finding] = []
+    for group in grouped.values():
+        made, found = _one_map(group, cache)
+        findings.extend(found)
+        if made is not None:
+            maps.append(made)
+    return maps, findings
+
+
+def _where(use: TextureUse) -> str:
+    node = prim_ref(use.node)
+    return f"{node} {asset_ref(use.asset)}" if use.asset else node
+
+
+def _skip(use: TextureUse, code: str, message: str) -> Finding:
+    doc = f" in {asset_ref(use.document)}" if use.document else ""
+    return Finding(Severity.SKIPPED, code, _where(use), f"{message} (material {use.material}{doc})")
+
+
+def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | None, list[Finding]]:
+    first = group[0]
+    roles: list[RoleUse] = []
+    for use in group:
+        if use.role not in roles:
+            roles.append(use.role)
+    if not first.asset or first.file_at is None:
+        return None, [_skip(first, Codes.NO_FILE, "texture node has no file")]
+    if first.uv is None:
+        return None, [_skip(first, Codes.NO_UV, "texture has no texture-coordinate input (a swatch texture)")]
+    if UDIM_TOKEN in first.asset:
+        tiles = udim_tiles(first.udim_pattern) if first.udim_pattern else []
+        listed = ", ".join(tiles) if tiles else "none found"
+        return None, [_skip(first, Codes.UDIM, f"UDIM textures are not supported; tiles: {listed}")]
+    if not first.resolved:
+        looked = f" at {first.expected}" if first.expected and first.expected != first.asset else ""
+        return None, [_skip(first, Codes.MISSING_FILE, f"texture file not found{looked}")]
+    info = cache.get_info(first.resolved)
+    if isinstance(info, str):
+        return None, [_skip(first, Codes.UNREADABLE_FILE, f"cannot read the image header: {info}")]
+    if min(info.width, info.height) < MIN_IMAGE_SIZE:
+        return None, [
+            _skip(first, Codes.TOO_SMALL, f"image is {info.width}x{info.height} px, below the {MIN_IMAGE_SIZE} px minimum crop")
+        ]
+    findings: list[Finding] = []
+    cs, reason, unknown = resolve_color_space(first.labels, info)
+    for name in unknown:
+        findings.append(
+            Finding(Severity.WARNING, Codes.UNKNOWN_COLORSPACE, _where(first),
+                    f"colour space {name!r} is not understood; passed over (now {cs.value}, {reason})")
+        )
+    mismatch = mismatch_finding(tuple(roles), cs, reason, _where(first))
+    if mismatch is not None:
+        findings.append(mismatch)
+    tmap = TextureMap(
+        material=first.material,
+        node=first.node,
+        node_type=first.node_type,
+        origin=first.origin,
+        asset=first.asset,
+        resolved=first.resolved,
+        file_at=first.file_at,
+        roles=tuple(roles),
+        color_space=cs,
+        color_space_reason=reason,
+        scale=first.scale,
+        bias=first.bias,
+        wrap_s=first.wrap_s,
+        wrap_t=first.wrap_t,
+        uv=first.uv,
+        image=info,
+        document=first.document,
+        in_package=is_package_path(first.resolved),
+        normal_y_flip=first.normal_y_flip,
+    )
+    if (
+        tmap.is_normal
+        and tmap.node_type == ShaderIds.UV_TEXTURE
+        and info.dtype in ("uint8", "uint16")
+        and tmap.scale[:3] == (1.0, 1.0, 1.0)
+        and tmap.bias[:3] == (0.0, 0.0, 0.0)
+    ):
+        findings.append(
+            Finding(Severity.WARNING, Codes.NORMAL_SCALE_BIAS, _where(first),
+                    "integer normal map read with scale 1 and bias 0: UsdPreviewSurface expects "
+                    "scale (2, 2, 2, 1) and bias (-1, -1, -1, 0)")
+        )
+    return tmap, findings

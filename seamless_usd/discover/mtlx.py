@@ -1,0 +1,147 @@
+"""Materials of MaterialX documents, read with the MaterialX package.
+
+Documents come from the command line or from USD prims that reference them (usd-core has no
+MaterialX file-format plugin). Paths get the active ``fileprefix`` (document, nodegraph or node,
+the nearest wins, as in MaterialX) and resolve against the document's folder.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import MaterialX as mx
+
+from seamless_usd.discover import mtlxgraph
+from seamless_usd.discover.colorspace import Label
+from seamless_usd.discover.maps import TextureUse
+from seamless_usd.discover.tokens import SEPARATE_OUTPUTS, UDIM_TOKEN, MtlxCategories, MtlxInputs, Terminals, Wrap
+from seamless_usd.discover.types import NORMAL_ROLES, Origin, RoleUse
+from seamless_usd.discover.uv import mtlx_uv_chain
+from seamless_usd.errors import InputError
+from seamless_usd.findings import asset_ref
+
+__all__ = ["read_document", "walk_document"]
+
+_MAX_DEPTH = 64
+
+
+def read_document(path: str | Path) -> mx.Document:
+    """Read a ``.mtlx`` file (with its XIncludes); InputError naming the file when it cannot be read."""
+    path = Path(path).resolve()
+    if not path.is_file():
+        raise InputError(f"{asset_ref(path)}: no such MaterialX document")
+    doc = mx.createDocument()
+    try:
+        mx.readFromXmlFile(doc, str(path), mx.FileSearchPath(str(path.parent)))
+    except Exception as exc:  # noqa: BLE001 - MaterialX raises several unrelated exception types
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{asset_ref(path)}: cannot read the MaterialX document: {first}") from None
+    return doc
+
+
+def walk_document(
+    doc: mx.Document, path: str | Path, *, under: str = "", only: str = ""
+) -> tuple[list[str], list[TextureUse]]:
+    """Materials and texture uses of a document.
+
+    ``under`` is the USD prim a referenced document is attached to: its materials are named
+    ``<under/Materials/name>`` (where usdMtlx would compose them), or ``<under>`` itself when the
+    reference targets one material (``only``). Materials of a document read directly are ``<name>``.
+    """
+    document = str(Path(path).resolve())
+    materials: list[str] = []
+    uses: list[TextureUse] = []
+    for material in doc.getMaterialNodes():
+        if only and material.getName() != only:
+            continue
+        if under:
+            name = f"<{under}>" if only else f"<{under}/Materials/{material.getName()}>"
+        else:
+            name = f"<{material.getNamePath()}>"
+        materials.append(name)
+        shaders = []
+        for shader_type in Terminals.MTLX_SHADER_TYPES:
+            shaders.extend(mx.getShaderNodes(material, shader_type))
+        for shader in shaders:
+            for inp in shader.getInputs():
+                consumer = f"<{shader.getNamePath()}.{inp.getName()}>"
+                for tex, channels, flip in _trace(inp, None, 0, False):
+                    uses.append(_texture_use(name, tex, RoleUse(inp.getName(), channels, consumer), flip, document))
+    return materials, uses
+
+
+def _compose(inner: tuple[int, ...], outer: tuple[int, ...] | None) -> tuple[int, ...]:
+    return inner if outer is None else tuple(inner[i] for i in outer if i < len(inner))
+
+
+def _trace(inp: mx.Input, pick, depth: int, flip: bool):
+    if depth > _MAX_DEPTH:
+        return
+    up = mtlxgraph.upstream(inp)
+    if up is None:
+        return
+    node, out_name = up
+    category = node.getCategory()
+    if category in MtlxCategories.TEXTURES:
+        channels = mtlxgraph.channels_of(node.getType(), out_name) or "rgb"
+        if pick is not None:
+            channels = "".join(channels[i] for i in pick if i < len(channels)) or channels
+        yield node, channels, flip
+        return
+    if category in (MtlxCategories.PLACE2D, MtlxCategories.TEXCOORD, MtlxCategories.GEOMPROPVALUE):
+        return
+    if category in MtlxCategories.SEPARATE and out_name in SEPARATE_OUTPUTS:
+        yield from _trace(node.getInput(MtlxInputs.IN), _compose((SEPARATE_OUTPUTS[out_name],), pick), depth + 1, flip)
+        return
+    if category == MtlxCategories.EXTRACT:
+        index, _ = mtlxgraph.input_value(node, MtlxInputs.INDEX, 0, "")
+        yield from _trace(node.getInput(MtlxInputs.IN), _compose((int(index),), pick), depth + 1, flip)
+        return
+    if category == MtlxCategories.NORMALMAP:
+        scale, _ = mtlxgraph.input_value(node, MtlxInputs.SCALE, 1.0, "")
+        flip = flip or (not isinstance(scale, (int, float)) and float(scale[1]) < 0)
+    for upstream in node.getInputs():
+        yield from _trace(upstream, pick, depth + 1, flip)
+
+
+def _texture_use(material: str, tex: mx.Node, role: RoleUse, flip: bool, document: str) -> TextureUse:
+    file_inp = tex.getInput(MtlxInputs.FILE)
+    src = mtlxgraph.value_source(file_inp)
+    asset = resolved = udim = expected = ""
+    file_at = None
+    labels: list[Label] = []
+    if src is not None and src.getValueString():
+        asset = src.getValueString()
+        prefixed = src.getResolvedValueString()  # applies the active fileprefix
+        file_at = mtlxgraph.authored_at(src, document)
+        base = Path(file_at.layer).parent
+        candidate = Path(prefixed) if Path(prefixed).is_absolute() else base / prefixed
+        expected = str(candidate)
+        if UDIM_TOKEN in prefixed:
+            udim = expected
+        elif candidate.is_file():
+            resolved = str(candidate.resolve())
+    for holder in (file_inp, src):
+        if holder is not None and holder.getActiveColorSpace():
+            labels.append(Label(holder.getActiveColorSpace(), "MaterialX colorspace"))
+            break
+    tiled = tex.getCategory() == MtlxCategories.TILEDIMAGE
+    wrap_s = Wrap.MTLX_DEFAULT if tiled else mtlxgraph.input_value(tex, MtlxInputs.UADDRESSMODE, Wrap.MTLX_DEFAULT, document)[0]
+    wrap_t = Wrap.MTLX_DEFAULT if tiled else mtlxgraph.input_value(tex, MtlxInputs.VADDRESSMODE, Wrap.MTLX_DEFAULT, document)[0]
+    return TextureUse(
+        material=material,
+        node=tex.getNamePath(),
+        node_type=mtlxgraph.node_type_name(tex),
+        origin=Origin.MTLX,
+        asset=asset,
+        resolved=resolved,
+        udim_pattern=udim,
+        expected=expected,
+        file_at=file_at,
+        role=role,
+        labels=labels,
+        wrap_s=str(wrap_s),
+        wrap_t=str(wrap_t),
+        uv=mtlx_uv_chain(tex, document),
+        document=document,
+        normal_y_flip=flip and role.role in NORMAL_ROLES,
+    )

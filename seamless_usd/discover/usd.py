@@ -1,0 +1,220 @@
+"""Materials of a composed USD stage and the texture nodes their surfaces read.
+
+The walk sees the stage as composed (payloads as loaded, references, selected variants) and goes
+into instances through instance proxies. From each Material terminal (``outputs:surface``,
+``outputs:mtlx:surface``, displacement) to its shader, then from every shader input upstream
+through NodeGraphs, interface inputs, channel splitters and other nodes to texture nodes.
+``.mtlx`` documents referenced from prims are listed for ``mtlx.py`` (usd-core cannot compose them).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pxr import Ar, Sdf, Usd, UsdShade
+
+from seamless_usd.discover import usdgraph
+from seamless_usd.discover.colorspace import Label
+from seamless_usd.discover.maps import TextureUse
+from seamless_usd.discover.mtlxgraph import channels_of
+from seamless_usd.discover.tokens import (
+    MTLX_SUFFIX,
+    SEPARATE_OUTPUTS,
+    UDIM_TOKEN,
+    Inputs,
+    MtlxInputs,
+    ShaderIds,
+    Terminals,
+    Wrap,
+)
+from seamless_usd.discover.types import NORMAL_ROLES, ColorSpace, Origin, RoleUse
+from seamless_usd.discover.uv import usd_uv_chain
+from seamless_usd.findings import prim_ref
+
+__all__ = ["MtlxReference", "walk_stage", "is_texture_id"]
+
+_MAX_DEPTH = 64
+
+
+@dataclass(frozen=True)
+class MtlxReference:
+    """A prim that references or payloads a ``.mtlx`` document."""
+
+    prim: str  # referencing prim path
+    document: str  # resolved document path ("" when it does not resolve)
+    asset: str  # as authored
+    target: str  # referenced prim path inside the document ("" for its default prim)
+    layer: str  # layer holding the reference
+
+
+def is_texture_id(sid: str) -> bool:
+    return (
+        sid == ShaderIds.UV_TEXTURE
+        or sid.startswith((ShaderIds.ND_IMAGE, ShaderIds.ND_TILEDIMAGE))
+        or (sid.startswith(ShaderIds.ND_GLTF) and "image" in sid)
+    )
+
+
+def _is_uv_id(sid: str) -> bool:
+    return (
+        sid in (ShaderIds.TRANSFORM_2D,)
+        or sid.startswith(("UsdPrimvarReader", ShaderIds.ND_PLACE2D, ShaderIds.ND_TEXCOORD, ShaderIds.ND_GEOMPROPVALUE))
+    )
+
+
+def walk_stage(stage: Usd.Stage) -> tuple[list[str], list[TextureUse], list[MtlxReference]]:
+    """Materials (``<path>``), texture uses and ``.mtlx`` references of a composed stage."""
+    materials: list[str] = []
+    uses: list[TextureUse] = []
+    refs: list[MtlxReference] = []
+    for prim in stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
+        refs.extend(_mtlx_references(prim))
+        if prim.IsA(UsdShade.Material):
+            materials.append(prim_ref(prim.GetPath()))
+            uses.extend(_material_uses(UsdShade.Material(prim)))
+    return materials, uses, refs
+
+
+def _mtlx_references(prim: Usd.Prim) -> list[MtlxReference]:
+    found = []
+    for spec in prim.GetPrimStack():
+        items = list(spec.referenceList.GetAddedOrExplicitItems()) + list(spec.payloadList.GetAddedOrExplicitItems())
+        for item in items:
+            if not item.assetPath.lower().endswith(MTLX_SUFFIX):
+                continue
+            anchored = spec.layer.ComputeAbsolutePath(item.assetPath)
+            resolved = str(Ar.GetResolver().Resolve(anchored)) if anchored else ""
+            found.append(
+                MtlxReference(
+                    prim=str(prim.GetPath()),
+                    document=resolved,
+                    asset=item.assetPath,
+                    target=str(item.primPath) if item.primPath != Sdf.Path.emptyPath else "",
+                    layer=spec.layer.realPath or spec.layer.identifier,
+                )
+            )
+    return found
+
+
+def _material_uses(material: UsdShade.Material) -> list[TextureUse]:
+    mat_name = prim_ref(material.GetPath())
+    shaders: dict[str, Usd.Prim] = {}
+    for output in material.GetOutputs():
+        if output.GetBaseName().split(":")[-1] not in Terminals.NAMES:
+            continue
+        for prim, _, _ in usdgraph.producing_outputs(output):
+            shaders.setdefault(str(prim.GetPath()), prim)
+    uses: list[TextureUse] = []
+    for shader in shaders.values():
+        for inp in UsdShade.Shader(shader).GetInputs():
+            role = inp.GetBaseName()
+            consumer = f"<{shader.GetPath()}.{inp.GetAttr().GetName()}>"
+            for tex, channels, flip in _trace(inp, None, 0, False):
+                uses.append(_texture_use(mat_name, tex, RoleUse(role, channels, consumer), flip))
+    return uses
+
+
+def _pick(channels: str, pick: tuple[int, ...] | None) -> str:
+    if pick is None:
+        return channels
+    return "".join(channels[i] for i in pick if i < len(channels)) or channels
+
+
+def _compose(inner: tuple[int, ...], outer: tuple[int, ...] | None) -> tuple[int, ...]:
+    return inner if outer is None else tuple(inner[i] for i in outer if i < len(inner))
+
+
+def _trace(inp, pick, depth, flip):
+    """Yield ``(texture prim, channels, normal_y_flip)`` for every texture node feeding ``inp``."""
+    if depth > _MAX_DEPTH:
+        return
+    for prim, out_name, out_type in usdgraph.producing_outputs(inp):
+        sid = usdgraph.shader_id(prim)
+        if is_texture_id(sid):
+            channels = channels_of(out_type, out_name) if sid != ShaderIds.UV_TEXTURE else out_name
+            yield prim, _pick(channels or "rgb", pick), flip
+            continue
+        if _is_uv_id(sid):
+            continue
+        shader = UsdShade.Shader(prim)
+        if sid.startswith(ShaderIds.ND_SEPARATE) and out_name in SEPARATE_OUTPUTS:
+            yield from _trace(shader.GetInput(MtlxInputs.IN), _compose((SEPARATE_OUTPUTS[out_name],), pick), depth + 1, flip)
+            continue
+        if sid.startswith(ShaderIds.ND_EXTRACT):
+            index, _ = usdgraph.input_value(prim, MtlxInputs.INDEX, 0)
+            yield from _trace(shader.GetInput(MtlxInputs.IN), _compose((int(index),), pick), depth + 1, flip)
+            continue
+        if sid.startswith(ShaderIds.ND_NORMALMAP):
+            scale, _ = usdgraph.input_value(prim, MtlxInputs.SCALE, 1.0)
+            flip = flip or _negative_y(scale)
+        for upstream in shader.GetInputs():
+            if upstream.HasConnectedSource():
+                yield from _trace(upstream, pick, depth + 1, flip)
+
+
+def _negative_y(scale) -> bool:
+    try:
+        return float(scale[1]) < 0
+    except (TypeError, IndexError):
+        return False
+
+
+def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> TextureUse:
+    sid = usdgraph.shader_id(tex)
+    is_preview = sid == ShaderIds.UV_TEXTURE
+    file_attr = usdgraph.value_attribute(tex, Inputs.FILE)
+    asset = resolved = udim = expected = ""
+    file_at = None
+    labels: list[Label] = []
+    if file_attr is not None:
+        asset, resolved = usdgraph.asset_text(file_attr.Get())
+        file_at = usdgraph.authored_at(file_attr)
+        expected = _anchor(file_attr, asset) if asset else ""
+        if UDIM_TOKEN in asset:
+            udim = expected
+    if is_preview:
+        source_cs, _ = usdgraph.input_value(tex, Inputs.SOURCE_COLOR_SPACE, "auto")
+        if str(source_cs) in (ColorSpace.SRGB.value, ColorSpace.RAW.value):
+            labels.append(Label(str(source_cs), "inputs:sourceColorSpace"))
+    node_file = UsdShade.Shader(tex).GetInput(Inputs.FILE)
+    for attr in (node_file.GetAttr() if node_file else None, file_attr):
+        if attr is not None and attr.HasColorSpace():
+            labels.append(Label(attr.GetColorSpace(), "colorSpace metadata"))
+    if is_preview:
+        scale, _ = usdgraph.input_value(tex, Inputs.SCALE, None)
+        bias, _ = usdgraph.input_value(tex, Inputs.BIAS, None)
+        wrap_s, _ = usdgraph.input_value(tex, Inputs.WRAP_S, Wrap.USD_DEFAULT)
+        wrap_t, _ = usdgraph.input_value(tex, Inputs.WRAP_T, Wrap.USD_DEFAULT)
+        scale_t = usdgraph.as_tuple(scale, 4, (1.0, 1.0, 1.0, 1.0))
+        bias_t = usdgraph.as_tuple(bias, 4, (0.0, 0.0, 0.0, 0.0))
+        flip = flip or scale_t[1] < 0
+    else:
+        scale_t, bias_t = (1.0, 1.0, 1.0, 1.0), (0.0, 0.0, 0.0, 0.0)
+        tiled = sid.startswith(ShaderIds.ND_TILEDIMAGE)
+        wrap_s = Wrap.MTLX_DEFAULT if tiled else usdgraph.input_value(tex, MtlxInputs.UADDRESSMODE, Wrap.MTLX_DEFAULT)[0]
+        wrap_t = Wrap.MTLX_DEFAULT if tiled else usdgraph.input_value(tex, MtlxInputs.VADDRESSMODE, Wrap.MTLX_DEFAULT)[0]
+    return TextureUse(
+        material=material,
+        node=str(tex.GetPath()),
+        node_type=sid,
+        origin=Origin.USD,
+        asset=asset,
+        resolved=resolved,
+        udim_pattern=udim,
+        expected=expected,
+        file_at=file_at,
+        role=role,
+        labels=labels,
+        scale=scale_t,
+        bias=bias_t,
+        wrap_s=str(wrap_s),
+        wrap_t=str(wrap_t),
+        uv=usd_uv_chain(tex, sid),
+        normal_y_flip=flip and role.role in NORMAL_ROLES,
+    )
+
+
+def _anchor(attr: Usd.Attribute, asset: str) -> str:
+    for spec in attr.GetPropertyStack(Usd.TimeCode.Default()):
+        if spec.HasDefaultValue():
+            return spec.layer.ComputeAbsolutePath(asset)
+    return asset

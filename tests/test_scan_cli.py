@@ -1,0 +1,47 @@
+"""`seamless-usd scan`: table output, --json against the schema, exit codes."""
+from __future__ import annotations
+
+import json
+
+import jsonschema
+import pytest
+
+from seamless_usd_cli.main import main
+from seamless_usd_schemas import json_schema
+
+
+def _validate(doc: dict) -> None:
+    jsonschema.validate(doc, json_schema("scan"), cls=jsonschema.Draft202012Validator)
+
+
+def test_schema_is_valid_json_schema():
+    jsonschema.Draft202012Validator.check_schema(json_schema("scan"))
+
+
+def test_table_lists_maps_roles_and_colour_spaces(samples_dir, capsys):
+    assert main(["scan", str(samples_dir / "brick" / "scene.usda")]) == 0
+    out = capsys.readouterr().out
+    assert "</World/Looks/Brick>" in out
+    for text in ("brick_albedo.png", "brick_normal.png", "brick_roughness.png", "diffuseColor (rgb)",
+                 "roughness (r)", "256x256", "primvar st"):
+        assert text in out
+
+
+def test_json_validates_against_schema(samples_dir, capsys):
+    assert main(["scan", "--json", str(samples_dir / "brick" / "scene.usda")]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    _validate(doc)
+    assert len(doc["stacks"]) == 1 and len(doc["stacks"][0]["maps"]) == 3
+
+
+def test_unreadable_stage_exits_2_naming_the_file(tmp_path, capsys):
+    bad = tmp_path / "broken.usda"
+    bad.write_text("#usda 1.0\ndef Xform \"A\" {\n  this is not usd\n")
+    assert main(["scan", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "broken.usda" in err and len(err.splitlines()) == 1
+
+
+def test_missing_path_exits_2(tmp_path, capsys):
+    assert main(["scan", str(tmp_path / "nope.usda")]) == 2
+    assert "nope.usda" in capsys.readouterr().err
