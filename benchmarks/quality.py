@@ -1,0 +1,561 @@
+#!/usr/bin/env python3
+"""Quality benchmark: are the tiles seamless, and faithful to the source?
+
+For every map of a set of real texture stacks, and for each method (SeamlessGAN trained with a
+preset, and the ``naive`` and ``crossfade`` baselines of ``benchmarks/baselines.py``), computes
+the metrics of :mod:`seamless_usd.metrics` (seam ratios, periodic-plus-smooth score, detail
+ratios, SSIM and Gram distance to the source), and writes:
+
+- ``<out>/quality.json``: every figure, with the run's settings;
+- ``<out>/quality.md``: the same as Markdown tables, with the issue's targets checked;
+- ``<out>/tiles/<stack>__<map>__<method>.png``: the 2x2 tiling of the method's tile (left) beside
+  the naive 2x2 tiling of the input (right), for every method but ``naive``.
+
+Stacks
+------
+``brick``, ``wood``, ``cloth``
+    The bundled sample maps (``sample_assets/textures``), already off-grid windows of periodic
+    textures, so not tileable.
+``mx_brick``, ``mx_wood``, ``mx_cloth``
+    Other off-grid windows cut from the MaterialX images in ``../shared/textures`` (relative to
+    the repository root; ``--textures-dir`` overrides it), the same window from every map of a
+    stack, downscaled like the samples. Left out with a note when the folder is absent, unless
+    asked for by name.
+
+Maps enter the network domain as ``2 v - 1`` of their file values ``v`` in ``[0, 1]`` (colour stays
+display-encoded; normal maps become vectors), which is the domain the metrics read.
+
+Run from anywhere, e.g.::
+
+    .venv/bin/python benchmarks/quality.py --preset default
+    .venv/bin/python benchmarks/quality.py --methods naive,crossfade   # baselines only, seconds
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+import OpenImageIO as oiio
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+if str(HERE) not in sys.path:  # the baselines sit beside this script
+    sys.path.insert(0, str(HERE))
+
+from baselines import BASELINES  # noqa: E402
+
+from seamless_usd import metrics as M  # noqa: E402
+
+__all__ = [
+    "MapFile",
+    "StackSpec",
+    "STACKS",
+    "METHODS",
+    "TARGETS",
+    "load_stack",
+    "run",
+    "main",
+]
+
+SAMPLES_DIR = ROOT / "sample_assets" / "textures"
+SHARED_DIR = ROOT.parent / "shared" / "textures"  # ../shared/textures from the repository root
+DEFAULT_OUT = HERE / "results"
+SEAMLESSGAN = "seamlessgan"
+#: Methods by name, in the order the tables list them.
+METHODS: tuple[str, ...] = (SEAMLESSGAN, *BASELINES)
+
+#: The issue's targets for the ``default`` preset: (figure, comparison, threshold). The detail
+#: target is checked on the worse of the border (``detail_ratio``) and centre
+#: (``detail_ratio_centre``) bands: a crossfade blurs the borders, SeamlessGAN's latent joins
+#: fall on the centre lines.
+TARGETS: tuple[tuple[str, str, float], ...] = (
+    ("seam_ratio_x", "<=", 1.3),
+    ("seam_ratio_y", "<=", 1.3),
+    ("detail_ratio_min", ">=", 0.85),
+    ("ssim", ">=", 0.23),
+)
+
+
+def _figure(row: dict, key: str):
+    if key == "detail_ratio_min":
+        pair = (row.get("detail_ratio"), row.get("detail_ratio_centre"))
+        return None if None in pair else min(pair)
+    return row.get(key)
+
+
+@dataclass(frozen=True)
+class MapFile:
+    """One map of a stack: a name, the file, its channels and whether it holds normals."""
+
+    name: str
+    file: str
+    channels: int  # channels kept (the first ones): 1 for grey/roughness maps stored as RGB
+    is_normal: bool = False
+
+
+@dataclass(frozen=True)
+class StackSpec:
+    """A stack of maps read from ``folder`` (``samples`` or ``shared``), optionally windowed.
+
+    ``window`` is ``(x, y, size, out_size)``: a ``size`` px square at ``(x, y)`` resized to
+    ``out_size`` px, cut the same from every map.
+    """
+
+    folder: str
+    maps: tuple[MapFile, ...]
+    window: tuple[int, int, int, int] | None = None
+    note: str = ""
+
+
+#: Stacks by name.
+STACKS: dict[str, StackSpec] = {
+    "brick": StackSpec(
+        "samples",
+        (
+            MapFile("albedo", "brick_albedo.png", 3),
+            MapFile("normal", "brick_normal.png", 3, True),
+            MapFile("roughness", "brick_roughness.png", 1),
+        ),
+        note="sample: 700 px window at (137, 291) of the MaterialX brick, 256 px",
+    ),
+    "wood": StackSpec(
+        "samples",
+        (MapFile("color", "wood_color.png", 3), MapFile("roughness", "wood_roughness.png", 1)),
+        note="sample: 900 px window at (413, 97) of the MaterialX wood, 256 px",
+    ),
+    "cloth": StackSpec(
+        "samples",
+        (MapFile("color", "cloth.png", 3),),
+        note="sample: 400 px window at (61, 133) of the MaterialX cloth, 200 px",
+    ),
+    "mx_brick": StackSpec(
+        "shared",
+        (
+            MapFile("base_gray", "brick_base_gray.jpg", 1),
+            MapFile("normal", "brick_normal.jpg", 3, True),
+            MapFile("roughness", "brick_roughness.jpg", 1),
+        ),
+        window=(1013, 389, 700, 256),
+        note="700 px window at (1013, 389) of the 2048 px MaterialX brick maps, 256 px",
+    ),
+    "mx_wood": StackSpec(
+        "shared",
+        (MapFile("color", "wood_color.jpg", 3), MapFile("roughness", "wood_roughness.jpg", 1)),
+        window=(1091, 733, 900, 256),
+        note="900 px window at (1091, 733) of the 2048 px MaterialX wood maps, 256 px",
+    ),
+    "mx_cloth": StackSpec(
+        "shared",
+        (MapFile("color", "cloth.jpg", 3),),
+        window=(197, 163, 400, 200),
+        note="400 px window at (197, 163) of the 640 px MaterialX cloth photo, 200 px",
+    ),
+}
+
+
+# --------------------------------------------------------------------------------------------
+# Inputs
+# --------------------------------------------------------------------------------------------
+
+
+def _read(path: Path, window: tuple[int, int, int, int] | None, max_size: int | None) -> np.ndarray:
+    """File values as float32 ``(H, W, C)`` in [0, 1], windowed and resized with OpenImageIO."""
+    buf = oiio.ImageBuf(str(path))
+    if buf.has_error:
+        raise RuntimeError(f"cannot read @{path}@: {buf.geterror()}")
+    nch = buf.nchannels
+    if window is not None:
+        x, y, size, out_size = window
+        spec = buf.spec()
+        if x + size > spec.width or y + size > spec.height:
+            raise RuntimeError(f"window {window} does not fit @{path}@ ({spec.width}x{spec.height})")
+        buf = oiio.ImageBufAlgo.cut(buf, oiio.ROI(x, x + size, y, y + size, 0, 1, 0, nch))
+        buf = oiio.ImageBufAlgo.resize(buf, roi=oiio.ROI(0, out_size, 0, out_size, 0, 1, 0, nch))
+    if max_size is not None:
+        spec = buf.spec()
+        scale = max_size / max(spec.width, spec.height)
+        if scale < 1:
+            w, h = max(8, round(spec.width * scale)), max(8, round(spec.height * scale))
+            buf = oiio.ImageBufAlgo.resize(buf, roi=oiio.ROI(0, w, 0, h, 0, 1, 0, nch))
+    return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32)
+
+
+def load_stack(
+    name: str, textures_dir: Path = SHARED_DIR, max_size: int | None = None
+) -> dict[str, tuple[np.ndarray, bool]]:
+    """The maps of stack ``name`` in the network domain: ``{map: (pixels (H, W, C), is_normal)}``.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`STACKS`.
+    textures_dir : pathlib.Path
+        Folder of the MaterialX images for the ``mx_*`` stacks.
+    max_size : int, optional
+        Downscale so that the longest side is at most this (quick runs).
+    """
+    spec = STACKS[name]
+    folder = SAMPLES_DIR if spec.folder == "samples" else textures_dir
+    if not folder.is_dir():
+        raise FileNotFoundError(
+            f"stack {name!r} needs the MaterialX images in @{folder}@ (see its README); "
+            f"pass --textures-dir, or leave {name!r} out of --stacks"
+        )
+    out = {}
+    for m in spec.maps:
+        v = _read(folder / m.file, spec.window, max_size)[..., : m.channels]
+        out[m.name] = (v * 2.0 - 1.0, m.is_normal)
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Methods
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class MethodResult:
+    """The tiles of one method on one stack, and what it reported about them."""
+
+    tiles: dict[str, np.ndarray]
+    seconds: float
+    info: dict = field(default_factory=dict)
+
+
+def run_baseline(name: str, stack: dict[str, tuple[np.ndarray, bool]]) -> MethodResult:
+    """Apply baseline ``name`` to every map of a stack."""
+    fn = BASELINES[name]
+    t0 = time.perf_counter()
+    tiles = {k: fn(px, is_normal) for k, (px, is_normal) in stack.items()}
+    return MethodResult(tiles, time.perf_counter() - t0)
+
+
+def _synthesis():
+    """The synthesis API, imported on first use (torch is only needed for SeamlessGAN)."""
+    try:
+        from seamless_usd import synthesis
+    except ImportError as exc:  # pragma: no cover - depends on the checkout
+        raise RuntimeError(f"method {SEAMLESSGAN!r} needs seamless_usd.synthesis: {exc}") from exc
+    missing = [n for n in ("get_preset", "MapInput", "train", "sample") if not hasattr(synthesis, n)]
+    if missing:
+        raise RuntimeError(
+            f"method {SEAMLESSGAN!r} needs seamless_usd.synthesis.{', '.join(missing)}, which this "
+            f"checkout does not have yet; run the baselines with --methods {','.join(BASELINES)}"
+        )
+    return synthesis
+
+
+def run_seamlessgan(stack: dict[str, tuple[np.ndarray, bool]], preset: str, seed: int) -> MethodResult:
+    """Train SeamlessGAN on the stack with ``preset`` and sample one tile per map."""
+    syn = _synthesis()
+    config = syn.get_preset(preset)
+    maps = [syn.MapInput(k, np.ascontiguousarray(px, dtype=np.float32), is_normal) for k, (px, is_normal) in stack.items()]
+    t0 = time.perf_counter()
+    model = syn.train(maps, config, seed=seed)
+    t1 = time.perf_counter()
+    result = syn.sample(model, maps, seed=seed)
+    t2 = time.perf_counter()
+    tiles = {k: np.asarray(v, dtype=np.float32) for k, v in result.maps.items()}
+    info = {
+        "preset": preset,
+        "crop_size": _jsonable(getattr(result, "crop_size", None)),
+        "passed": _jsonable(getattr(result, "passed", None)),
+        "train_seconds": round(t1 - t0, 2),
+        "sample_seconds": round(t2 - t1, 2),
+    }
+    return MethodResult(tiles, t2 - t0, info)
+
+
+def _jsonable(v):
+    if isinstance(v, (np.generic,)):
+        return v.item()
+    if isinstance(v, tuple):
+        return [_jsonable(x) for x in v]
+    return v
+
+
+def default_features() -> tuple[Callable | None, str]:
+    """The synthesis engine's default feature extractor as a numpy callable, and a note.
+
+    Returns ``(None, reason)`` when the engine or torch is not available; the Gram distance is
+    then left out (``null``).
+    """
+    try:
+        import torch
+
+        from seamless_usd import synthesis
+    except ImportError as exc:
+        return None, f"Gram distance left out: {exc}"
+    factory = getattr(synthesis, "default_feature_extractor", None)
+    if factory is None:
+        return None, "Gram distance left out: seamless_usd.synthesis has no default_feature_extractor"
+    cache: dict[int, object] = {}
+
+    def features(img: np.ndarray) -> list[np.ndarray]:
+        c = img.shape[-1]
+        if c not in cache:
+            cache[c] = factory(c)
+        net = cache[c]
+        x = torch.from_numpy(np.ascontiguousarray(np.moveaxis(img, -1, 0)))[None].float()  # (1, C, H, W)
+        with torch.no_grad():
+            return [f[0].float().numpy() for f in net(x)]
+
+    return features, "Gram distance: seamless_usd.synthesis.default_feature_extractor"
+
+
+# --------------------------------------------------------------------------------------------
+# Pictures
+# --------------------------------------------------------------------------------------------
+
+
+def side_by_side(tile: np.ndarray, source: np.ndarray, is_normal: bool, gap: int = 8) -> np.ndarray:
+    """uint8 picture: 2x2 tiling of ``tile`` (left), naive 2x2 tiling of ``source`` (right)."""
+    left = M.preview_uint8(M.tile_2x2(tile), is_normal)
+    right = M.preview_uint8(M.tile_2x2(source), is_normal)
+    h = max(left.shape[0], right.shape[0])
+    out = np.full((h, left.shape[1] + gap + right.shape[1], 3), 255, np.uint8)
+    out[: left.shape[0], : left.shape[1]] = left
+    out[: right.shape[0], left.shape[1] + gap :] = right
+    return out
+
+
+def write_png(path: Path, pixels: np.ndarray) -> None:
+    """Write an ``(H, W, 3)`` uint8 picture as PNG."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    h, w, c = pixels.shape
+    out = oiio.ImageOutput.create(str(path))
+    if out is None or not out.open(str(path), oiio.ImageSpec(w, h, c, oiio.UINT8)):
+        raise RuntimeError(f"cannot write @{path}@: {oiio.geterror()}")
+    out.write_image(np.ascontiguousarray(pixels))
+    out.close()
+
+
+# --------------------------------------------------------------------------------------------
+# The run
+# --------------------------------------------------------------------------------------------
+
+
+def _round(v):
+    return None if v is None else (v if not np.isfinite(v) else round(float(v), 4))
+
+
+def run(
+    stacks: Sequence[str],
+    methods: Sequence[str],
+    *,
+    preset: str = "default",
+    seed: int = 0,
+    out: Path = DEFAULT_OUT,
+    textures_dir: Path = SHARED_DIR,
+    max_size: int | None = None,
+    gram: bool = True,
+    pictures: bool = True,
+    log: Callable[[str], None] = print,
+) -> dict:
+    """Run the benchmark and write ``quality.json``, ``quality.md`` and the pictures.
+
+    Returns
+    -------
+    dict
+        The content of ``quality.json``.
+    """
+    features, gram_note = default_features() if gram else (None, "Gram distance left out (--no-gram)")
+    log(gram_note)
+    rows: list[dict] = []
+    notes: list[str] = [gram_note]
+    for stack_name in stacks:
+        stack = load_stack(stack_name, textures_dir, max_size)
+        for method in methods:
+            log(f"{stack_name}: {method} ...")
+            if method == SEAMLESSGAN:
+                res = run_seamlessgan(stack, preset, seed)
+            else:
+                res = run_baseline(method, stack)
+            for map_name, (src, is_normal) in stack.items():
+                tile = res.tiles[map_name]
+                m = M.map_metrics(tile, src, is_normal, features=features)
+                row = {
+                    "stack": stack_name,
+                    "map": map_name,
+                    "method": method,
+                    "is_normal": is_normal,
+                    "source_size": list(src.shape[:2]),
+                    "tile_size": list(tile.shape[:2]),
+                    **{k: _round(v) for k, v in m.items()},
+                    "seconds": round(res.seconds, 2),
+                    **res.info,
+                }
+                rows.append(row)
+                if pictures and method != "naive":
+                    name = f"{stack_name}__{map_name}__{method}.png"
+                    write_png(out / "tiles" / name, side_by_side(tile, src, is_normal))
+                    row["picture"] = f"tiles/{name}"
+                log(
+                    f"  {map_name:<10} seam x {m['seam_ratio_x']:.2f} y {m['seam_ratio_y']:.2f}  "
+                    f"p+s {m['ps_score']:.3f}  detail {m['detail_ratio']:.2f}  ssim {m['ssim']:.3f}"
+                )
+    result = {
+        "settings": {
+            "command": "benchmarks/quality.py " + " ".join(sys.argv[1:]) if sys.argv[0].endswith("quality.py") else None,
+            "preset": preset if SEAMLESSGAN in methods else None,
+            "seed": seed,
+            "stacks": {s: STACKS[s].note for s in stacks},
+            "methods": list(methods),
+            "max_size": max_size,
+            "domain": "network domain: 2 v - 1 of file values v in [0, 1]; normal maps as vectors",
+            "band_fraction": M.BAND_FRACTION,
+            "highpass_sigma": M.HIGHPASS_SIGMA,
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+        },
+        "targets": [{"metric": k, "op": op, "value": v} for k, op, v in TARGETS],
+        "notes": notes,
+        "results": rows,
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "quality.json").write_text(json.dumps(result, indent=1) + "\n")
+    (out / "quality.md").write_text(to_markdown(result))
+    log(f"wrote @{out / 'quality.md'}@ and @{out / 'quality.json'}@")
+    return result
+
+
+def _meets(v, op: str, threshold: float) -> bool:
+    return v is not None and (v <= threshold if op == "<=" else v >= threshold)
+
+
+def _fmt(v, digits=2) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    return f"{v:.{digits}f}" if isinstance(v, float) else str(v)
+
+
+def to_markdown(result: dict) -> str:
+    """The benchmark's figures as Markdown: one table per stack and a target summary per method."""
+    s = result["settings"]
+    lines = ["# Quality benchmark", ""]
+    if s.get("command"):
+        lines += [f"Command: `{s['command']}`", ""]
+    lines += [
+        f"Methods: {', '.join(s['methods'])}"
+        + (f"; SeamlessGAN preset `{s['preset']}`" if s.get("preset") else "")
+        + f"; seed {s['seed']}" + (f"; inputs downscaled to <= {s['max_size']} px" if s.get("max_size") else ""),
+        "",
+        "Columns: seam ratio per axis (first / second differences; about 1 when seamless), "
+        "periodic-plus-smooth score (0 when periodic), detail ratio in the border seam bands and in "
+        f"the centre bands (band half-width {s['band_fraction']:.0%} of the size, high-pass sigma "
+        f"{s['highpass_sigma']} px; < 1 when blurred), SSIM of the tile repeated to the source's size, "
+        "and the relative Gram distance (0 = same statistics). See `seamless_usd/metrics.py`.",
+        "",
+    ]
+    for note in result.get("notes", []):
+        lines += [f"- {note}"]
+    lines += [""]
+    header = (
+        "| map | method | tile | seam x | seam y | seam² x | seam² y | p+s | detail | detail ctr | SSIM | Gram | s |"
+    )
+    sep = "|---|---|---|" + "---:|" * (len(M.METRIC_KEYS) + 1)
+    rows = result["results"]
+    for stack in s["stacks"]:
+        lines += [f"## {stack}", "", s["stacks"][stack], "", header, sep]
+        for r in (r for r in rows if r["stack"] == stack):
+            tile = "x".join(str(n) for n in r["tile_size"])
+            extra = ""
+            if r["method"] == SEAMLESSGAN and r.get("passed") is not None:
+                extra = "" if r["passed"] else " (Q failed)"
+            lines.append(
+                f"| {r['map']}{' (normal)' if r['is_normal'] else ''} | {r['method']}{extra} | {tile} | "
+                + " | ".join(
+                    _fmt(r[k], 3 if k in ("ps_score", "ssim", "gram_distance") else 2)
+                    for k in M.METRIC_KEYS
+                )
+                + f" | {_fmt(r['seconds'], 1)} |"
+            )
+        lines += [""]
+    lines += [
+        "## Targets",
+        "",
+        "Maps meeting each target (the issue's targets for the `default` preset; "
+        "`detail_ratio_min` is the worse of the border and centre detail ratios):",
+        "",
+    ]
+    lines += ["| method | " + " | ".join(f"{k} {op} {v}" for k, op, v in TARGETS) + " | all |"]
+    lines += ["|---|" + "---:|" * (len(TARGETS) + 1)]
+    for method in s["methods"]:
+        mine = [r for r in rows if r["method"] == method]
+        cells = [f"{sum(_meets(_figure(r, k), op, v) for r in mine)}/{len(mine)}" for k, op, v in TARGETS]
+        every = sum(all(_meets(_figure(r, k), op, v) for k, op, v in TARGETS) for r in mine)
+        lines.append(f"| {method} | " + " | ".join(cells) + f" | {every}/{len(mine)} |")
+    lines += [""]
+    return "\n".join(lines)
+
+
+def _names(text: str, valid: Sequence[str], what: str) -> list[str]:
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    bad = [n for n in names if n not in valid]
+    if bad or not names:
+        raise SystemExit(f"unknown {what} {', '.join(bad) or '(none)'}; valid: {', '.join(valid)}")
+    return names
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command line entry; returns the exit code."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--preset", default="default", help="SeamlessGAN preset (default: %(default)s)")
+    p.add_argument("--stacks", default=None, help=f"comma-separated, from: {', '.join(STACKS)} (default: all available)")
+    p.add_argument("--methods", default=",".join(METHODS), help=f"comma-separated, from: {', '.join(METHODS)} (default: all)")
+    p.add_argument("--seed", type=int, default=0, help="training and sampling seed (default: %(default)s)")
+    p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: benchmarks/results)")
+    p.add_argument("--textures-dir", type=Path, default=SHARED_DIR, help="MaterialX images for the mx_* stacks (default: ../shared/textures from the repository root)")
+    p.add_argument("--max-size", type=int, default=None, help="downscale inputs to at most this many px (quick runs)")
+    p.add_argument("--no-gram", action="store_true", help="leave out the Gram distance (no torch needed)")
+    p.add_argument("--no-pictures", action="store_true", help="do not write the 2x2 PNGs")
+    a = p.parse_args(argv)
+    methods = _names(a.methods, METHODS, "method")
+    if a.stacks is None:
+        stacks = [n for n, s in STACKS.items() if s.folder == "samples" or a.textures_dir.is_dir()]
+        if len(stacks) < len(STACKS):
+            print(f"note: @{a.textures_dir}@ not found; running the sample stacks only", file=sys.stderr)
+    else:
+        stacks = _names(a.stacks, list(STACKS), "stack")
+        if not a.textures_dir.is_dir() and any(STACKS[n].folder == "shared" for n in stacks):
+            print(
+                f"error: the mx_* stacks need the MaterialX images in @{a.textures_dir}@ "
+                "(see ../shared/textures/README.md); pass --textures-dir or leave them out",
+                file=sys.stderr,
+            )
+            return 2
+    if SEAMLESSGAN in methods:
+        try:
+            _synthesis().get_preset(a.preset)
+        except (RuntimeError, ValueError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+    try:
+        run(
+            stacks,
+            methods,
+            preset=a.preset,
+            seed=a.seed,
+            out=a.out,
+            textures_dir=a.textures_dir,
+            max_size=a.max_size,
+            gram=not a.no_gram,
+            pictures=not a.no_pictures,
+        )
+    except (FileNotFoundError, RuntimeError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

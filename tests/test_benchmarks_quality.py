@@ -1,0 +1,53 @@
+"""Smoke test of the quality benchmark: the baselines on a small real stack."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import OpenImageIO as oiio
+
+QUALITY = Path(__file__).resolve().parents[1] / "benchmarks" / "quality.py"
+
+
+def _quality():
+    spec = importlib.util.spec_from_file_location("benchmark_quality", QUALITY)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # dataclasses look their module up there
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_baselines_on_a_small_real_stack(tmp_path, capsys):
+    q = _quality()
+    code = q.main(["--methods", "naive,crossfade", "--stacks", "wood", "--max-size", "64", "--out", str(tmp_path), "--no-gram"])
+    assert code == 0
+    data = json.loads((tmp_path / "quality.json").read_text())
+    rows = {(r["map"], r["method"]): r for r in data["results"]}
+    assert set(rows) == {(m, k) for m in ("color", "roughness") for k in ("naive", "crossfade")}
+    for m in ("color", "roughness"):
+        naive, fade = rows[m, "naive"], rows[m, "crossfade"]
+        assert naive["ssim"] == 1.0 and naive["tile_size"] == [64, 64]
+        assert fade["tile_size"] == [56, 56]
+        assert max(naive["seam_ratio_x"], naive["seam_ratio_y"]) > 2.0  # an off-grid window
+        assert fade["ps_score"] < naive["ps_score"]
+        assert naive["gram_distance"] is None
+        assert "picture" not in naive
+        pic = oiio.ImageBuf(str(tmp_path / fade["picture"])).spec()
+        assert (pic.width, pic.height, pic.nchannels) == (2 * 56 + 8 + 2 * 64, 128, 3)
+    md = (tmp_path / "quality.md").read_text()
+    assert "## wood" in md and "| crossfade |" in md and "## Targets" in md
+
+
+def test_unknown_names_and_missing_textures_are_clean_errors(tmp_path, capsys):
+    q = _quality()
+    try:
+        q.main(["--stacks", "marble", "--methods", "naive", "--out", str(tmp_path)])
+    except SystemExit as exc:
+        assert "unknown stack marble" in str(exc)
+    else:
+        raise AssertionError("expected SystemExit")
+    code = q.main(["--stacks", "mx_wood", "--methods", "naive", "--textures-dir", str(tmp_path / "absent"), "--out", str(tmp_path)])
+    assert code == 2
+    assert "--textures-dir" in capsys.readouterr().err
