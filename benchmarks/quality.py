@@ -282,32 +282,37 @@ def _jsonable(v):
 
 
 def default_features() -> tuple[Callable | None, str]:
-    """The synthesis engine's default feature extractor as a numpy callable, and a note.
+    """The synthesis engine's default style feature extractor as a numpy callable, and a note.
 
-    Returns ``(None, reason)`` when the engine or torch is not available; the Gram distance is
-    then left out (``null``).
+    It is the seeded random multi-scale CNN that ``SynthesisConfig()``'s defaults build
+    (``style_features="random"`` with the default scales, channels and seed), whatever the preset,
+    so Gram distances compare across presets and methods. Maps go in as the engine feeds them
+    (``to_rgb_batch``: grey repeated, two channels padded, RGBA as RGB + AAA). Returns
+    ``(None, reason)`` when torch or the engine is not available; the Gram distance is then
+    ``null``.
     """
     try:
         import torch
 
-        from seamless_usd import synthesis
+        from seamless_usd.synthesis.config import SynthesisConfig
+        from seamless_usd.synthesis.features import build_feature_extractor, to_rgb_batch
     except ImportError as exc:
         return None, f"Gram distance left out: {exc}"
-    factory = getattr(synthesis, "default_feature_extractor", None)
-    if factory is None:
-        return None, "Gram distance left out: seamless_usd.synthesis has no default_feature_extractor"
-    cache: dict[int, object] = {}
+    config = SynthesisConfig()
+    net = build_feature_extractor(config).eval()
 
     def features(img: np.ndarray) -> list[np.ndarray]:
-        c = img.shape[-1]
-        if c not in cache:
-            cache[c] = factory(c)
-        net = cache[c]
-        x = torch.from_numpy(np.ascontiguousarray(np.moveaxis(img, -1, 0)))[None].float()  # (1, C, H, W)
+        x = torch.from_numpy(np.ascontiguousarray(np.moveaxis(img, -1, 0), dtype=np.float32))[None]  # (1, C, H, W)
         with torch.no_grad():
-            return [f[0].float().numpy() for f in net(x)]
+            feats = net(to_rgb_batch(x))  # [(N, K, h, w)], N = 2 for RGBA
+        return [f[i].float().numpy() for f in feats for i in range(f.shape[0])]
 
-    return features, "Gram distance: seamless_usd.synthesis.default_feature_extractor"
+    note = (
+        "Gram distance: mean over layers of ||G(tile) - G(source)|| / ||G(source)|| with the synthesis "
+        f"engine's default random feature extractor ({config.style_scales} scales x "
+        f"{config.style_channels} channels, seed {config.style_seed}), tile repeated to the source's size"
+    )
+    return features, note
 
 
 # --------------------------------------------------------------------------------------------
