@@ -1,11 +1,24 @@
 """Group maps into texture stacks (one material, one UV chain) and mark identical stacks."""
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
-from seamless_usd.discover.types import TextureMap, TextureStack
+from seamless_usd.discover.tokens import TransformKinds
+from seamless_usd.discover.types import TextureMap, TextureStack, UVChain
 
-__all__ = ["build_stacks"]
+__all__ = ["build_stacks", "chain_key"]
+
+
+def chain_key(uv: UVChain) -> str:
+    """Maps sharing this key share a UV chain. Like ``UVChain.key``, except that a ``tiledimage``'s
+    own ``uvtiling``/``uvoffset`` (a transform on each texture node) counts by value, so tiled
+    images with the same tiling over the same texcoord form one stack."""
+    transforms = [
+        [t.kind, list(t.scale), list(t.translation)] if t.kind == TransformKinds.UVTILING else t.node
+        for t in uv.transforms
+    ]
+    return json.dumps([uv.primvar, uv.reader, transforms, uv.connected_from])
 
 
 def build_stacks(maps: list[TextureMap]) -> list[TextureStack]:
@@ -18,7 +31,7 @@ def build_stacks(maps: list[TextureMap]) -> list[TextureStack]:
     grouped: dict[tuple[str, str], list[TextureMap]] = {}
     chains = {}
     for m in maps:
-        key = (m.material, m.uv.key)
+        key = (m.material, chain_key(m.uv))
         grouped.setdefault(key, []).append(m)
         chains.setdefault(key, m.uv)
     stacks: list[TextureStack] = []
