@@ -348,7 +348,8 @@ def write_png(path: Path, pixels: np.ndarray) -> None:
 
 
 def _round(v):
-    return None if v is None else (v if not np.isfinite(v) else round(float(v), 4))
+    """4 decimals; None for a missing or infinite figure (JSON has no infinity)."""
+    return None if v is None or not np.isfinite(v) else round(float(v), 4)
 
 
 def run(
@@ -363,6 +364,7 @@ def run(
     gram: bool = True,
     pictures: bool = True,
     log: Callable[[str], None] = print,
+    command: str | None = None,
 ) -> dict:
     """Run the benchmark and write ``quality.json``, ``quality.md`` and the pictures.
 
@@ -408,7 +410,7 @@ def run(
                 )
     result = {
         "settings": {
-            "command": "benchmarks/quality.py " + " ".join(sys.argv[1:]) if sys.argv[0].endswith("quality.py") else None,
+            "command": command,
             "preset": preset if SEAMLESSGAN in methods else None,
             "seed": seed,
             "stacks": {s: STACKS[s].note for s in stacks},
@@ -555,6 +557,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             max_size=a.max_size,
             gram=not a.no_gram,
             pictures=not a.no_pictures,
+            command=" ".join(["benchmarks/quality.py", *(sys.argv[1:] if argv is None else argv)]),
         )
     except (FileNotFoundError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -6,7 +6,9 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import OpenImageIO as oiio
+import pytest
 
 QUALITY = Path(__file__).resolve().parents[1] / "benchmarks" / "quality.py"
 
@@ -42,12 +44,25 @@ def test_baselines_on_a_small_real_stack(tmp_path, capsys):
 
 def test_unknown_names_and_missing_textures_are_clean_errors(tmp_path, capsys):
     q = _quality()
-    try:
+    with pytest.raises(SystemExit, match="unknown stack marble"):
         q.main(["--stacks", "marble", "--methods", "naive", "--out", str(tmp_path)])
-    except SystemExit as exc:
-        assert "unknown stack marble" in str(exc)
-    else:
-        raise AssertionError("expected SystemExit")
     code = q.main(["--stacks", "mx_wood", "--methods", "naive", "--textures-dir", str(tmp_path / "absent"), "--out", str(tmp_path)])
     assert code == 2
     assert "--textures-dir" in capsys.readouterr().err
+
+
+def test_gram_distance_with_the_engine_extractor():
+    q = _quality()
+    features, note = q.default_features()
+    if features is None:  # torch or the engine missing in this environment
+        pytest.skip(note)
+    from seamless_usd import metrics as M
+
+    stack = q.load_stack("wood", max_size=96)
+    color, _ = stack["color"]
+    rough, _ = stack["roughness"]
+    assert M.gram_distance(color, color, features) == pytest.approx(0.0, abs=1e-9)
+    assert M.gram_distance(np.roll(color, 31, axis=1), color, features) < 0.05
+    assert M.gram_distance(rough, rough, features) == pytest.approx(0.0, abs=1e-9)  # one channel
+    assert M.gram_distance(np.zeros_like(color), color, features) > 0.5
+
