@@ -1,0 +1,304 @@
+"""Write tileable maps back into a MaterialX document: file paths, address modes, UV scale.
+
+By default a new document ``<name>.seamless.mtlx`` is written next to the original; in place
+on request (after a ``.bak`` copy). ``tiledimage`` nodes get their ``uvtiling`` / ``uvoffset``
+multiplied by the UV scale (exact: the node computes ``texcoord * uvtiling - uvoffset``, scaled
+component-wise afterwards). ``image`` nodes get a ``place2d`` named ``seamless_uv`` inserted
+before their ``texcoord`` input (``scale`` = 1 / UV scale, since place2d divides), after the
+existing chain, so any existing ``place2d`` is composed exactly. Provenance is recorded as
+``seamless_*`` attributes on each edited image node (MaterialX keeps unknown attributes).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Sequence
+
+import MaterialX as mx
+
+from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
+from seamless_usd.authoring.types import AuthoringResult, Provenance, StackResult, WriteMode
+from seamless_usd.discover.types import Origin
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
+
+__all__ = ["MtlxNames", "author_mtlx", "default_output_document", "read_mtlx_provenance"]
+
+
+class MtlxNames:
+    """Categories, input names, values and provenance attributes, named once."""
+
+    OUTPUT_SUFFIX = ".seamless"
+    IMAGE = "image"
+    TILED_IMAGE = "tiledimage"
+    PLACE_2D = "place2d"
+    UV_NODE = "seamless_uv"
+    VECTOR2 = "vector2"
+    FILENAME = "filename"
+    FILE = "file"
+    TEXCOORD = "texcoord"
+    SCALE = "scale"
+    U_ADDRESS = "uaddressmode"
+    V_ADDRESS = "vaddressmode"
+    PERIODIC = "periodic"
+    UV_TILING = "uvtiling"
+    UV_OFFSET = "uvoffset"
+    CONNECTION_ATTRS = ("nodename", "nodegraph", "output", "interfacename", "value")
+    MARK_UV = "seamless_uvtransform"  # "true" on the place2d seamless-usd inserted
+    SOURCE_ASSET = "seamless_sourceasset"
+    CROP_SIZE = "seamless_cropsize"
+    UV_SCALE = "seamless_uvscale"
+    Q_PASSED = "seamless_qpassed"
+    Q_TAU = "seamless_qtau"
+    Q_BAND_MIN = "seamless_qbandmin"
+    MODEL_HASH = "seamless_modelhash"
+    TOOL_VERSION = "seamless_toolversion"
+
+
+def default_output_document(document_path: Path) -> Path:
+    """``look.mtlx`` -> ``look.seamless.mtlx`` beside it."""
+    document_path = Path(document_path)
+    return document_path.with_name(f"{document_path.stem}{MtlxNames.OUTPUT_SUFFIX}.mtlx")
+
+
+def author_mtlx(
+    document_path: Path | str,
+    results: Sequence[StackResult],
+    mode: WriteMode = WriteMode.NEW_LAYER,
+    output_path: Path | str | None = None,
+) -> AuthoringResult:
+    """Write the MaterialX maps of ``results`` into a copy of the document (or in place).
+
+    Maps of other documents (or USD maps) in ``results`` are ignored. ``NEW_LAYER`` writes
+    ``output_path`` (default :func:`default_output_document`), ``IN_PLACE`` rewrites the
+    document after a ``.bak`` copy, ``DRY_RUN`` only fills ``plan``.
+    """
+    src = Path(document_path).resolve()
+    mode = WriteMode(mode)
+    out = src if mode is WriteMode.IN_PLACE else (
+        Path(output_path).resolve() if output_path else default_output_document(src))
+    result = AuthoringResult(dry_run=mode is WriteMode.DRY_RUN,
+                             output=None if mode is WriteMode.IN_PLACE else out)
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(src))
+    author = _MtlxAuthor(doc, src, out, result)
+    if out.parent != src.parent:
+        author.rebase_files()
+    for stack_result in results:
+        for map_result in stack_result.maps:
+            tex_map = map_result.map
+            if tex_map.origin is not Origin.MTLX or not _same_path(tex_map.document or tex_map.file_at.layer, src):
+                continue
+            author.edit_map(map_result, stack_result.uv_scale, stack_result.provenance)
+    if not author.changed:
+        result.findings.append(Finding(Severity.SKIPPED, "already-up-to-date", asset_ref(src),
+                                       "every texture already has these edits; nothing written"))
+        return result
+    if result.dry_run:
+        return result
+    if mode is WriteMode.IN_PLACE:
+        result.backups.append(backup_once(src))
+    write_atomically(out, lambda tmp: mx.writeToXmlFile(doc, str(tmp)))
+    result.layers_written.append(out)
+    return result
+
+
+def read_mtlx_provenance(node: mx.Node) -> Provenance | None:
+    """The provenance recorded on a MaterialX node, or None."""
+    if not node.hasAttribute(MtlxNames.SOURCE_ASSET):
+        return None
+
+    def floats(name: str, n: int = 2) -> tuple:
+        text = node.getAttribute(name)
+        return tuple(float(v) for v in text.split(",")) if text else (0.0,) * n
+
+    return Provenance(
+        source_asset=node.getAttribute(MtlxNames.SOURCE_ASSET),
+        crop_size=tuple(int(v) for v in floats(MtlxNames.CROP_SIZE)),
+        uv_scale=floats(MtlxNames.UV_SCALE),
+        q_passed=node.getAttribute(MtlxNames.Q_PASSED) == "true",
+        q_tau=floats(MtlxNames.Q_TAU, 1)[0],
+        q_band_min=floats(MtlxNames.Q_BAND_MIN),
+        model_hash=node.getAttribute(MtlxNames.MODEL_HASH),
+        tool_version=node.getAttribute(MtlxNames.TOOL_VERSION),
+    )
+
+
+def _same_path(a: str | None, b: Path) -> bool:
+    if not a:
+        return False
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return Path(a).resolve() == b
+
+
+def _fmt(values) -> str:
+    return ", ".join(repr(float(v)) if isinstance(v, float) else str(v) for v in values)
+
+
+class _MtlxAuthor:
+    def __init__(self, doc: mx.Document, src: Path, out: Path, result: AuthoringResult):
+        self.doc, self.src, self.out, self.result = doc, src, out, result
+        self.changed = False
+        self._uv_nodes: dict[tuple, str] = {}
+        self._done: dict[str, tuple] = {}
+
+    def _plan(self, line: str) -> None:
+        self.result.plan.append(f"{line} in {asset_ref(self.out.name)}")
+        self.changed = True
+
+    def _set(self, elem: mx.Element, name: str, value: str, label: str) -> None:
+        if elem.getAttribute(name) != value:
+            elem.setAttribute(name, value)
+            self._plan(f"set {prim_ref(elem.getNamePath())}.{label} = {value}")
+
+    def rebase_files(self) -> None:
+        """Keep this document's relative file paths valid from a new folder."""
+        if any(e.getSourceUri() for e in self.doc.getChildren()):
+            self.result.findings.append(Finding(
+                Severity.WARNING, "mtlx-includes-moved", asset_ref(self.out),
+                "the new document is in another folder; its XIncludes keep their relative hrefs"))
+        for elem in self.doc.traverseTree():
+            if isinstance(elem, mx.Input) and elem.getType() == MtlxNames.FILENAME and elem.hasValue():
+                value = elem.getResolvedValueString()
+                if value and not os.path.isabs(value):
+                    new = relative_asset_path(self.src.parent / value, self.out.parent)
+                    self._set_file(elem, new)
+
+    def _set_file(self, inp: mx.Input, rel: str) -> None:
+        rel = rel[2:] if rel.startswith("./") else rel
+        if inp.getActiveFilePrefix() and not inp.hasFilePrefix():
+            inp.setFilePrefix("./")
+        elif inp.hasFilePrefix() and inp.getFilePrefix() != "./":
+            inp.setFilePrefix("./")
+        if inp.getValueString() != rel:
+            inp.setValueString(rel)
+            self._plan(f"set {prim_ref(inp.getNamePath())} = {asset_ref(rel)}")
+
+    def _authored(self, node: mx.Node, name: str) -> mx.Input:
+        """The input holding ``name``'s value: the interface input it reads, or the node's own."""
+        inp = node.getInput(name)
+        if inp is not None and inp.getInterfaceName():
+            iface = inp.getInterfaceInput()
+            if iface is not None:
+                return iface
+        if inp is None:
+            nodedef_input = node.getNodeDef().getActiveInput(name) if node.getNodeDef() else None
+            inp = node.addInput(name, nodedef_input.getType() if nodedef_input else MtlxNames.VECTOR2)
+            if nodedef_input is not None and nodedef_input.hasValue():
+                inp.setValueString(nodedef_input.getValueString())
+        return inp
+
+    def edit_map(self, map_result, uv_scale, provenance: Provenance) -> None:
+        tex_map = map_result.map
+        node_path = tex_map.node.strip("<>")
+        node = self.doc.getDescendant(node_path)
+        if node is None or not isinstance(node, mx.Node):
+            self.result.findings.append(Finding(Severity.ERROR, "authoring-missing-prim",
+                                                prim_ref(node_path), "MaterialX node not found"))
+            return
+        out_file = Path(map_result.output_path).resolve()
+        scale = (float(uv_scale[0]), float(uv_scale[1]))
+        if node_path in self._done:
+            if self._done[node_path][:2] != (out_file, scale):
+                self.result.findings.append(Finding(
+                    Severity.WARNING, "shared-texture-conflict", prim_ref(node_path),
+                    f"node shared by {self._done[node_path][2]} and {tex_map.material} with "
+                    f"different results; kept {self._done[node_path][2]}'s"))
+            return
+        self._done[node_path] = (out_file, scale, tex_map.material)
+        before = len(self.result.plan)
+        recorded = read_mtlx_provenance(node)
+        from_source = recorded is None or _same_path(
+            str(self.src.parent / recorded.source_asset), Path(tex_map.resolved))
+        # file
+        at = tex_map.file_at
+        owner = self.doc.getDescendant(at.prim.strip("<>")) if at.prim else None
+        file_input = owner if isinstance(owner, mx.Input) else (
+            owner.getInput(at.attribute) if owner is not None and hasattr(owner, "getInput") else None)
+        if file_input is None:
+            file_input = self._authored(node, MtlxNames.FILE)
+        self._set_file(file_input, relative_asset_path(out_file, self.out.parent))
+        category = node.getCategory()
+        # address modes
+        if category != MtlxNames.TILED_IMAGE:
+            for name in (MtlxNames.U_ADDRESS, MtlxNames.V_ADDRESS):
+                inp = self._authored(node, name)
+                if inp.getValueString() != MtlxNames.PERIODIC:
+                    inp.setValueString(MtlxNames.PERIODIC)
+                    self._plan(f"set {prim_ref(inp.getNamePath())} = {MtlxNames.PERIODIC}")
+        # UV scale
+        prior = recorded.uv_scale if recorded else None
+        total = scale if from_source or prior is None else (prior[0] * scale[0], prior[1] * scale[1])
+        if category == MtlxNames.TILED_IMAGE:
+            undo = prior or (1.0, 1.0)
+            for name in (MtlxNames.UV_TILING, MtlxNames.UV_OFFSET):
+                inp = self._authored(node, name)
+                value = inp.getValue() if inp.hasValue() else (
+                    mx.Vector2(1, 1) if name == MtlxNames.UV_TILING else mx.Vector2(0, 0))
+                new = mx.Vector2(value[0] / undo[0] * total[0], value[1] / undo[1] * total[1])
+                if any(abs(new[i] - value[i]) > 1e-9 for i in range(2)):
+                    inp.setValue(new)
+                    self._plan(f"set {prim_ref(inp.getNamePath())} = {inp.getValueString()}")
+        else:
+            total = self._place2d(node, scale, from_source)
+        # provenance
+        if recorded and not from_source:
+            source = recorded.source_asset  # the tile was made from an earlier tile: keep the origin
+        elif tex_map.resolved:
+            source = relative_asset_path(Path(tex_map.resolved), self.out.parent).removeprefix("./")
+        else:
+            source = provenance.source_asset
+        p = provenance
+        for name, value in (
+            (MtlxNames.SOURCE_ASSET, source),
+            (MtlxNames.CROP_SIZE, _fmt(p.crop_size)),
+            (MtlxNames.UV_SCALE, _fmt(total)),
+            (MtlxNames.Q_PASSED, "true" if p.q_passed else "false"),
+            (MtlxNames.Q_TAU, _fmt([float(p.q_tau)])),
+            (MtlxNames.Q_BAND_MIN, _fmt(p.q_band_min)),
+            (MtlxNames.MODEL_HASH, p.model_hash),
+            (MtlxNames.TOOL_VERSION, p.tool_version),
+        ):
+            self._set(node, name, value, name)
+        if len(self.result.plan) > before and prim_ref(node_path) not in self.result.edited_prims:
+            self.result.edited_prims.append(prim_ref(node_path))
+
+    def _place2d(self, node: mx.Node, scale, from_source: bool) -> tuple[float, float]:
+        tex_in = node.getInput(MtlxNames.TEXCOORD)
+        upstream = tex_in.getConnectedNode() if tex_in is not None else None
+        if upstream is not None and upstream.getAttribute(MtlxNames.MARK_UV) == "true":
+            s_in = upstream.getInput(MtlxNames.SCALE)
+            current = s_in.getValue() if s_in is not None and s_in.hasValue() else mx.Vector2(1, 1)
+            prior = (1.0 / current[0], 1.0 / current[1])
+            total = scale if from_source else (prior[0] * scale[0], prior[1] * scale[1])
+            new = mx.Vector2(1.0 / total[0], 1.0 / total[1])
+            if any(abs(new[i] - current[i]) > 1e-9 for i in range(2)):
+                upstream.setInputValue(MtlxNames.SCALE, new, MtlxNames.VECTOR2)
+                self._plan(f"set {prim_ref(upstream.getNamePath())}.scale = {_fmt(new)}")
+            return total
+        parent = node.getParent()
+        connection = tuple(
+            (a, tex_in.getAttribute(a)) for a in MtlxNames.CONNECTION_ATTRS
+            if tex_in is not None and tex_in.hasAttribute(a))
+        key = (parent.getNamePath(), connection, scale)
+        name = self._uv_nodes.get(key)
+        if name is None:
+            name = parent.createValidChildName(MtlxNames.UV_NODE)
+            place = parent.addNode(MtlxNames.PLACE_2D, name, MtlxNames.VECTOR2)
+            place.setAttribute(MtlxNames.MARK_UV, "true")
+            if connection:
+                coords = place.addInput(MtlxNames.TEXCOORD, MtlxNames.VECTOR2)
+                for attr, value in connection:
+                    coords.setAttribute(attr, value)
+            place.setInputValue(MtlxNames.SCALE, mx.Vector2(1.0 / scale[0], 1.0 / scale[1]),
+                                MtlxNames.VECTOR2)
+            self._uv_nodes[key] = name
+            self._plan(f"add place2d {prim_ref(place.getNamePath())} scale = "
+                       f"{place.getInput(MtlxNames.SCALE).getValueString()}")
+        if tex_in is not None:
+            node.removeInput(MtlxNames.TEXCOORD)
+        coords = node.addInput(MtlxNames.TEXCOORD, MtlxNames.VECTOR2)
+        coords.setNodeName(name)
+        self._plan(f"connect {prim_ref(coords.getNamePath())} -> {prim_ref(name)}")
+        return scale

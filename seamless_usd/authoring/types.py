@@ -1,0 +1,97 @@
+"""Values the authoring step takes and returns: write modes, per-map results, provenance."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from pathlib import Path
+
+from seamless_usd.discover.types import TextureMap, TextureStack
+from seamless_usd.findings import Finding
+
+__all__ = [
+    "WriteMode",
+    "MapResult",
+    "Provenance",
+    "StackResult",
+    "AuthoringResult",
+    "uv_scale_for",
+]
+
+
+class WriteMode(str, Enum):
+    """Where the edits go."""
+
+    NEW_LAYER = "new-layer"  # default: a new layer beside the input that sublayers its root layer
+    IN_PLACE = "in-place"  # edit the layers holding the opinions, after `.bak` copies
+    DRY_RUN = "dry-run"  # compute the edits, write nothing
+
+
+@dataclass(frozen=True)
+class MapResult:
+    """A tileable file, already written, that replaces ``map``'s image."""
+
+    map: TextureMap
+    output_path: Path
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """What is recorded on each edited texture node (``SeamlessTileAPI``)."""
+
+    source_asset: str  # the texture file the tile was made from, as authored
+    crop_size: tuple[int, int]  # (c_w, c_h) working pixels; the tile is 2c x 2c
+    uv_scale: tuple[float, float]  # (W / 2c_w, H / 2c_h)
+    q_passed: bool  # min(D) on each seam band >= tau
+    q_tau: float
+    q_band_min: tuple[float, float]  # (vertical band, horizontal band)
+    model_hash: str
+    tool_version: str
+
+
+@dataclass(frozen=True)
+class StackResult:
+    """The new maps of one stack, sharing one UV scale."""
+
+    stack: TextureStack
+    maps: list[MapResult]
+    uv_scale: tuple[float, float]
+    provenance: Provenance
+
+
+@dataclass
+class AuthoringResult:
+    """What authoring did (or, in a dry run, would do)."""
+
+    layers_written: list[Path] = field(default_factory=list)  # layers / documents saved
+    backups: list[Path] = field(default_factory=list)  # `.bak` copies (in place only)
+    edited_prims: list[str] = field(default_factory=list)  # "<path>" of texture nodes / mtlx nodes
+    findings: list[Finding] = field(default_factory=list)
+    plan: list[str] = field(default_factory=list)  # one human-readable line per edit
+    dry_run: bool = False
+    output: Path | None = None  # the new layer / document (NEW_LAYER mode), if written or planned
+
+    def to_dict(self) -> dict:
+        return {
+            "layers_written": [str(p) for p in self.layers_written],
+            "backups": [str(p) for p in self.backups],
+            "edited_prims": list(self.edited_prims),
+            "findings": [f.to_dict() for f in self.findings],
+            "plan": list(self.plan),
+            "dry_run": self.dry_run,
+            "output": str(self.output) if self.output else None,
+        }
+
+
+def uv_scale_for(working_size: tuple[int, int], crop: tuple[int, int]) -> tuple[float, float]:
+    """UV scale that keeps the pattern's real-world size for a 2c x 2c tile.
+
+    The working image is W x H pixels for the UV unit square, so the tile spans 2c/W x 2c/H of
+    UV space; multiplying UVs by (W / 2c_w, H / 2c_h) makes one UV unit one tile.
+
+    >>> uv_scale_for((1024, 512), (128, 128))
+    (4.0, 2.0)
+    """
+    (w, h), (cw, ch) = working_size, crop
+    if min(w, h, cw, ch) <= 0:
+        raise ValueError(f"working size {working_size} and crop {crop} must be positive")
+    return (w / (2.0 * cw), h / (2.0 * ch))
