@@ -1,0 +1,106 @@
+"""Training and sampling settings for SeamlessGAN, and the named presets."""
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass, field
+
+__all__ = ["SynthesisConfig", "PRESETS", "get_preset"]
+
+
+@dataclass(frozen=True)
+class SynthesisConfig:
+    """Every knob of training and sampling; defaults are the paper's (section 5) unless noted."""
+
+    # --- networks ---
+    k: int = 128  # source crop size; the target crop is 2k (paper: 128). Multiple of 8.
+    ngf: int = 64  # generator width at full resolution; the latent x0 has 2*ngf channels
+    ndf: int = 64  # discriminator width of its first layer (doubles per layer, PatchGAN)
+    n_res_blocks: int = 5  # residual blocks after the encoder (paper: l = 5)
+    init_std: float = 0.02  # N(0, 0.02) weight init, standard for pix2pix-style GANs
+
+    # --- training ---
+    iterations: int = 50_000  # paper: 50 000 at batch size 1
+    lr: float = 2e-4  # Adam learning rate for G and D (paper)
+    betas: tuple[float, float] = (0.5, 0.999)  # pix2pix/Zhou et al. Adam betas; 0.5 damps GAN oscillation
+    lr_milestones: tuple[float, ...] = (0.6, 0.8)  # fractions of the run where lr is divided (paper: 30k, 40k of 50k)
+    lr_decay: float = 5.0  # divisor applied at each milestone (paper)
+    lambda_adv: float = 1.0  # adversarial weight
+    lambda_l1: float = 10.0  # per-map L1 weight (paper)
+    lambda_style: float = 1.0  # per-map Gram style weight
+    style_features: str = "random"  # "random" (seeded, no download) or "vgg19" (needs vgg_weights)
+    vgg_weights: str | None = None  # local VGG19 state dict (torchvision key names); no downloads, ever
+    style_scales: int = 4  # random extractor: number of scales (each halves resolution)
+    style_channels: int = 32  # random extractor: channels per scale; small so style does not dominate the step
+    style_seed: int = 1234  # random extractor filters are fixed by this seed, independent of the training seed
+    seam_training_prob: float = 0.0  # beyond the paper: fraction of G steps fed a 2x2-tiled latent (off by default)
+
+    # --- run control ---
+    checkpoint_every: int = 500  # iterations between checkpoints (one is always written at the end)
+    progress_every: int = 10  # iterations between progress callbacks
+    precision: str = "auto"  # "auto" (CUDA: bf16/fp16, CPU: bf16 if supported else fp32), "fp32", "bf16", "fp16"
+
+    # --- sampling (paper section 4.2) ---
+    tiling: str = "circular"  # "circular": one period of the infinitely tiled latent (exactly periodic, 4x cheaper);
+    #                           "repeat": literal 2x2 repeat, decode 4c, keep the central 2c (paper)
+    c_min: int = 100  # smallest crop side tried (paper)
+    crop_step: int = 16  # decrease of the larger crop side between sizes (pixels)
+    crops_per_size: int = 3  # random crops per size below c_max (paper); c_max has exactly one
+    max_candidates: int | None = None  # stop the search after this many candidates (None: until c_min)
+    gamma: float = 1.0  # Q threshold factor, tau = gamma * min(D outside the bands) (paper)
+    band_fraction: float = 0.2  # width of each search band as a fraction of the dimension (paper)
+    chunk_pixels: int = 1 << 21  # max output pixels a decoder chunk produces at once (memory bound for big tiles)
+
+    def __post_init__(self) -> None:
+        assert self.k % 8 == 0 and self.k >= 16, f"k must be a multiple of 8 and >= 16, got {self.k}"
+        assert self.precision in ("auto", "fp32", "bf16", "fp16"), f"unknown precision {self.precision!r}"
+        assert self.tiling in ("circular", "repeat"), f"tiling must be 'circular' or 'repeat', got {self.tiling!r}"
+        assert self.style_features in ("random", "vgg19"), (
+            f"style_features must be 'random' or 'vgg19', got {self.style_features!r}")
+        assert 0.0 <= self.seam_training_prob <= 1.0, "seam_training_prob is a probability"
+
+    def replace(self, **changes) -> "SynthesisConfig":
+        return dataclasses.replace(self, **changes)
+
+    def to_json(self) -> str:
+        return json.dumps(dataclasses.asdict(self), sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> "SynthesisConfig":
+        data = json.loads(text)
+        for key in ("betas", "lr_milestones"):
+            data[key] = tuple(data[key])
+        known = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: v for k, v in data.items() if k in known})
+
+    def training_fields(self) -> dict:
+        """The fields that change the trained weights (run control and sampling excluded)."""
+        skip = {"checkpoint_every", "progress_every", "tiling", "c_min", "crop_step", "crops_per_size",
+                "max_candidates", "gamma", "band_fraction", "chunk_pixels", "vgg_weights"}
+        return {k: v for k, v in dataclasses.asdict(self).items() if k not in skip}
+
+
+PRESETS: dict[str, SynthesisConfig] = {
+    # The paper's numbers (section 5); meant for a GPU.
+    "paper": SynthesisConfig(),
+    # CPU presets sized with benchmarks/speed.py (see benchmarks/results/speed.md).
+    "default": SynthesisConfig(k=64, ngf=32, ndf=32, n_res_blocks=5, iterations=3000, crop_step=32,
+                               max_candidates=12, checkpoint_every=250),
+    "draft": SynthesisConfig(k=48, ngf=16, ndf=16, n_res_blocks=3, iterations=800, crop_step=64,
+                             max_candidates=4, checkpoint_every=200),
+    # For tests: trains in about a second.
+    "tiny": SynthesisConfig(k=16, ngf=8, ndf=8, n_res_blocks=1, iterations=4, style_scales=2, style_channels=8,
+                            c_min=16, crop_step=8, max_candidates=6, checkpoint_every=2, progress_every=1),
+}
+
+
+def get_preset(name: str) -> SynthesisConfig:
+    """Return the preset called ``name``.
+
+    >>> get_preset("tiny").k
+    16
+    """
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise ValueError(f"unknown synthesis preset {name!r}; valid presets: {', '.join(sorted(PRESETS))}") from None
