@@ -1,0 +1,369 @@
+"""File values <-> the network domain [-1, 1]: :class:`MapEncoding`, :func:`decode_map`, :func:`encode_map`.
+
+What a map's encoding records, and how each network channel is made:
+
+* **channels**: the network sees the file channels the map's roles read (``r``, ``g``, ``b``,
+  ``a``; a 1- or 2-channel file answers ``r``/``g``/``b`` with its first channel), plus the alpha
+  channel whenever the file has one (alpha is kept, so the output keeps it). A map with no roles
+  uses all channels. File channels left out are written back as a constant (``fill``: the
+  source channel's mean).
+* **colour**: colour channels are decoded to linear with the map's colour space (sRGB EOTF from
+  colour-science, or raw); alpha is always linear.
+* **normals**: the xyz channels of a normal map become unit vectors with the map's scale and bias
+  (negative Y scale = the other Y convention), and go to the network as they are (already in
+  [-1, 1]). Encoding renormalises, then inverts scale and bias.
+* **range**: other channels are mapped affinely from ``[lo, hi]`` to [-1, 1]. Integer files use
+  [0, 1]. Float files get a range fitted to their pixels, ``lo = min(0, min)``,
+  ``hi = max(1, max)``; when values leave [-1, 1] (HDR, e.g. emission above 1) the ``log`` tone
+  is used: ``sign(x) * log1p(|x|)`` before the affine map, which is invertible, keeps detail in
+  [0, 1] and brings large values into range. ``encode_map(decode_map(x)) == x`` up to float
+  rounding, so nothing is lost before quantisation.
+
+Non-finite input is refused (``ValueError``): replace it first with
+:func:`seamless_usd.imaging.finite.replace_nonfinite`, which :func:`load_stack_pixels` does and
+reports.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from seamless_usd.discover.types import ColorSpace, ImageInfo, TextureMap
+from seamless_usd.imaging.transfer import from_linear, to_linear
+from seamless_usd.imaging.io import alpha_channel
+from seamless_usd.imaging.normals import decode_normals, encode_normals, normal_scale_bias
+
+__all__ = ["Tone", "ValueRange", "MapEncoding", "decode_map", "encode_map"]
+
+_INTEGER_TYPES = ("uint8", "uint16", "int8", "int16", "uint32", "int32")
+
+
+class Tone(str, Enum):
+    """Curve applied before the affine range map."""
+
+    LINEAR = "linear"  # values within [-1, 1]: the affine map alone (exact for LDR data)
+    LOG = "log"  # sign(x) * log1p(|x|): HDR values, invertible with expm1
+
+
+@dataclass(frozen=True)
+class ValueRange:
+    """Maps linear values in ``[lo, hi]`` to [-1, 1] through ``tone``; invertible, never clipping.
+
+    Examples
+    --------
+    >>> r = ValueRange(0.0, 8.0, Tone.LOG)
+    >>> float(r.to_network(np.array(8.0))), round(float(r.from_network(r.to_network(np.array(3.0)))), 9)
+    (1.0, 3.0)
+    """
+
+    lo: float = 0.0
+    hi: float = 1.0
+    tone: Tone = Tone.LINEAR
+
+    def __post_init__(self) -> None:
+        if not self.hi > self.lo:
+            raise ValueError(f"ValueRange needs hi > lo, got [{self.lo}, {self.hi}]")
+
+    @classmethod
+    def fit(cls, values: np.ndarray) -> ValueRange:
+        """The range covering ``values`` and [0, 1], with the log tone when they leave [-1, 1]."""
+        v = np.asarray(values, dtype=np.float64)
+        v = v[np.isfinite(v)]
+        lo = min(0.0, float(v.min())) if v.size else 0.0
+        hi = max(1.0, float(v.max())) if v.size else 1.0
+        tone = Tone.LOG if (hi > 1.0 or lo < -1.0) else Tone.LINEAR
+        return cls(lo, hi, tone)
+
+    def _curve(self, x: np.ndarray) -> np.ndarray:
+        return x if self.tone is Tone.LINEAR else np.sign(x) * np.log1p(np.abs(x))
+
+    def _uncurve(self, s: np.ndarray) -> np.ndarray:
+        return s if self.tone is Tone.LINEAR else np.sign(s) * np.expm1(np.abs(s))
+
+    def to_network(self, x: np.ndarray) -> np.ndarray:
+        a, b = self._curve(np.float64(self.lo)), self._curve(np.float64(self.hi))
+        return 2.0 * (self._curve(np.asarray(x, np.float64)) - a) / (b - a) - 1.0
+
+    def from_network(self, y: np.ndarray) -> np.ndarray:
+        a, b = self._curve(np.float64(self.lo)), self._curve(np.float64(self.hi))
+        return self._uncurve((np.asarray(y, np.float64) + 1.0) * 0.5 * (b - a) + a)
+
+
+@dataclass(frozen=True)
+class MapEncoding:
+    """How one map's file values become network values and back (see the module docstring).
+
+    Build it with :meth:`for_map` (from discovery) or :meth:`for_image` (from a bare header).
+    """
+
+    color_space: ColorSpace
+    dtype: str  # source sample type: "uint8", "uint16", "half", "float"
+    file_channels: int
+    channels: tuple[int, ...]  # file channel indices the network sees, in network order
+    alpha: int | None = None  # file index of the alpha channel (always kept when present)
+    normal: tuple[int, int, int] | None = None  # file indices of a normal map's x, y, z
+    normal_scale: tuple[float, float, float] = (2.0, 2.0, 2.0)
+    normal_bias: tuple[float, float, float] = (-1.0, -1.0, -1.0)
+    value_range: ValueRange = ValueRange()  # colour / data channels
+    alpha_range: ValueRange = ValueRange()
+    fill: tuple[float, ...] = ()  # per file channel: the value written where a channel is not kept
+    notes: tuple[str, ...] = field(default=(), compare=False)  # what was decided and why
+
+    @property
+    def network_channels(self) -> int:
+        """How many channels the network sees for this map."""
+        return len(self.channels)
+
+    @property
+    def is_integer(self) -> bool:
+        return self.dtype in _INTEGER_TYPES
+
+    @classmethod
+    def for_map(
+        cls, texture_map: TextureMap, info: ImageInfo, pixels: np.ndarray | None = None
+    ) -> MapEncoding:
+        """The encoding of a discovered map.
+
+        Parameters
+        ----------
+        texture_map
+            Gives the colour space, the channels its roles read, whether it is a normal map and
+            its scale/bias.
+        info
+            The file header (channel count and names, sample type).
+        pixels
+            The file values ``(H, W, C)``, finite. Needed for float files so the range covers
+            their values (HDR); also gives the fill values of unused channels. Without them a
+            float map uses [0, 1] and values outside it leave [-1, 1] in the network domain.
+
+        Raises
+        ------
+        ValueError
+            A normal map whose scale has a zero component.
+        """
+        scale_bias = None
+        if texture_map.is_normal:
+            scale_bias = normal_scale_bias(texture_map.scale, texture_map.bias)
+        return cls.for_image(
+            info,
+            texture_map.color_space,
+            channels_used=texture_map.channels_used,
+            normal_scale_bias=scale_bias,
+            pixels=pixels,
+        )
+
+    @classmethod
+    def for_image(
+        cls,
+        info: ImageInfo,
+        color_space: ColorSpace | str,
+        *,
+        channels_used: str = "",
+        normal_scale_bias: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None,
+        pixels: np.ndarray | None = None,
+    ) -> MapEncoding:
+        """The encoding of an image used with the given channels (``""`` = all channels).
+
+        ``normal_scale_bias`` marks a normal map (its xyz scale and bias, see
+        :func:`~seamless_usd.imaging.normals.normal_scale_bias`). ``pixels`` as in :meth:`for_map`.
+
+        Examples
+        --------
+        >>> info = ImageInfo(4, 4, 4, "uint8", "png", ("R", "G", "B", "A"))
+        >>> MapEncoding.for_image(info, "sRGB", channels_used="rgb").channels
+        (0, 1, 2, 3)
+        """
+        cs = ColorSpace(color_space)
+        n = info.channels
+        alpha = alpha_channel(info)
+        notes: list[str] = []
+
+        def index(letter: str) -> int | None:
+            if letter == "a":
+                return alpha
+            if n <= 2:
+                return 0  # grey (+ alpha): r, g and b all read the grey channel
+            return "rgb".index(letter)
+
+        if channels_used:
+            unknown = set(channels_used) - set("rgba")
+            if unknown:
+                raise ValueError(f"unknown channel letters {sorted(unknown)} in {channels_used!r}; use r, g, b, a")
+            kept = {index(c) for c in channels_used} - {None}
+            if "a" in channels_used and alpha is None:
+                notes.append("a role reads alpha but the file has none (the shader sees 1)")
+        else:
+            kept = set(range(n))
+        if alpha is not None and alpha not in kept:
+            kept.add(alpha)
+            notes.append("alpha kept although no role reads it")
+        channels = tuple(sorted(kept))
+
+        normal = None
+        scale, bias = (2.0, 2.0, 2.0), (-1.0, -1.0, -1.0)
+        if normal_scale_bias is not None:
+            if n >= 3 and {0, 1, 2} <= kept and alpha not in (0, 1, 2):
+                normal = (0, 1, 2)
+                scale, bias = normal_scale_bias
+            else:
+                notes.append("normal map without three xyz channels: treated as plain values")
+
+        value_range = alpha_range = ValueRange()
+        fill = tuple(1.0 if i == alpha else 0.0 for i in range(n))
+        if pixels is not None:
+            p = np.asarray(pixels, dtype=np.float64)
+            if p.ndim == 2:
+                p = p[..., None]
+            if p.shape[-1] != n:
+                raise ValueError(f"pixels have {p.shape[-1]} channels, the header says {n}")
+            fill = tuple(float(np.nanmean(p[..., i])) if p[..., i].size else 0.0 for i in range(n))
+            if not cls._integer(info.dtype):
+                values = [i for i in channels if i != alpha and (normal is None or i not in normal)]
+                if values:
+                    linear = to_linear(p[..., values], cs, info.dtype)
+                    value_range = ValueRange.fit(linear)
+                if alpha is not None:
+                    alpha_range = ValueRange.fit(p[..., alpha])
+                if value_range.tone is Tone.LOG:
+                    notes.append(
+                        f"values in [{value_range.lo:g}, {value_range.hi:g}]: log-encoded (HDR)"
+                    )
+        return cls(
+            color_space=cs,
+            dtype=info.dtype,
+            file_channels=n,
+            channels=channels,
+            alpha=alpha,
+            normal=normal,
+            normal_scale=tuple(float(v) for v in scale),  # type: ignore[arg-type]
+            normal_bias=tuple(float(v) for v in bias),  # type: ignore[arg-type]
+            value_range=value_range,
+            alpha_range=alpha_range,
+            fill=fill,
+            notes=tuple(notes),
+        )
+
+    @staticmethod
+    def _integer(dtype: str) -> bool:
+        return dtype in _INTEGER_TYPES
+
+    def channel_groups(self) -> tuple[list[int], list[int], list[int]]:
+        """Network positions of the (value, normal, alpha) channels, three lists."""
+        values, normals, alphas = [], [], []
+        for j, f in enumerate(self.channels):
+            if f == self.alpha:
+                alphas.append(j)
+            elif self.normal is not None and f in self.normal:
+                normals.append(j)
+            else:
+                values.append(j)
+        return values, normals, alphas
+
+    def to_dict(self) -> dict:
+        """JSON form for reports."""
+        d = asdict(self)
+        d["color_space"] = self.color_space.value
+        for key in ("value_range", "alpha_range"):
+            d[key]["tone"] = getattr(self, key).tone.value
+        d["channels"] = list(self.channels)
+        d["notes"] = list(self.notes)
+        return d
+
+
+def _as_hwc(array: np.ndarray, channels: int, what: str) -> np.ndarray:
+    a = np.asarray(array)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3 or a.shape[2] != channels:
+        raise ValueError(f"{what}: expected (H, W) or (H, W, {channels}), got {np.shape(array)}")
+    if not np.isfinite(a).all():
+        raise ValueError(
+            f"{what} contain NaN or inf; replace them first (imaging.finite.replace_nonfinite)"
+        )
+    return a
+
+
+def decode_map(pixels: np.ndarray, encoding: MapEncoding) -> np.ndarray:
+    """File values -> network values in [-1, 1].
+
+    Parameters
+    ----------
+    pixels
+        ``(H, W, C_file)`` file values (or ``(H, W)`` for a 1-channel file), finite.
+    encoding
+        The map's :class:`MapEncoding`.
+
+    Returns
+    -------
+    np.ndarray
+        ``(H, W, encoding.network_channels)`` float32.
+
+    Raises
+    ------
+    ValueError
+        Wrong shape, or NaN / inf in ``pixels``.
+
+    Examples
+    --------
+    >>> info = ImageInfo(1, 1, 1, "uint8", "png")
+    >>> enc = MapEncoding.for_image(info, "raw")
+    >>> decode_map(np.array([[0.0]]), enc).tolist()
+    [[[-1.0]]]
+    """
+    p = _as_hwc(pixels, encoding.file_channels, "pixels").astype(np.float64, copy=False)
+    out = np.empty(p.shape[:2] + (encoding.network_channels,), dtype=np.float64)
+    values, normals, alphas = encoding.channel_groups()
+    if values:
+        idx = [encoding.channels[j] for j in values]
+        linear = to_linear(p[..., idx], encoding.color_space, encoding.dtype)
+        out[..., values] = encoding.value_range.to_network(linear)
+    if normals:
+        linear = to_linear(p[..., list(encoding.normal)], encoding.color_space, encoding.dtype)
+        out[..., normals] = decode_normals(linear, encoding.normal_scale, encoding.normal_bias)
+    if alphas:
+        out[..., alphas] = encoding.alpha_range.to_network(p[..., [encoding.alpha]])
+    return out.astype(np.float32)
+
+
+def encode_map(values: np.ndarray, encoding: MapEncoding) -> np.ndarray:
+    """Network values -> file values, with the file's full channel layout.
+
+    Normals are renormalised first; channels the network does not see get ``encoding.fill``.
+    Integer files' values are clipped to [0, 1] (the writer rounds them to codes); float values
+    are returned unclipped.
+
+    Parameters
+    ----------
+    values
+        ``(H, W, encoding.network_channels)`` network values (``(H, W)`` for one channel), finite.
+    encoding
+        The map's :class:`MapEncoding`.
+
+    Returns
+    -------
+    np.ndarray
+        ``(H, W, encoding.file_channels)`` float32 file values.
+
+    Raises
+    ------
+    ValueError
+        Wrong shape, or NaN / inf in ``values`` (e.g. a diverged model).
+    """
+    v = _as_hwc(values, encoding.network_channels, "network values").astype(np.float64, copy=False)
+    out = np.empty(v.shape[:2] + (encoding.file_channels,), dtype=np.float64)
+    out[...] = np.asarray(encoding.fill or [0.0] * encoding.file_channels, dtype=np.float64)
+    groups_values, normals, alphas = encoding.channel_groups()
+    if groups_values:
+        idx = [encoding.channels[j] for j in groups_values]
+        linear = encoding.value_range.from_network(v[..., groups_values])
+        out[..., idx] = from_linear(linear, encoding.color_space)
+    if normals:
+        linear = encode_normals(v[..., normals], encoding.normal_scale, encoding.normal_bias)
+        out[..., list(encoding.normal)] = from_linear(linear, encoding.color_space)
+    if alphas:
+        out[..., [encoding.alpha]] = encoding.alpha_range.from_network(v[..., alphas])
+    if encoding.is_integer:
+        np.clip(out, 0.0, 1.0, out=out)
+    return out.astype(np.float32)

@@ -1,0 +1,72 @@
+"""Normal maps: file values <-> unit vectors with the map's UsdUVTexture scale and bias.
+
+A renderer reads ``n = value * scale + bias`` per channel. The conventional tangent-space map
+has scale (2, 2, 2) and bias (-1, -1, -1); a map in the other Y convention (DirectX style) is
+declared with a negative Y scale, (2, -2, 2) and (-1, 1, -1). Decoding applies the declared
+numbers, so every normal map reaches the network in the shader's convention, and encoding
+inverts them, so the output is stored in the source's convention.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["DEFAULT_NORMAL_SCALE", "DEFAULT_NORMAL_BIAS", "normal_scale_bias", "renormalise", "decode_normals", "encode_normals"]
+
+DEFAULT_NORMAL_SCALE = (2.0, 2.0, 2.0)
+DEFAULT_NORMAL_BIAS = (-1.0, -1.0, -1.0)
+_FLAT = np.array([0.0, 0.0, 1.0])
+
+
+def normal_scale_bias(
+    scale: tuple[float, ...], bias: tuple[float, ...]
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """The xyz scale and bias a normal map is decoded with.
+
+    The identity (scale 1, bias 0: nothing authored, or a MaterialX ``normalmap`` node, which
+    applies ``2 * value - 1`` itself) means the conventional (2, 2, 2) / (-1, -1, -1).
+
+    Raises
+    ------
+    ValueError
+        When a scale component is 0 (the map could not be inverted).
+
+    Examples
+    --------
+    >>> normal_scale_bias((1, 1, 1, 1), (0, 0, 0, 0))
+    ((2.0, 2.0, 2.0), (-1.0, -1.0, -1.0))
+    >>> normal_scale_bias((2, -2, 2, 1), (-1, 1, -1, 0))
+    ((2.0, -2.0, 2.0), (-1.0, 1.0, -1.0))
+    """
+    s = tuple(float(v) for v in scale[:3])
+    b = tuple(float(v) for v in bias[:3])
+    if s == (1.0, 1.0, 1.0) and b == (0.0, 0.0, 0.0):
+        return DEFAULT_NORMAL_SCALE, DEFAULT_NORMAL_BIAS
+    if any(v == 0.0 for v in s):
+        raise ValueError(f"normal map scale {s} has a zero component; it cannot be inverted")
+    return s, b  # type: ignore[return-value]
+
+
+def renormalise(vectors: np.ndarray) -> np.ndarray:
+    """Unit vectors along the last axis (length 3); zero-length vectors become (0, 0, 1).
+
+    Examples
+    --------
+    >>> renormalise(np.array([[0.0, 0.0, 2.0], [0.0, 0.0, 0.0]])).tolist()
+    [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]
+    """
+    v = np.asarray(vectors, dtype=np.float64)
+    length = np.linalg.norm(v, axis=-1, keepdims=True)
+    tiny = length < 1e-12
+    return np.where(tiny, _FLAT, v / np.where(tiny, 1.0, length))
+
+
+def decode_normals(values: np.ndarray, scale, bias) -> np.ndarray:
+    """Linear file values ``(..., 3)`` -> unit vectors ``value * scale + bias``, renormalised."""
+    v = np.asarray(values, dtype=np.float64)
+    return renormalise(v * np.asarray(scale, np.float64) + np.asarray(bias, np.float64))
+
+
+def encode_normals(vectors: np.ndarray, scale, bias) -> np.ndarray:
+    """Vectors ``(..., 3)`` -> linear file values: renormalise, then ``(n - bias) / scale``."""
+    n = renormalise(vectors)
+    return (n - np.asarray(bias, np.float64)) / np.asarray(scale, np.float64)
