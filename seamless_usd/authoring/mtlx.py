@@ -33,6 +33,7 @@ class MtlxNames:
     PLACE_2D = "place2d"
     UV_NODE = "seamless_uv"
     VECTOR2 = "vector2"
+    STRING = "string"
     FILENAME = "filename"
     FILE = "file"
     TEXCOORD = "texcoord"
@@ -132,6 +133,11 @@ def _same_path(a: str | None, b: Path) -> bool:
         return Path(a).resolve() == b
 
 
+def _set_vector2(inp: mx.Input, value) -> None:
+    """Set a vector2 with full float precision (MaterialX's own formatting keeps 6 digits)."""
+    inp.setValueString(_fmt((float(value[0]), float(value[1]))))
+
+
 def _fmt(values) -> str:
     return ", ".join(repr(float(v)) if isinstance(v, float) else str(v) for v in values)
 
@@ -159,7 +165,7 @@ class _MtlxAuthor:
                 Severity.WARNING, "mtlx-includes-moved", asset_ref(self.out),
                 "the new document is in another folder; its XIncludes keep their relative hrefs"))
         for elem in self.doc.traverseTree():
-            if isinstance(elem, mx.Input) and elem.getType() == MtlxNames.FILENAME and elem.hasValue():
+            if isinstance(elem, mx.Input) and elem.getType() == MtlxNames.FILENAME and elem.getValueString():
                 value = elem.getResolvedValueString()
                 if value and not os.path.isabs(value):
                     new = relative_asset_path(self.src.parent / value, self.out.parent)
@@ -175,19 +181,14 @@ class _MtlxAuthor:
             inp.setValueString(rel)
             self._plan(f"set {prim_ref(inp.getNamePath())} = {asset_ref(rel)}")
 
-    def _authored(self, node: mx.Node, name: str) -> mx.Input:
+    def _authored(self, node: mx.Node, name: str, type_name: str) -> mx.Input:
         """The input holding ``name``'s value: the interface input it reads, or the node's own."""
         inp = node.getInput(name)
         if inp is not None and inp.getInterfaceName():
             iface = inp.getInterfaceInput()
             if iface is not None:
                 return iface
-        if inp is None:
-            nodedef_input = node.getNodeDef().getActiveInput(name) if node.getNodeDef() else None
-            inp = node.addInput(name, nodedef_input.getType() if nodedef_input else MtlxNames.VECTOR2)
-            if nodedef_input is not None and nodedef_input.hasValue():
-                inp.setValueString(nodedef_input.getValueString())
-        return inp
+        return inp if inp is not None else node.addInput(name, type_name)
 
     def edit_map(self, map_result, uv_scale, provenance: Provenance) -> None:
         tex_map = map_result.map
@@ -217,13 +218,13 @@ class _MtlxAuthor:
         file_input = owner if isinstance(owner, mx.Input) else (
             owner.getInput(at.attribute) if owner is not None and hasattr(owner, "getInput") else None)
         if file_input is None:
-            file_input = self._authored(node, MtlxNames.FILE)
+            file_input = self._authored(node, MtlxNames.FILE, MtlxNames.FILENAME)
         self._set_file(file_input, relative_asset_path(out_file, self.out.parent))
         category = node.getCategory()
         # address modes
         if category != MtlxNames.TILED_IMAGE:
             for name in (MtlxNames.U_ADDRESS, MtlxNames.V_ADDRESS):
-                inp = self._authored(node, name)
+                inp = self._authored(node, name, MtlxNames.STRING)
                 if inp.getValueString() != MtlxNames.PERIODIC:
                     inp.setValueString(MtlxNames.PERIODIC)
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {MtlxNames.PERIODIC}")
@@ -233,12 +234,12 @@ class _MtlxAuthor:
         if category == MtlxNames.TILED_IMAGE:
             undo = prior or (1.0, 1.0)
             for name in (MtlxNames.UV_TILING, MtlxNames.UV_OFFSET):
-                inp = self._authored(node, name)
-                value = inp.getValue() if inp.hasValue() else (
+                inp = self._authored(node, name, MtlxNames.VECTOR2)
+                value = inp.getValue() if inp.getValueString() else (
                     mx.Vector2(1, 1) if name == MtlxNames.UV_TILING else mx.Vector2(0, 0))
                 new = mx.Vector2(value[0] / undo[0] * total[0], value[1] / undo[1] * total[1])
                 if any(abs(new[i] - value[i]) > 1e-9 for i in range(2)):
-                    inp.setValue(new)
+                    _set_vector2(inp, new)
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {inp.getValueString()}")
         else:
             total = self._place2d(node, scale, from_source)
@@ -269,12 +270,13 @@ class _MtlxAuthor:
         upstream = tex_in.getConnectedNode() if tex_in is not None else None
         if upstream is not None and upstream.getAttribute(MtlxNames.MARK_UV) == "true":
             s_in = upstream.getInput(MtlxNames.SCALE)
-            current = s_in.getValue() if s_in is not None and s_in.hasValue() else mx.Vector2(1, 1)
+            current = s_in.getValue() if s_in is not None and s_in.getValueString() else mx.Vector2(1, 1)
             prior = (1.0 / current[0], 1.0 / current[1])
             total = scale if from_source else (prior[0] * scale[0], prior[1] * scale[1])
             new = mx.Vector2(1.0 / total[0], 1.0 / total[1])
             if any(abs(new[i] - current[i]) > 1e-9 for i in range(2)):
-                upstream.setInputValue(MtlxNames.SCALE, new, MtlxNames.VECTOR2)
+                _set_vector2(upstream.getInput(MtlxNames.SCALE) or upstream.addInput(
+                    MtlxNames.SCALE, MtlxNames.VECTOR2), new)
                 self._plan(f"set {prim_ref(upstream.getNamePath())}.scale = {_fmt(new)}")
             return total
         parent = node.getParent()
@@ -291,8 +293,8 @@ class _MtlxAuthor:
                 coords = place.addInput(MtlxNames.TEXCOORD, MtlxNames.VECTOR2)
                 for attr, value in connection:
                     coords.setAttribute(attr, value)
-            place.setInputValue(MtlxNames.SCALE, mx.Vector2(1.0 / scale[0], 1.0 / scale[1]),
-                                MtlxNames.VECTOR2)
+            _set_vector2(place.addInput(MtlxNames.SCALE, MtlxNames.VECTOR2),
+                         (1.0 / scale[0], 1.0 / scale[1]))
             self._uv_nodes[key] = name
             self._plan(f"add place2d {prim_ref(place.getNamePath())} scale = "
                        f"{place.getInput(MtlxNames.SCALE).getValueString()}")

@@ -1,0 +1,201 @@
+"""Authoring into MaterialX documents written by the tests: files, address modes, uvtiling, place2d."""
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import MaterialX as mx
+import pytest
+
+from seamless_usd.authoring import (
+    Affine2,
+    MapResult,
+    Provenance,
+    StackResult,
+    WriteMode,
+    author_mtlx,
+    place2d,
+    read_mtlx_provenance,
+    scale2d,
+    uv_scale_for,
+)
+from seamless_usd.discover.types import AuthoredAt, ColorSpace, Origin, RoleUse, TextureMap, TextureStack, UVChain
+
+SCALE = uv_scale_for((512, 768), (64, 128))  # (4, 3)
+
+DOC = """<?xml version="1.0"?>
+<materialx version="1.39" fileprefix="textures/">
+  <nodegraph name="NG_brick">
+    <input name="albedo_file" type="filename" value="brick albedo é.png" />
+    <texcoord name="uv" type="vector2" />
+    <place2d name="place" type="vector2">
+      <input name="texcoord" type="vector2" nodename="uv" />
+      <input name="scale" type="vector2" value="0.5, 2" />
+      <input name="rotate" type="float" value="30" />
+      <input name="offset" type="vector2" value="0.1, 0.2" />
+      <input name="pivot" type="vector2" value="0.5, 0.5" />
+    </place2d>
+    <image name="image_color" type="color3">
+      <input name="file" type="filename" interfacename="albedo_file" />
+      <input name="texcoord" type="vector2" nodename="place" />
+      <input name="uaddressmode" type="string" value="clamp" />
+    </image>
+    <tiledimage name="tiled_rough" type="float">
+      <input name="file" type="filename" value="rough.png" />
+      <input name="uvtiling" type="vector2" value="2, 3" />
+      <input name="uvoffset" type="vector2" value="0.5, 0.25" />
+    </tiledimage>
+    <output name="out_color" type="color3" nodename="image_color" />
+    <output name="out_rough" type="float" nodename="tiled_rough" />
+  </nodegraph>
+  <standard_surface name="SR_brick" type="surfaceshader">
+    <input name="base_color" type="color3" nodegraph="NG_brick" output="out_color" />
+    <input name="specular_roughness" type="float" nodegraph="NG_brick" output="out_rough" />
+  </standard_surface>
+  <surfacematerial name="M_brick" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="SR_brick" />
+  </surfacematerial>
+</materialx>
+"""
+
+
+@pytest.fixture()
+def document(tmp_path: Path) -> Path:
+    path = tmp_path / "brick.mtlx"
+    path.write_text(DOC, encoding="utf-8")
+    (tmp_path / "textures").mkdir()
+    for name in ("brick albedo é.png", "rough.png"):
+        (tmp_path / "textures" / name).write_bytes(b"source")
+    (tmp_path / "tileable").mkdir()
+    for name in ("albedo_tile.png", "rough_tile.png"):
+        (tmp_path / "tileable" / name).write_bytes(b"tile")
+    return path
+
+
+def mtlx_map(doc: Path, node: str, source: str, file_at: AuthoredAt) -> TextureMap:
+    return TextureMap(
+        material="M_brick", node=node, node_type="ND_image_color3", origin=Origin.MTLX,
+        asset=source, resolved=str(doc.parent / "textures" / source), file_at=file_at,
+        roles=(RoleUse("base_color", "rgb", "SR_brick.base_color"),), color_space=ColorSpace.SRGB,
+        color_space_reason="test", uv=UVChain("UV0", None), document=str(doc),
+    )
+
+
+def results(doc: Path) -> list[StackResult]:
+    albedo = mtlx_map(doc, "NG_brick/image_color", "brick albedo é.png",
+                      AuthoredAt("NG_brick", "albedo_file", str(doc)))
+    rough = mtlx_map(doc, "NG_brick/tiled_rough", "rough.png",
+                     AuthoredAt("NG_brick/tiled_rough", "file", str(doc)))
+    prov = Provenance("textures/brick albedo é.png", (64, 128), SCALE, False, 0.3, (0.1, 0.2), "h", "0.1.0")
+    out = doc.parent / "tileable"
+    return [
+        StackResult(TextureStack("M_brick", albedo.uv, (albedo,)),
+                    [MapResult(albedo, out / "albedo_tile.png")], SCALE, prov),
+        StackResult(TextureStack("M_brick", rough.uv, (rough,)),
+                    [MapResult(rough, out / "rough_tile.png")], SCALE, prov),
+    ]
+
+
+def read(path: Path) -> mx.Document:
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(path))
+    return doc
+
+
+def chain(doc: mx.Document, node_path: str) -> Affine2:
+    """The affine map from UV0 to the UVs the node samples with (place2d chain, tiledimage)."""
+    node = doc.getDescendant(node_path)
+    total = Affine2()
+    if node.getCategory() == "tiledimage":
+        t, o = node.getInputValue("uvtiling"), node.getInputValue("uvoffset")
+        total = Affine2(a=t[0], d=t[1], tx=-o[0], ty=-o[1])
+    steps = []
+    upstream = node.getInput("texcoord").getConnectedNode() if node.getInput("texcoord") else None
+    while upstream is not None and upstream.getCategory() == "place2d":
+        def val(name, default):
+            v = upstream.getInputValue(name)
+            return default if v is None else (tuple(v) if not isinstance(v, (int, float)) else v)
+        steps.append(place2d(val("pivot", (0.0, 0.0)), val("scale", (1.0, 1.0)), val("rotate", 0.0),
+                             val("offset", (0.0, 0.0)), val("operationorder", 0)))
+        inp = upstream.getInput("texcoord")
+        upstream = inp.getConnectedNode() if inp is not None else None
+    out = Affine2()
+    for step in reversed(steps):
+        out = out.then(step)
+    return out.then(total)
+
+
+def test_new_document_with_paths_address_modes_and_uv(document: Path):
+    before = hashlib.sha256(document.read_bytes()).hexdigest()
+    result = author_mtlx(document, results(document))
+    assert result.output == document.with_name("brick.seamless.mtlx")
+    assert result.layers_written == [result.output]
+    assert hashlib.sha256(document.read_bytes()).hexdigest() == before
+    old, new = read(document), read(result.output)
+    valid, message = new.validate()
+    assert valid, message
+    # files resolve (through fileprefix) to the tiles, relative to the new document
+    albedo_file = new.getDescendant("NG_brick/albedo_file")
+    assert (result.output.parent / albedo_file.getResolvedValueString()).resolve() == \
+        (document.parent / "tileable" / "albedo_tile.png").resolve()
+    rough_file = new.getDescendant("NG_brick/tiled_rough").getInput("file")
+    assert (result.output.parent / rough_file.getResolvedValueString()).resolve() == \
+        (document.parent / "tileable" / "rough_tile.png").resolve()
+    image = new.getDescendant("NG_brick/image_color")
+    assert image.getInputValue("uaddressmode") == "periodic"
+    assert image.getInputValue("vaddressmode") == "periodic"
+    # tiledimage: uvtiling and uvoffset scaled; image: a place2d after the existing one
+    tiled = new.getDescendant("NG_brick/tiled_rough")
+    assert tuple(tiled.getInputValue("uvtiling")) == pytest.approx((8.0, 9.0))
+    assert tuple(tiled.getInputValue("uvoffset")) == pytest.approx((2.0, 0.75))
+    for node in ("NG_brick/image_color", "NG_brick/tiled_rough"):
+        assert chain(new, node).close_to(chain(old, node).then(scale2d(SCALE)), tol=1e-9)
+    added = image.getInput("texcoord").getConnectedNode()
+    assert added.getName() == "seamless_uv" and added.getCategory() == "place2d"
+    assert added.getInput("texcoord").getNodeName() == "place"
+    recorded = read_mtlx_provenance(image)
+    assert recorded.uv_scale == pytest.approx(SCALE) and recorded.crop_size == (64, 128)
+    assert not recorded.q_passed
+
+
+def test_rerun_on_new_document_is_a_no_op(document: Path):
+    first = author_mtlx(document, results(document))
+    text = first.output.read_text(encoding="utf-8")
+    again = author_mtlx(first.output, [_retarget(r, first.output) for r in results(document)],
+                        output_path=first.output.with_name("again.mtlx"))
+    assert again.layers_written == [] and again.plan == []
+    assert first.output.read_text(encoding="utf-8") == text
+    new = read(first.output)
+    assert len([n for n in new.getDescendant("NG_brick").getNodes() if n.getCategory() == "place2d"]) == 2
+
+
+def _retarget(result: StackResult, doc: Path) -> StackResult:
+    from dataclasses import replace
+
+    maps = [MapResult(replace(m.map, document=str(doc),
+                              file_at=replace(m.map.file_at, layer=str(doc))), m.output_path)
+            for m in result.maps]
+    return replace(result, maps=maps)
+
+
+def test_in_place_keeps_backup_and_dry_run_writes_nothing(document: Path):
+    original = document.read_bytes()
+    dry = author_mtlx(document, results(document), mode=WriteMode.DRY_RUN)
+    assert dry.dry_run and dry.plan and dry.layers_written == []
+    assert sorted(p.name for p in document.parent.iterdir()) == ["brick.mtlx", "textures", "tileable"]
+    result = author_mtlx(document, results(document), mode=WriteMode.IN_PLACE)
+    assert result.layers_written == [document]
+    assert result.backups == [document.with_name("brick.mtlx.bak")]
+    assert result.backups[0].read_bytes() == original
+    in_place = read(document)
+    tiled = in_place.getDescendant("NG_brick/tiled_rough")
+    assert tuple(tiled.getInputValue("uvtiling")) == pytest.approx((8.0, 9.0))
+
+
+def test_new_document_in_another_folder_rebases_paths(document: Path):
+    out = document.parent / "out" / "brick.mtlx"
+    result = author_mtlx(document, results(document), output_path=out)
+    new = read(out)
+    image_file = new.getDescendant("NG_brick/albedo_file").getResolvedValueString()
+    assert (out.parent / image_file).resolve() == (document.parent / "tileable" / "albedo_tile.png").resolve()
+    assert result.layers_written == [out]
