@@ -62,7 +62,8 @@ def _read_through_ar(resolved: str) -> bytes:
 def _read_header(path: str, raw) -> ImageInfo:
     inp = oiio.ImageInput.open(path)
     if inp is None:
-        raise ImageReadError(oiio.geterror().strip().splitlines()[0] if oiio.geterror() else "unknown format")
+        lines = oiio.geterror().strip().splitlines()  # geterror() clears the message: read it once
+        raise ImageReadError(lines[0] if lines else "unknown image format")
     try:
         spec = inp.spec()
         fmt = inp.format_name()

@@ -81,8 +81,7 @@ def _mtlx_references(prim: Usd.Prim) -> list[MtlxReference]:
         for item in items:
             if not item.assetPath.lower().endswith(MTLX_SUFFIX):
                 continue
-            anchored = spec.layer.ComputeAbsolutePath(item.assetPath)
-            resolved = str(Ar.GetResolver().Resolve(anchored)) if anchored else ""
+            resolved = str(Ar.GetResolver().Resolve(usdgraph.anchored(spec.layer, item.assetPath)))
             found.append(
                 MtlxReference(
                     prim=str(prim.GetPath()),
@@ -216,5 +215,5 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
 def _anchor(attr: Usd.Attribute, asset: str) -> str:
     for spec in attr.GetPropertyStack(Usd.TimeCode.Default()):
         if spec.HasDefaultValue():
-            return spec.layer.ComputeAbsolutePath(asset)
+            return usdgraph.anchored(spec.layer, asset)
     return asset

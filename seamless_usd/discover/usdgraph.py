@@ -1,13 +1,15 @@
 """Small helpers over UsdShade: shader ids, input values and where they are authored."""
 from __future__ import annotations
 
-from pxr import Sdf, Usd, UsdShade
+import os
+
+from pxr import Ar, Sdf, Usd, UsdShade
 
 from seamless_usd.discover.types import AuthoredAt
 
 __all__ = [
     "shader_id", "layer_of", "authored_at", "input_value", "value_attribute", "producing_outputs",
-    "as_tuple", "asset_text",
+    "as_tuple", "asset_text", "anchored",
 ]
 
 
@@ -96,3 +98,13 @@ def asset_text(value) -> tuple[str, str]:
     if isinstance(value, Sdf.AssetPath):
         return value.path, value.resolvedPath
     return (str(value) if value else ""), ""
+
+
+def anchored(layer: Sdf.Layer, asset: str) -> str:
+    """``asset`` as Ar resolves it from ``layer`` (relative and search paths are tried next to
+    the layer first); a path next to the layer when it does not exist (for messages, UDIM tiles).
+    """
+    identifier = Ar.GetResolver().CreateIdentifier(asset, Ar.ResolvedPath(layer.resolvedPath or layer.identifier))
+    if os.path.isabs(identifier) or Ar.IsPackageRelativePath(identifier) or not layer.realPath:
+        return identifier
+    return os.path.normpath(os.path.join(os.path.dirname(layer.realPath), asset))

@@ -1,0 +1,114 @@
+"""Items discovery leaves out, each with a reason and a stable code, and never a crash."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+from pxr import Sdf, Usd, UsdShade, UsdUtils
+
+from seamless_usd.discover import scan_paths, scan_stage
+
+TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
+
+
+def write_image(path: Path, size: int = 128, channels: int = 3, dtype=oiio.UINT8) -> Path:
+    spec = oiio.ImageSpec(size, size, channels, dtype)
+    out = oiio.ImageOutput.create(str(path))
+    out.open(str(path), spec)
+    out.write_image(np.full((size, size, channels), 0.5, np.float32))
+    out.close()
+    return path
+
+
+def texture_scene(path: Path, file: str | None, *, st: bool = True) -> Path:
+    """A quad material whose diffuseColor reads one UsdUVTexture with ``file``."""
+    stage = Usd.Stage.CreateNew(str(path))
+    mat = UsdShade.Material.Define(stage, "/Looks/M")
+    surf = UsdShade.Shader.Define(stage, "/Looks/M/Surface")
+    surf.CreateIdAttr("UsdPreviewSurface")
+    mat.CreateSurfaceOutput().ConnectToSource(surf.ConnectableAPI(), "surface")
+    tex = UsdShade.Shader.Define(stage, "/Looks/M/Tex")
+    tex.CreateIdAttr("UsdUVTexture")
+    if file is not None:
+        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(file)
+    surf.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
+        tex.ConnectableAPI(), "rgb")
+    if st:
+        reader = UsdShade.Shader.Define(stage, "/Looks/M/St")
+        reader.CreateIdAttr("UsdPrimvarReader_float2")
+        reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+    stage.Save()
+    return path
+
+
+def _only_finding(result):
+    assert not result.stacks
+    (finding,) = result.findings
+    assert finding.severity.value == "skipped"
+    return finding
+
+
+def test_missing_texture_is_skipped_naming_prim_and_asset(tmp_path):
+    result = scan_paths([texture_scene(tmp_path / "s.usda", "tex/absent.png")])
+    f = _only_finding(result)
+    assert f.code == "missing-file"
+    assert "</Looks/M/Tex>" in f.where and "@tex/absent.png@" in f.where
+    assert "absent.png" in f.message
+
+
+def test_udim_is_skipped_listing_tiles_found(tmp_path):
+    (tmp_path / "tex").mkdir()
+    for tile in (1001, 1002, 1011):
+        write_image(tmp_path / "tex" / f"body.{tile}.png")
+    result = scan_paths([texture_scene(tmp_path / "s.usda", "tex/body.<UDIM>.png")])
+    f = _only_finding(result)
+    assert f.code == "udim" and "1001, 1002, 1011" in f.message
+
+
+def test_texture_without_file_is_skipped(tmp_path):
+    f = _only_finding(scan_paths([texture_scene(tmp_path / "s.usda", None)]))
+    assert f.code == "no-file"
+
+
+def test_texture_without_uv_input_is_skipped(tmp_path):
+    write_image(tmp_path / "a.png")
+    f = _only_finding(scan_paths([texture_scene(tmp_path / "s.usda", "a.png", st=False)]))
+    assert f.code == "no-uv" and "swatch" in f.message
+
+
+def test_image_below_100_px_is_skipped(tmp_path):
+    write_image(tmp_path / "small.png", size=64)
+    f = _only_finding(scan_paths([texture_scene(tmp_path / "s.usda", "small.png")]))
+    assert f.code == "too-small" and "64x64" in f.message
+
+
+def test_unreadable_image_is_skipped(tmp_path):
+    (tmp_path / "junk.png").write_bytes(b"this is not an image")
+    f = _only_finding(scan_paths([texture_scene(tmp_path / "s.usda", "junk.png")]))
+    assert f.code == "unreadable-file"
+
+
+def test_usdz_texture_is_read_through_ar_and_marked_in_package(tmp_path):
+    shutil.copy(TEXTURES / "brick_albedo.png", tmp_path / "albedo.png")
+    texture_scene(tmp_path / "s.usda", "albedo.png")
+    assert UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp_path / "s.usda")), str(tmp_path / "s.usdz"))
+    (tmp_path / "albedo.png").unlink()  # only the packaged copy is left
+    result = scan_paths([tmp_path / "s.usdz"])
+    (stack,) = result.stacks
+    (m,) = stack.maps
+    assert m.in_package and m.resolved.endswith("]") and "s.usdz[" in m.resolved
+    assert (m.image.width, m.image.channels) == (256, 3)
+
+
+def test_in_memory_stage_with_missing_and_good_textures(tmp_path):
+    write_image(tmp_path / "good.png")
+    stage = Usd.Stage.Open(str(texture_scene(tmp_path / "s.usda", "good.png")))
+    stage.GetRootLayer().Save()
+    mem = Usd.Stage.CreateInMemory()
+    mem.GetRootLayer().subLayerPaths.append(str(tmp_path / "s.usda"))
+    result = scan_stage(mem)
+    assert len(result.stacks) == 1 and not result.findings
+    assert result.sources and result.sources[0].startswith("anon:")
