@@ -149,7 +149,8 @@ def test_new_document_with_paths_address_modes_and_uv(document: Path):
     assert tuple(tiled.getInputValue("uvtiling")) == pytest.approx((8.0, 9.0))
     assert tuple(tiled.getInputValue("uvoffset")) == pytest.approx((2.0, 0.75))
     for node in ("NG_brick/image_color", "NG_brick/tiled_rough"):
-        assert chain(new, node).close_to(chain(old, node).then(scale2d(SCALE)), tol=1e-9)
+        # MaterialX holds vector2 values in float32 (1/3 is not exact): compare at float precision
+        assert chain(new, node).close_to(chain(old, node).then(scale2d(SCALE)), tol=1e-6)
     added = image.getInput("texcoord").getConnectedNode()
     assert added.getName() == "seamless_uv" and added.getCategory() == "place2d"
     assert added.getInput("texcoord").getNodeName() == "place"
