@@ -141,7 +141,8 @@ class MapEncoding:
         Raises
         ------
         ValueError
-            A normal map whose scale has a zero component.
+            A normal map whose scale has a zero component, or roles that read only channels the
+            file does not have (alpha of a file without alpha).
         """
         scale_bias = None
         if texture_map.is_normal:
@@ -200,6 +201,10 @@ class MapEncoding:
             kept.add(alpha)
             notes.append("alpha kept although no role reads it")
         channels = tuple(sorted(kept))
+        if not channels:
+            raise ValueError(
+                f"the roles read channels {channels_used!r} but the file has {n} channel(s) and no alpha"
+            )
 
         normal = None
         scale, bias = (2.0, 2.0, 2.0), (-1.0, -1.0, -1.0)

@@ -35,12 +35,16 @@ TRANSFER_FUNCTIONS: dict[ColorSpace, tuple[Callable[[np.ndarray], np.ndarray], C
 _CODE_MAX = {"uint8": 255, "uint16": 65535}
 
 
-def _functions(color_space: ColorSpace | str):
+def _colour_space(color_space: ColorSpace | str) -> ColorSpace:
     try:
-        return TRANSFER_FUNCTIONS[ColorSpace(color_space)]
+        return ColorSpace(color_space)
     except ValueError:
         valid = ", ".join(c.value for c in TRANSFER_FUNCTIONS)
         raise ValueError(f"unknown colour space {color_space!r}; valid: {valid}") from None
+
+
+def _functions(color_space: ColorSpace | str):
+    return TRANSFER_FUNCTIONS[_colour_space(color_space)]
 
 
 @lru_cache(maxsize=None)
@@ -72,7 +76,7 @@ def to_linear(values: np.ndarray, color_space: ColorSpace | str, dtype: str | No
     >>> float(to_linear(np.array(0.5), "sRGB").round(6))
     0.214041
     """
-    cs = ColorSpace(color_space)
+    cs = _colour_space(color_space)
     if cs is ColorSpace.RAW:
         return np.asarray(values, dtype=np.float64)
     code_max = _CODE_MAX.get(dtype or "")
