@@ -175,8 +175,11 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
         if str(source_cs) in (ColorSpace.SRGB.value, ColorSpace.RAW.value):
             labels.append(Label(str(source_cs), "inputs:sourceColorSpace"))
     node_file = UsdShade.Shader(tex).GetInput(Inputs.FILE)
-    for attr in (node_file.GetAttr() if node_file else None, file_attr):
-        if attr is not None and attr.HasColorSpace():
+    holders = [node_file.GetAttr()] if node_file else []
+    if file_attr is not None and file_attr.GetPath() not in [a.GetPath() for a in holders]:
+        holders.append(file_attr)  # the interface input holding the value
+    for attr in holders:
+        if attr.HasColorSpace():
             labels.append(Label(attr.GetColorSpace(), "colorSpace metadata"))
     if is_preview:
         scale, _ = usdgraph.input_value(tex, Inputs.SCALE, None)
