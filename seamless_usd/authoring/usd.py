@@ -26,6 +26,7 @@ from seamless_usd.authoring.files import backup_once, relative_asset_path, write
 from seamless_usd.authoring.schema import PROPERTIES, Schema, is_seamless_uv_transform, read_provenance
 from seamless_usd.authoring.types import AuthoringResult, Provenance, StackResult, WriteMode
 from seamless_usd.authoring.uvmath import Affine2, place2d, scale2d, transform2d
+from seamless_usd.discover.types import Origin
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = [
@@ -110,7 +111,8 @@ def author_usd(
     the original root layer and holds every override, with asset paths relative to it; no input
     file changes. ``IN_PLACE`` edits the layers holding the opinions, saving only changed layers
     after ``.bak`` copies (kept from the first edit). ``DRY_RUN`` plans the ``NEW_LAYER`` edits
-    (``plan``) and writes nothing.
+    (``plan``) and writes nothing. Maps of MaterialX documents (``Origin.MTLX``) are left to
+    :func:`author_mtlx`.
     """
     stage_path = Path(stage_path).resolve()
     mode = WriteMode(mode)
@@ -126,10 +128,11 @@ def author_usd(
     author = _Author(stage, result, anchor_dir=out.parent, layer_names={overrides: out.name})
     author.plan_all(results, lambda prim, prop=None: Usd.EditTarget(overrides))
     if not author.edits:
-        result.findings.append(
-            Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
-                    "every texture already has these edits; no layer written")
-        )
+        if author.planned_maps:
+            result.findings.append(
+                Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
+                        "every texture already has these edits; no layer written")
+            )
         return result
     author.apply()
     if result.dry_run:
@@ -350,6 +353,7 @@ class _Author:
         self._reserved: set[Sdf.Path] = set()
         self._uv_updates: dict[Sdf.Path, tuple[float, float]] = {}  # marked node -> total scale
         self.target_for = None
+        self.planned_maps = 0
 
     # -- planning ------------------------------------------------------------------------
 
@@ -358,7 +362,9 @@ class _Author:
         self.target_for = target_for
         for stack_result in results:
             for map_result in stack_result.maps:
-                self._plan_map(map_result, stack_result.uv_scale, stack_result.provenance)
+                if map_result.map.origin is Origin.USD:  # MaterialX documents: author_mtlx
+                    self.planned_maps += 1
+                    self._plan_map(map_result, stack_result.uv_scale, stack_result.provenance)
 
     def _find(self, severity: Severity, code: str, where: str, message: str) -> None:
         self.result.findings.append(Finding(severity, code, where, message))
@@ -680,8 +686,9 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult]) -> Author
     author = _Author(stage, result, anchor_dir=None)
     author.plan_all(results, _in_place_target)
     if not author.edits:
-        result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
-                                       "every texture already has these edits; nothing saved"))
+        if author.planned_maps:
+            result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
+                                           "every texture already has these edits; nothing saved"))
         return result
     changed = {edit.target.GetLayer() for edit in author.edits}
     for layer in changed:
