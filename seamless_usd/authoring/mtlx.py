@@ -133,9 +133,42 @@ def _same_path(a: str | None, b: Path) -> bool:
         return Path(a).resolve() == b
 
 
+class _UnauthoredInput:
+    """An input a node does not have yet: reads as unset, added on the first write."""
+
+    def __init__(self, node: mx.Node, name: str, type_name: str):
+        self.node, self.name, self.type_name = node, name, type_name
+
+    def getValueString(self) -> str:
+        return ""
+
+    def getNamePath(self) -> str:
+        return f"{self.node.getNamePath()}/{self.name}"
+
+    def _real(self) -> mx.Input:
+        return self.node.getInput(self.name) or self.node.addInput(self.name, self.type_name)
+
+    def setValueString(self, value: str) -> None:
+        self._real().setValueString(value)
+
+    def getActiveFilePrefix(self) -> str:
+        return self.node.getActiveFilePrefix()
+
+    def hasFilePrefix(self) -> bool:
+        return False
+
+    def setFilePrefix(self, prefix: str) -> None:
+        self._real().setFilePrefix(prefix)
+
+
 def _set_vector2(inp: mx.Input, value) -> None:
     """Set a vector2 with full float precision (MaterialX's own formatting keeps 6 digits)."""
     inp.setValueString(_fmt((float(value[0]), float(value[1]))))
+
+
+def _vector2(text: str) -> tuple[float, float]:
+    x, y = (float(v) for v in text.split(","))
+    return (x, y)
 
 
 def _fmt(values) -> str:
@@ -188,7 +221,7 @@ class _MtlxAuthor:
             iface = inp.getInterfaceInput()
             if iface is not None:
                 return iface
-        return inp if inp is not None else node.addInput(name, type_name)
+        return inp if inp is not None else _UnauthoredInput(node, name, type_name)
 
     def edit_map(self, map_result, uv_scale, provenance: Provenance) -> None:
         tex_map = map_result.map
@@ -235,12 +268,12 @@ class _MtlxAuthor:
             undo = prior or (1.0, 1.0)
             for name in (MtlxNames.UV_TILING, MtlxNames.UV_OFFSET):
                 inp = self._authored(node, name, MtlxNames.VECTOR2)
-                value = inp.getValue() if inp.getValueString() else (
-                    mx.Vector2(1, 1) if name == MtlxNames.UV_TILING else mx.Vector2(0, 0))
-                new = mx.Vector2(value[0] / undo[0] * total[0], value[1] / undo[1] * total[1])
+                value = _vector2(inp.getValueString()) if inp.getValueString() else (
+                    (1.0, 1.0) if name == MtlxNames.UV_TILING else (0.0, 0.0))
+                new = (value[0] / undo[0] * total[0], value[1] / undo[1] * total[1])
                 if any(abs(new[i] - value[i]) > 1e-9 for i in range(2)):
                     _set_vector2(inp, new)
-                    self._plan(f"set {prim_ref(inp.getNamePath())} = {inp.getValueString()}")
+                    self._plan(f"set {prim_ref(inp.getNamePath())} = {_fmt(new)}")
         else:
             total = self._place2d(node, scale, from_source)
         # provenance
@@ -270,10 +303,11 @@ class _MtlxAuthor:
         upstream = tex_in.getConnectedNode() if tex_in is not None else None
         if upstream is not None and upstream.getAttribute(MtlxNames.MARK_UV) == "true":
             s_in = upstream.getInput(MtlxNames.SCALE)
-            current = s_in.getValue() if s_in is not None and s_in.getValueString() else mx.Vector2(1, 1)
+            current = _vector2(s_in.getValueString()) if s_in is not None and s_in.getValueString() \
+                else (1.0, 1.0)
             prior = (1.0 / current[0], 1.0 / current[1])
             total = scale if from_source else (prior[0] * scale[0], prior[1] * scale[1])
-            new = mx.Vector2(1.0 / total[0], 1.0 / total[1])
+            new = (1.0 / total[0], 1.0 / total[1])
             if any(abs(new[i] - current[i]) > 1e-9 for i in range(2)):
                 _set_vector2(upstream.getInput(MtlxNames.SCALE) or upstream.addInput(
                     MtlxNames.SCALE, MtlxNames.VECTOR2), new)
