@@ -45,3 +45,45 @@ def test_unreadable_stage_exits_2_naming_the_file(tmp_path, capsys):
 def test_missing_path_exits_2(tmp_path, capsys):
     assert main(["scan", str(tmp_path / "nope.usda")]) == 2
     assert "nope.usda" in capsys.readouterr().err
+
+
+def test_parse_error_message_is_short(tmp_path, capsys):
+    bad = tmp_path / "broken.usda"
+    bad.write_text('#usda 1.0\ndef Xform "A" (\n  kind = \n) {}\n')
+    assert main(["scan", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("seamless-usd: error: @") and "textParserHelpers" not in err
+
+
+def test_skipped_items_still_exit_0_and_are_listed(tmp_path, samples_dir, capsys):
+    scene = tmp_path / "s.usda"
+    text = (samples_dir / "brick" / "scene.usda").read_text()
+    text = text.replace("@../textures/brick_roughness.png@", "@./missing_roughness.png@")
+    scene.write_text(text.replace("@../textures/", f"@{(samples_dir / 'textures').as_posix()}/"))
+    assert main(["scan", str(scene)]) == 0
+    out = capsys.readouterr().out
+    assert "missing-file" in out and "missing_roughness.png" in out and "brick_albedo.png" in out
+    assert main(["scan", "--json", str(scene)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    _validate(doc)
+    assert [f["code"] for f in doc["findings"]] == ["missing-file"]
+    assert len(doc["stacks"][0]["maps"]) == 2
+
+
+def test_several_paths_and_mtlx_documents_in_one_scan(samples_dir, capsys):
+    paths = [str(samples_dir / "mtlx" / "tiled.mtlx"), str(samples_dir / "mtlx" / "prefixed.mtlx"),
+             str(samples_dir / "transform2d" / "scene.usda")]
+    assert main(["scan", "--json", *paths]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    _validate(doc)
+    assert doc["materials"] == ["<M_wood>", "<M_brick>", "</World/Looks/Wood>"]
+    assert main(["scan", *paths]) == 0
+    out = capsys.readouterr().out
+    assert "uvtiling scale 2,2" in out and "UsdTransform2d scale 3,3" in out
+
+
+def test_unreadable_mtlx_exits_2(tmp_path, capsys):
+    bad = tmp_path / "bad.mtlx"
+    bad.write_text("<materialx")
+    assert main(["scan", str(bad)]) == 2
+    assert "bad.mtlx" in capsys.readouterr().err

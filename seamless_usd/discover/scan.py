@@ -1,6 +1,7 @@
 """The discovery entry points: scan stages, in-memory stages and MaterialX documents."""
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -25,11 +26,18 @@ def open_stage(path: str | Path) -> Usd.Stage:
     try:
         stage = Usd.Stage.Open(str(path.resolve()), Usd.Stage.LoadAll)
     except Tf.ErrorException as exc:
-        first = next((ln.strip() for ln in str(exc).splitlines() if ln.strip()), "unreadable")
-        raise InputError(f"{asset_ref(path)}: cannot open the USD stage: {first}") from None
+        raise InputError(f"{asset_ref(path)}: cannot open the USD stage: {_tf_message(str(exc))}") from None
     if stage is None:
         raise InputError(f"{asset_ref(path)}: cannot open the USD stage")
     return stage
+
+
+def _tf_message(text: str) -> str:
+    """The useful part of a Tf error (``3:40: Expected ) at ...``), on one line."""
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "unreadable")
+    quoted = re.search(r" : '(.*)'", first)
+    message = quoted.group(1) if quoted else first
+    return re.sub(r"^\S+?\.usd[acz]?:(?=\d)", "line ", message)
 
 
 class _Scan:
