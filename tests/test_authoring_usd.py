@@ -422,3 +422,43 @@ def test_usdz_new_layer_beside_it_and_in_place_skipped(scene: Path):
     tex = stage.GetPrimAtPath(f"{PLAIN_MAT}/Tex")
     assert Path(tex.GetAttribute("inputs:file").Get().resolvedPath) == (root / "tileable" / "plain_tile.png").resolve()
     assert uv_affine(stage, f"{PLAIN_MAT}/Tex").close_to(scale2d((4.0, 4.0)))
+
+
+def test_dry_run_of_in_place_plans_opinion_layers(scene: Path):
+    root = scene.parent
+    before = hashes(root)
+    result = author_usd(scene, [brick_result(root)], mode=WriteMode.DRY_RUN, plan_mode=WriteMode.IN_PLACE)
+    assert hashes(root) == before and result.dry_run and not result.backups
+    assert result.plan and all("looks.usda" in line for line in result.plan)
+    assert Sdf.Layer.Find(str(root / "looks.usda")) is None or not Sdf.Layer.Find(str(root / "looks.usda")).dirty
+
+
+def test_missing_output_file_and_unreadable_stage(scene: Path):
+    from seamless_usd.errors import InputError
+
+    root = scene.parent
+    (root / "tileable" / "plain_tile.png").unlink()
+    result = author_usd(scene, [plain_result(root), brick_result(root)])
+    assert [f.code for f in result.findings] == ["missing-output"]
+    assert f"<{BRICK}/Albedo>" in result.edited_prims  # the rest went on
+    with pytest.raises(InputError):
+        author_usd(root / "missing.usda", [plain_result(root)])
+    (root / "broken.usda").write_text("#usda 1.0\ndef (((", encoding="utf-8")
+    with pytest.raises(InputError):
+        author_usd(root / "broken.usda", [plain_result(root)])
+
+
+def test_in_place_keeps_crate_format(scene: Path):
+    root = scene.parent
+    crate = root / "looks.usdc"
+    Sdf.Layer.FindOrOpen(str(root / "looks.usda")).Export(str(crate))
+    (root / "scene.usda").write_text(ROOT_LAYER.replace("looks.usda", "looks.usdc"), encoding="utf-8")
+    results = [brick_result(root)]
+    for r in results:  # discovery would report the crate layer as the opinion's layer
+        for m in r.maps:
+            object.__setattr__(m.map.file_at, "layer", str(crate))
+    result = author_usd(scene, results, mode=WriteMode.IN_PLACE)
+    assert result.layers_written == [crate]
+    assert crate.read_bytes().startswith(b"PXR-USDC")
+    stage = Usd.Stage.Open(str(scene))
+    assert stage.GetPrimAtPath(f"{BRICK}/Albedo").HasAPI(Schema.TILE_API)

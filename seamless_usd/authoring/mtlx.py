@@ -19,6 +19,7 @@ import MaterialX as mx
 from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
 from seamless_usd.authoring.types import AuthoringResult, Provenance, StackResult, WriteMode
 from seamless_usd.discover.types import Origin
+from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["MtlxNames", "author_mtlx", "default_output_document", "read_mtlx_provenance"]
@@ -66,21 +67,27 @@ def author_mtlx(
     results: Sequence[StackResult],
     mode: WriteMode = WriteMode.NEW_LAYER,
     output_path: Path | str | None = None,
+    plan_mode: WriteMode = WriteMode.NEW_LAYER,
 ) -> AuthoringResult:
     """Write the MaterialX maps of ``results`` into a copy of the document (or in place).
 
     Maps of other documents (or USD maps) in ``results`` are ignored. ``NEW_LAYER`` writes
     ``output_path`` (default :func:`default_output_document`), ``IN_PLACE`` rewrites the
-    document after a ``.bak`` copy, ``DRY_RUN`` only fills ``plan``.
+    document after a ``.bak`` copy, ``DRY_RUN`` only fills ``plan`` (for ``plan_mode``).
+    Raises :class:`~seamless_usd.errors.InputError` when the document cannot be read.
     """
     src = Path(document_path).resolve()
     mode = WriteMode(mode)
-    out = src if mode is WriteMode.IN_PLACE else (
+    in_place = mode is WriteMode.IN_PLACE or (
+        mode is WriteMode.DRY_RUN and WriteMode(plan_mode) is WriteMode.IN_PLACE)
+    out = src if in_place else (
         Path(output_path).resolve() if output_path else default_output_document(src))
-    result = AuthoringResult(dry_run=mode is WriteMode.DRY_RUN,
-                             output=None if mode is WriteMode.IN_PLACE else out)
+    result = AuthoringResult(dry_run=mode is WriteMode.DRY_RUN, output=None if in_place else out)
     doc = mx.createDocument()
-    mx.readFromXmlFile(doc, str(src))
+    try:
+        mx.readFromXmlFile(doc, str(src))
+    except Exception as exc:  # MaterialX raises its own ExceptionFileMissing / ExceptionParseError
+        raise InputError(f"{asset_ref(src)}: cannot be read as a MaterialX document ({exc})") from None
     author = _MtlxAuthor(doc, src, out, result)
     if out.parent != src.parent:
         author.rebase_files()
@@ -232,6 +239,11 @@ class _MtlxAuthor:
                                                 prim_ref(node_path), "MaterialX node not found"))
             return
         out_file = Path(map_result.output_path).resolve()
+        if not out_file.is_file():
+            self.result.findings.append(Finding(
+                Severity.ERROR, "missing-output", asset_ref(out_file),
+                f"tileable file for {prim_ref(node_path)} not found; nothing written for it"))
+            return
         scale = (float(uv_scale[0]), float(uv_scale[1]))
         if node_path in self._done:
             if self._done[node_path][:2] != (out_file, scale):

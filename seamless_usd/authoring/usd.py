@@ -20,17 +20,19 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Iterable, Sequence
 
-from pxr import Ar, Gf, Sdf, Usd, UsdShade
+from pxr import Ar, Gf, Sdf, Tf, Usd, UsdShade
 
 from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
 from seamless_usd.authoring.schema import PROPERTIES, Schema, is_seamless_uv_transform, read_provenance
 from seamless_usd.authoring.types import AuthoringResult, Provenance, StackResult, WriteMode
 from seamless_usd.authoring.uvmath import Affine2, place2d, scale2d, transform2d
 from seamless_usd.discover.types import Origin
+from seamless_usd.errors import InputError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = [
     "Names",
+    "Codes",
     "author_usd",
     "author_usd_stage",
     "default_output_layer",
@@ -79,6 +81,7 @@ class Codes:
     """Finding codes of the authoring step."""
 
     MISSING_PRIM = "authoring-missing-prim"
+    MISSING_OUTPUT = "missing-output"
     IN_PACKAGE = "in-package"
     READ_ONLY = "read-only-layer"
     INSTANCE_PROXY = "instance-proxy"
@@ -104,6 +107,7 @@ def author_usd(
     results: Sequence[StackResult],
     mode: WriteMode = WriteMode.NEW_LAYER,
     output_layer: Path | str | None = None,
+    plan_mode: WriteMode = WriteMode.NEW_LAYER,
 ) -> AuthoringResult:
     """Open the stage at ``stage_path`` and write ``results`` into it.
 
@@ -111,16 +115,24 @@ def author_usd(
     the original root layer and holds every override, with asset paths relative to it; no input
     file changes. ``IN_PLACE`` edits the layers holding the opinions, saving only changed layers
     after ``.bak`` copies (kept from the first edit). ``DRY_RUN`` plans the ``NEW_LAYER`` edits
-    (``plan``) and writes nothing. Maps of MaterialX documents (``Origin.MTLX``) are left to
-    :func:`author_mtlx`.
+    (``plan``) of ``plan_mode`` (``NEW_LAYER`` or ``IN_PLACE``) and writes nothing. Maps of
+    MaterialX documents (``Origin.MTLX``) are left to :func:`author_mtlx`; maps whose output
+    file is missing are skipped with an error finding.
+
+    Raises :class:`~seamless_usd.errors.UsageError` when the output layer is the input stage and
+    :class:`~seamless_usd.errors.InputError` when the stage cannot be opened or a layer to edit
+    in place has unsaved changes in this process.
     """
     stage_path = Path(stage_path).resolve()
     mode = WriteMode(mode)
-    if mode is WriteMode.IN_PLACE:
-        return _author_in_place(stage_path, results)
+    if not stage_path.is_file():
+        raise InputError(f"{asset_ref(stage_path)}: no such stage")
+    if mode is WriteMode.IN_PLACE or (mode is WriteMode.DRY_RUN and WriteMode(plan_mode) is WriteMode.IN_PLACE):
+        return _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
     out = Path(output_layer).resolve() if output_layer else default_output_layer(stage_path)
     if out == stage_path:
-        raise ValueError(f"{asset_ref(out)}: the output layer must not be the input stage")
+        raise UsageError(f"{asset_ref(out)}: the output layer must not be the input stage")
+    source = _open_layer(stage_path)  # held while authoring: the sublayer below is this one
     overrides = Sdf.Layer.CreateAnonymous(".usda")
     overrides.subLayerPaths.append(str(stage_path))
     stage = Usd.Stage.Open(overrides, Usd.Stage.LoadNone)
@@ -137,11 +149,14 @@ def author_usd(
     author.apply()
     if result.dry_run:
         return result
-    del author, stage  # the relative sublayer path below would not resolve from memory
+    del author, stage, source  # the relative sublayer path below would not resolve from memory
     saved = Sdf.Layer.CreateAnonymous(".usda")
     saved.TransferContent(overrides)
     saved.subLayerPaths[0] = relative_asset_path(stage_path, out.parent)
     write_atomically(out, lambda tmp: saved.Export(str(tmp)))
+    stale = Sdf.Layer.Find(str(out))
+    if stale:  # a previous version is open in this process: show it the new content
+        stale.Reload(force=True)
     result.layers_written.append(out)
     return result
 
@@ -390,6 +405,10 @@ class _Author:
                        "non-instanceable")
             return
         out = str(Path(map_result.output_path).resolve())
+        if not Path(out).is_file():
+            self._find(Severity.ERROR, Codes.MISSING_OUTPUT, asset_ref(out),
+                       f"tileable file for {prim_ref(node_path)} not found; nothing written for it")
+            return
         scale = (float(uv_scale[0]), float(uv_scale[1]))
         done = self._done.get(node_path)
         if done is not None:
@@ -674,13 +693,14 @@ def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None):
     return Usd.EditTarget(layer)
 
 
-def _author_in_place(stage_path: Path, results: Sequence[StackResult]) -> AuthoringResult:
-    result = AuthoringResult()
+def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: bool = False) -> AuthoringResult:
+    result = AuthoringResult(dry_run=dry_run)
     if _is_packaged_path(stage_path):
         result.findings.append(Finding(
             Severity.SKIPPED, Codes.IN_PACKAGE, asset_ref(stage_path),
             "a .usdz cannot be edited in place; use the default new-layer mode"))
         return result
+    _open_layer(stage_path)
     stage = Usd.Stage.Open(str(stage_path), Usd.Stage.LoadNone)
     layers = {layer: layer.dirty for layer in stage.GetUsedLayers()}
     author = _Author(stage, result, anchor_dir=None)
@@ -690,10 +710,14 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult]) -> Author
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
                                            "every texture already has these edits; nothing saved"))
         return result
+    if dry_run:
+        author.apply()  # records the plan only
+        return result
     changed = {edit.target.GetLayer() for edit in author.edits}
     for layer in changed:
         if layers.get(layer):
-            raise RuntimeError(f"{asset_ref(layer.identifier)} has unsaved changes; save or reload it first")
+            raise InputError(f"{asset_ref(layer.identifier)} has unsaved changes in this process; "
+                             "save or reload it first")
     try:
         author.apply()
         for layer in sorted(changed, key=lambda lay: lay.realPath):
@@ -706,6 +730,16 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult]) -> Author
         for layer in changed:
             layer.Reload(force=True)  # drop in-memory edits; saved ones come back from disk
     return result
+
+
+def _open_layer(path: Path) -> Sdf.Layer:
+    try:
+        layer = Sdf.Layer.FindOrOpen(str(path))
+    except Tf.ErrorException as exc:
+        raise InputError(f"{asset_ref(path)}: cannot be read as a USD layer ({exc})") from None
+    if not layer:
+        raise InputError(f"{asset_ref(path)}: cannot be read as a USD layer")
+    return layer
 
 
 def _format_args(layer: Sdf.Layer) -> dict:
