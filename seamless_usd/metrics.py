@@ -417,8 +417,11 @@ def detail_ratio(
     Returns
     -------
     float
-        About 1 when detail is even; < 1 for a blurred seam (a crossfade gives about 0.7-0.8),
-        > 1 for a hard seam (its step adds high frequencies).
+        About 1 when detail is even; < 1 for a blurred seam, > 1 for a hard seam (its step adds
+        high frequencies). A linear crossfade mixes two unrelated signals with weights ``a`` and
+        ``1 - a``, which scales their high-pass RMS by ``sqrt(a^2 + (1 - a)^2)`` (0.71 at the
+        middle of the blend, 0.82 averaged over it); as its blend covers only part of the default
+        bands, a crossfade over 1/8 of the size measures about 0.85-0.95 on real maps.
     """
     masks = {"seams": seam_band_mask, "centre": centre_band_mask}
     if where not in masks:
