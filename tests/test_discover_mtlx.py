@@ -141,3 +141,10 @@ def test_unreadable_document_raises_input_error_naming_it(tmp_path):
         scan_mtlx(bad)
     with pytest.raises(InputError, match="absent.mtlx"):
         scan_paths([tmp_path / "absent.mtlx"])
+
+
+def test_missing_referenced_document_is_skipped(tmp_path):
+    (tmp_path / "scene.usda").write_text('#usda 1.0\ndef Material "M" (references = @./gone.mtlx@) {}\n')
+    result = scan_paths([tmp_path / "scene.usda"])
+    (f,) = result.findings
+    assert f.code == "missing-file" and "</M>" in f.where and "@./gone.mtlx@" in f.where

@@ -87,3 +87,9 @@ def test_unreadable_mtlx_exits_2(tmp_path, capsys):
     bad.write_text("<materialx")
     assert main(["scan", str(bad)]) == 2
     assert "bad.mtlx" in capsys.readouterr().err
+
+
+def test_mtlx_reference_causes_no_usd_warning_noise(samples_dir, capfd):
+    assert main(["scan", str(samples_dir / "mtlx" / "scene.usda")]) == 0
+    captured = capfd.readouterr()
+    assert "</World/Looks/Wood>" in captured.out and captured.err == ""

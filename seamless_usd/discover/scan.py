@@ -24,7 +24,11 @@ def open_stage(path: str | Path) -> Usd.Stage:
     if not path.is_file():
         raise InputError(f"{asset_ref(path)}: no such file")
     try:
-        stage = Usd.Stage.Open(str(path.resolve()), Usd.Stage.LoadAll)
+        with Tf.DiagnosticTrap() as trap:
+            stage = Usd.Stage.Open(str(path.resolve()), Usd.Stage.LoadAll)
+            # usd-core cannot compose .mtlx references; discovery reads them itself, so USD's
+            # warning about them is noise. Every other diagnostic is passed on when the trap closes.
+            trap.EraseMatching(lambda d: MTLX_SUFFIX in str(d.commentary).lower())
     except Tf.ErrorException as exc:
         raise InputError(f"{asset_ref(path)}: cannot open the USD stage: {_tf_message(str(exc))}") from None
     if stage is None:
