@@ -462,3 +462,18 @@ def test_in_place_keeps_crate_format(scene: Path):
     assert crate.read_bytes().startswith(b"PXR-USDC")
     stage = Usd.Stage.Open(str(scene))
     assert stage.GetPrimAtPath(f"{BRICK}/Albedo").HasAPI(Schema.TILE_API)
+
+
+def test_in_place_skips_opinions_inside_a_package(scene: Path):
+    from pxr import UsdUtils
+
+    root = scene.parent
+    flat = root / "flat.usda"
+    Usd.Stage.Open(str(scene)).Export(str(flat))
+    assert UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(flat)), str(root / "looks.usdz"))
+    (root / "outer.usda").write_text(
+        '#usda 1.0\n(\n    subLayers = [@./looks.usdz@]\n)\n', encoding="utf-8")
+    before = hashes(root)
+    result = author_usd(root / "outer.usda", [plain_result(root)], mode=WriteMode.IN_PLACE)
+    assert {f.code for f in result.findings} == {"in-package"}
+    assert result.layers_written == [] and hashes(root) == before

@@ -49,7 +49,6 @@ class Names:
     INFO_ID = "info:id"
     USD_UV_TEXTURE = "UsdUVTexture"
     USD_TRANSFORM_2D = "UsdTransform2d"
-    USD_PRIMVAR_READER = "UsdPrimvarReader_float2"
     MX_PLACE_2D = "ND_place2d_vector2"
     MX_IMAGE_PREFIX = "ND_image_"
     MX_TILED_PREFIX = "ND_tiledimage_"
@@ -114,8 +113,8 @@ def author_usd(
     ``NEW_LAYER`` writes ``output_layer`` (default :func:`default_output_layer`) that sublayers
     the original root layer and holds every override, with asset paths relative to it; no input
     file changes. ``IN_PLACE`` edits the layers holding the opinions, saving only changed layers
-    after ``.bak`` copies (kept from the first edit). ``DRY_RUN`` plans the ``NEW_LAYER`` edits
-    (``plan``) of ``plan_mode`` (``NEW_LAYER`` or ``IN_PLACE``) and writes nothing. Maps of
+    after ``.bak`` copies (kept from the first edit). ``DRY_RUN`` lists in ``plan`` the edits
+    ``plan_mode`` (``NEW_LAYER`` or ``IN_PLACE``) would make and writes nothing. Maps of
     MaterialX documents (``Origin.MTLX``) are left to :func:`author_mtlx`; maps whose output
     file is missing are skipped with an error finding.
 
@@ -140,7 +139,7 @@ def author_usd(
     author = _Author(stage, result, anchor_dir=out.parent, layer_names={overrides: out.name})
     author.plan_all(results, lambda prim, prop=None: Usd.EditTarget(overrides))
     if not author.edits:
-        if author.planned_maps:
+        if author.planned_maps and not result.findings:
             result.findings.append(
                 Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
                         "every texture already has these edits; no layer written")
@@ -299,12 +298,19 @@ def _close(a, b, tol: float = 1e-6) -> bool:
     return all(abs(float(x) - float(y)) <= tol * max(1.0, abs(float(x))) for x, y in zip(a, b))
 
 
+class _EditKind:
+    VALUE = "value"  # set an attribute's default value (None: declare the attribute only)
+    CONNECT = "connect"  # replace an input's connections with one source
+    DEFINE = "define"  # define a Shader prim
+    SCHEMA = "schema"  # prepend an applied API schema
+
+
 @dataclass
 class _Edit:
     """One spec-level edit: a value, a connection, a new node or an applied schema."""
 
     target: Usd.EditTarget
-    kind: str  # "value" | "connect" | "define" | "schema"
+    kind: str  # an _EditKind
     path: Sdf.Path  # stage namespace: property path, or prim path for define / schema
     type_name: Sdf.ValueTypeName | None = None
     value: object = None
@@ -312,21 +318,23 @@ class _Edit:
 
     def describe(self, layer_name: str) -> str:
         where = f"in {asset_ref(layer_name)}"
-        if self.kind == "value":
-            shown = f"@{self.value.path}@" if isinstance(self.value, Sdf.AssetPath) else self.value
+        if self.kind == _EditKind.VALUE and self.value is None:
+            return f"declare {prim_ref(self.path)} {where}"
+        if self.kind == _EditKind.VALUE:
+            shown = asset_ref(self.value.path) if isinstance(self.value, Sdf.AssetPath) else self.value
             return f"set {prim_ref(self.path)} = {shown} {where}"
-        if self.kind == "connect":
+        if self.kind == _EditKind.CONNECT:
             return f"connect {prim_ref(self.path)} -> {prim_ref(self.value)} {where}"
-        if self.kind == "define":
+        if self.kind == _EditKind.DEFINE:
             return f"define {self.value} {prim_ref(self.path)} {where}"
         return f"apply {self.value} to {prim_ref(self.path)} {where}"
 
     def apply(self) -> None:
         layer = self.target.GetLayer()
         spec_path = self.target.MapToSpecPath(self.path)
-        if self.kind in ("define", "schema"):
+        if self.kind in (_EditKind.DEFINE, _EditKind.SCHEMA):
             prim_spec = Sdf.CreatePrimInLayer(layer, spec_path)
-            if self.kind == "define":
+            if self.kind == _EditKind.DEFINE:
                 prim_spec.specifier = Sdf.SpecifierDef
                 prim_spec.typeName = Names.SHADER_TYPE
             else:
@@ -336,7 +344,7 @@ class _Edit:
         attr_spec = layer.GetAttributeAtPath(spec_path)
         if not attr_spec:
             attr_spec = Sdf.AttributeSpec(prim_spec, spec_path.name, self.type_name, self.variability)
-        if self.kind == "value":
+        if self.kind == _EditKind.VALUE:
             if self.value is not None:
                 attr_spec.default = self.value
         else:
@@ -427,20 +435,24 @@ class _Author:
         recorded = read_provenance(prim)
         from_source = recorded is None or _same_file(
             prim.GetAttribute(Schema.SOURCE_ASSET).Get(), tex_map.resolved)
-        self._plan_file(prim, shader, tex_map, out)
+        if not self._plan_file(prim, shader, tex_map, out):
+            return
         self._plan_wrap(prim, shader, kind)
         applied = self._plan_uv(prim, shader, kind, scale, recorded, from_source)
-        if applied is not None:
-            if recorded and not from_source:  # made from an earlier tile: keep the origin
-                origin = prim.GetAttribute(Schema.SOURCE_ASSET).Get()
-                source = origin.resolvedPath or origin.path
-            else:
-                source = tex_map.resolved
-            self._plan_provenance(prim, provenance, applied, source)
+        if applied is None:  # the UV edit cannot be made: leave this map untouched
+            del self.edits[first_edit:]
+            return
+        if recorded and not from_source:  # made from an earlier tile: keep the origin
+            origin = prim.GetAttribute(Schema.SOURCE_ASSET).Get()
+            source = origin.resolvedPath or origin.path
+        else:
+            source = tex_map.resolved
+        self._plan_provenance(prim, provenance, applied, source)
         if len(self.edits) > first_edit and prim_ref(node_path) not in self.result.edited_prims:
             self.result.edited_prims.append(prim_ref(node_path))
 
-    def _plan_file(self, prim, shader, tex_map, out: str) -> None:
+    def _plan_file(self, prim, shader, tex_map, out: str) -> bool:
+        """Plan the new asset path where it is authored; False when it cannot be edited."""
         at = tex_map.file_at
         owner = self.stage.GetPrimAtPath(at.prim.strip("<>")) if at.prim else None
         attr = owner.GetAttribute(at.attribute) if owner else None
@@ -449,15 +461,16 @@ class _Author:
         if not attr:
             self._find(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(prim.GetPath()),
                        "no file input found to edit")
-            return
+            return False
         current = attr.Get()
         if isinstance(current, Sdf.AssetPath) and _same_file(current, out):
-            return
+            return True
         target = self._target(attr.GetPrim(), attr)
         if target is None:
-            return
-        self.edits.append(_Edit(target, "value", attr.GetPath(), attr.GetTypeName(),
+            return False
+        self.edits.append(_Edit(target, _EditKind.VALUE, attr.GetPath(), attr.GetTypeName(),
                                 Sdf.AssetPath(self._asset_path(out, target)), attr.GetVariability()))
+        return True
 
     def _asset_path(self, out: str, target: Usd.EditTarget) -> str:
         layer = target.GetLayer()
@@ -488,7 +501,7 @@ class _Author:
             return
         if isinstance(value, tuple):
             value = Gf.Vec2f(*value)
-        self.edits.append(_Edit(target, "value", path, type_name, value))
+        self.edits.append(_Edit(target, _EditKind.VALUE, path, type_name, value))
 
     def _plan_wrap(self, prim, shader, kind: str) -> None:
         if kind == _Kind.USD_UV_TEXTURE:
@@ -550,7 +563,7 @@ class _Author:
             node_path = self._new_uv_node(prim, target, source_attr, scale, use_place2d)
             self._uv_nodes[key] = node_path
         out_name = Names.OUT if use_place2d else Names.RESULT
-        self.edits.append(_Edit(target, "connect", uv_input.GetAttr().GetPath(),
+        self.edits.append(_Edit(target, _EditKind.CONNECT, uv_input.GetAttr().GetPath(),
                                 Sdf.ValueTypeNames.Float2,
                                 node_path.AppendProperty(f"outputs:{out_name}")))
         return scale
@@ -571,13 +584,13 @@ class _Author:
             node_id, in_name, out_name = Names.USD_TRANSFORM_2D, Names.IN, Names.RESULT
             value = Gf.Vec2f(*scale)
         self.edits += [
-            _Edit(target, "define", path, value=f"{node_id} node"),
-            _Edit(target, "value", path.AppendProperty(Names.INFO_ID), Sdf.ValueTypeNames.Token,
+            _Edit(target, _EditKind.DEFINE, path, value=f"{node_id} node"),
+            _Edit(target, _EditKind.VALUE, path.AppendProperty(Names.INFO_ID), Sdf.ValueTypeNames.Token,
                   node_id, Sdf.VariabilityUniform),
-            _Edit(target, "connect", path.AppendProperty(f"inputs:{in_name}"), f2, source_attr),
-            _Edit(target, "value", path.AppendProperty(f"inputs:{Names.SCALE}"), f2, value),
-            _Edit(target, "value", path.AppendProperty(f"outputs:{out_name}"), f2, None),
-            _Edit(target, "schema", path, value=Schema.UV_TRANSFORM_API),
+            _Edit(target, _EditKind.CONNECT, path.AppendProperty(f"inputs:{in_name}"), f2, source_attr),
+            _Edit(target, _EditKind.VALUE, path.AppendProperty(f"inputs:{Names.SCALE}"), f2, value),
+            _Edit(target, _EditKind.VALUE, path.AppendProperty(f"outputs:{out_name}"), f2, None),
+            _Edit(target, _EditKind.SCHEMA, path, value=Schema.UV_TRANSFORM_API),
         ]
         return path
 
@@ -591,9 +604,9 @@ class _Author:
         if read_provenance(prim) == p:
             return
         if Schema.TILE_API not in prim.GetAppliedSchemas():
-            self.edits.append(_Edit(target, "schema", prim.GetPath(), value=Schema.TILE_API))
+            self.edits.append(_Edit(target, _EditKind.SCHEMA, prim.GetPath(), value=Schema.TILE_API))
         for name, (type_name, convert) in PROPERTIES.items():
-            self.edits.append(_Edit(target, "value", prim.GetPath().AppendProperty(name), type_name,
+            self.edits.append(_Edit(target, _EditKind.VALUE, prim.GetPath().AppendProperty(name), type_name,
                                     convert(p)))
 
     # -- applying ------------------------------------------------------------------------
@@ -706,7 +719,7 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
     author = _Author(stage, result, anchor_dir=None)
     author.plan_all(results, _in_place_target)
     if not author.edits:
-        if author.planned_maps:
+        if author.planned_maps and not result.findings:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
                                            "every texture already has these edits; nothing saved"))
         return result
