@@ -198,7 +198,7 @@ def test_alpha_role_on_file_without_alpha() -> None:
     with_colour = texture_map((("diffuseColor", "rgb"), ("opacity", "a")))
     enc = MapEncoding.for_map(with_colour, info(3))
     assert enc.channels == (0, 1, 2)
-    assert any("has none" in n for n in enc.notes)
+    assert any("has none" in w for w in enc.warnings)
     with pytest.raises(ValueError, match="no alpha"):
         MapEncoding.for_map(texture_map((("opacity", "a"),), ColorSpace.RAW), info(3))
 

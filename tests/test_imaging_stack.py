@@ -168,6 +168,33 @@ def test_stack_nonfinite_pixels_are_replaced_and_reported(tmp_path: Path) -> Non
     assert "1 NaN, 1 +inf, 1 -inf" in finding.message
 
 
+def test_stack_channel_warnings_become_findings(tmp_path: Path) -> None:
+    path = write_image(tmp_path / "rgb.png", np.zeros((4, 4, 3), np.uint8))
+    stack = load_stack_pixels([texture_map(path, (("diffuseColor", "rgb"), ("opacity", "a")))])
+    [finding] = stack.findings
+    assert (finding.code, finding.where) == ("map-channels", "</M/rgb> @textures/rgb.png@")
+
+
+@pytest.mark.parametrize("name", ["a.tga", "a.tif", "a.jpg"])
+def test_8bit_sources_of_other_formats_are_written_as_png(tmp_path: Path, name: str) -> None:
+    data = np.random.default_rng(7).integers(0, 256, (6, 6, 3), dtype=np.uint8)
+    stack = load_stack_pixels([texture_map(write_image(tmp_path / name, data))])
+    out = write_map(tmp_path / "tile", stack.values[0], stack.encodings[0], like=stack.infos[0])
+    assert out.name == "tile.png"
+    assert np.array_equal(np.rint(read_image(out)[0] * 255), np.rint(read_image(tmp_path / name)[0] * 255))
+
+
+def test_cmyk_jpeg_is_written_as_rgb_png(tmp_path: Path) -> None:
+    image = pytest.importorskip("PIL.Image")
+    cmyk = np.random.default_rng(8).integers(0, 256, (8, 8, 4), dtype=np.uint8)
+    image.fromarray(cmyk, mode="CMYK").save(tmp_path / "print.jpg", quality=95)
+    stack = load_stack_pixels([texture_map(tmp_path / "print.jpg")])
+    out = write_map(tmp_path / "tile", stack.values[0], stack.encodings[0], like=stack.infos[0])
+    back, info = read_image(out)
+    assert (out.suffix, info.channels, info.dtype) == (".png", 3, "uint8")
+    assert np.array_equal(np.rint(back * 255), np.rint(read_image(tmp_path / "print.jpg")[0] * 255))
+
+
 def test_stack_errors_are_input_errors(tmp_path: Path) -> None:
     missing = texture_map(tmp_path / "gone.png")
     with pytest.raises(InputError, match=r"@.*gone\.png@"):

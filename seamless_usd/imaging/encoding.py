@@ -110,6 +110,7 @@ class MapEncoding:
     alpha_range: ValueRange = ValueRange()
     fill: tuple[float, ...] = ()  # per file channel: the value written where a channel is not kept
     notes: tuple[str, ...] = field(default=(), compare=False)  # what was decided and why
+    warnings: tuple[str, ...] = field(default=(), compare=False)  # what the user should look at
 
     @property
     def network_channels(self) -> int:
@@ -180,6 +181,7 @@ class MapEncoding:
         n = info.channels
         alpha = alpha_channel(info)
         notes: list[str] = []
+        warnings: list[str] = []
 
         def index(letter: str) -> int | None:
             if letter == "a":
@@ -194,7 +196,7 @@ class MapEncoding:
                 raise ValueError(f"unknown channel letters {sorted(unknown)} in {channels_used!r}; use r, g, b, a")
             kept = {index(c) for c in channels_used} - {None}
             if "a" in channels_used and alpha is None:
-                notes.append("a role reads alpha but the file has none (the shader sees 1)")
+                warnings.append("a role reads alpha but the file has none (the shader sees 1)")
         else:
             kept = set(range(n))
         if alpha is not None and alpha not in kept:
@@ -213,7 +215,7 @@ class MapEncoding:
                 normal = (0, 1, 2)
                 scale, bias = normal_scale_bias
             else:
-                notes.append("normal map without three xyz channels: treated as plain values")
+                warnings.append("normal map without three xyz channels: treated as plain values")
 
         value_range = alpha_range = ValueRange()
         fill = tuple(1.0 if i == alpha else 0.0 for i in range(n))
@@ -248,6 +250,7 @@ class MapEncoding:
             alpha_range=alpha_range,
             fill=fill,
             notes=tuple(notes),
+            warnings=tuple(warnings),
         )
 
     @staticmethod
@@ -274,6 +277,7 @@ class MapEncoding:
             d[key]["tone"] = getattr(self, key).tone.value
         d["channels"] = list(self.channels)
         d["notes"] = list(self.notes)
+        d["warnings"] = list(self.warnings)
         return d
 
 

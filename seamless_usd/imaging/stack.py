@@ -1,7 +1,8 @@
 """Loading the maps of one stack onto a common working grid in the network domain.
 
 For each map: read the file (pixel limit checked on the header first), replace non-finite
-values (reported as a ``non-finite-pixels`` warning), fit its :class:`MapEncoding`, decode to
+values (reported as a ``non-finite-pixels`` warning; channel problems such as a role reading
+an alpha the file lacks become ``map-channels`` warnings), fit its :class:`MapEncoding`, decode to
 [-1, 1], then resample to the working size chosen by the :class:`WorkingResolution` policy.
 Resampling happens in the network domain (linear light for LDR maps, since that map is affine;
 the log domain for HDR maps); afterwards values are clipped to [-1, 1] (filter ringing) and
@@ -140,6 +141,10 @@ def load_stack_pixels(
             encoding = MapEncoding.for_map(m, info, pixels)
         except ValueError as exc:
             raise InputError(f"{prim_ref(m.node)} {asset_ref(m.asset)}: {exc}; fix its scale/bias") from exc
+        findings.extend(
+            Finding(Severity.WARNING, "map-channels", f"{prim_ref(m.node)} {asset_ref(m.asset)}", w)
+            for w in encoding.warnings
+        )
         infos.append(info)
         encodings.append(encoding)
         decoded.append(decode_map(pixels, encoding))
