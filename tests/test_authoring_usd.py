@@ -477,3 +477,56 @@ def test_in_place_skips_opinions_inside_a_package(scene: Path):
     result = author_usd(root / "outer.usda", [plain_result(root)], mode=WriteMode.IN_PLACE)
     assert {f.code for f in result.findings} == {"in-package"}
     assert result.layers_written == [] and hashes(root) == before
+
+
+TILED_LAYER = """#usda 1.0
+def Material "Mat"
+{
+    token outputs:mtlx:surface.connect = </Mat/Surface.outputs:out>
+    float2 inputs:tiling = (2, 2)
+    def Shader "Surface"
+    {
+        uniform token info:id = "ND_standard_surface_surfaceshader"
+        color3f inputs:base_color.connect = </Mat/Tiled.outputs:out>
+        token outputs:out
+    }
+    def Shader "Coords"
+    {
+        uniform token info:id = "ND_texcoord_vector2"
+        float2 outputs:out
+    }
+    def Shader "Tiled"
+    {
+        uniform token info:id = "ND_tiledimage_color3"
+        asset inputs:file = @plain.png@
+        float2 inputs:texcoord.connect = </Mat/Coords.outputs:out>
+        float2 inputs:uvtiling.connect = </Mat.inputs:tiling>
+        float2 inputs:uvoffset = (0.5, 0.25)
+        color3f outputs:out
+    }
+}
+"""
+
+
+def test_usd_materialx_tiledimage_scales_uvtiling_where_authored(tmp_path: Path):
+    path = tmp_path / "tiled.usda"
+    path.write_text(TILED_LAYER, encoding="utf-8")
+    (tmp_path / "plain.png").write_bytes(b"source")
+    (tmp_path / "plain_tile.png").write_bytes(b"tile")
+    tex = replace_map(texture_map(tmp_path, "/Mat", "/Mat/Tiled", "plain.png",
+                                  AuthoredAt("/Mat/Tiled", "inputs:file", str(path))))
+    stack = StackResult(TextureStack("/Mat", tex.uv, (tex,)), [MapResult(tex, tmp_path / "plain_tile.png")],
+                        (4.0, 3.0), provenance("plain.png", (4.0, 3.0)))
+    result = author_usd(path, [stack])
+    old, new = Usd.Stage.Open(str(path)), Usd.Stage.Open(str(result.output))
+    assert uv_affine(new, "/Mat/Tiled").close_to(uv_affine(old, "/Mat/Tiled").then(scale2d((4.0, 3.0))))
+    assert tuple(new.GetPrimAtPath("/Mat").GetAttribute("inputs:tiling").Get()) == (8.0, 6.0)
+    assert not [p for p in new.Traverse() if p.GetName().startswith("SeamlessUV")]
+    again = author_usd(result.output, [stack])
+    assert again.plan == []
+
+
+def replace_map(tex: TextureMap) -> TextureMap:
+    from dataclasses import replace
+
+    return replace(tex, node_type="ND_tiledimage_color3")

@@ -31,6 +31,7 @@ class MtlxNames:
     OUTPUT_SUFFIX = ".seamless"
     IMAGE = "image"
     TILED_IMAGE = "tiledimage"
+    GLTF_PREFIX = "gltf_"  # gltf_image, gltf_colorimage, ...: their own place2d inside
     PLACE_2D = "place2d"
     UV_NODE = "seamless_uv"
     VECTOR2 = "vector2"
@@ -173,6 +174,18 @@ def _set_vector2(inp: mx.Input, value) -> None:
     inp.setValueString(_fmt((float(value[0]), float(value[1]))))
 
 
+def _gltf_identity(node: mx.Node) -> bool:
+    """Whether a gltf image node's own UV transform (scale, rotate, offset) is the identity."""
+    for name, identity in (("scale", "1, 1"), ("rotate", "0"), ("offset", "0, 0")):
+        inp = node.getInput(name)
+        text = inp.getValueString() if inp is not None else ""
+        if text and [float(v) for v in text.split(",")] != [float(v) for v in identity.split(",")]:
+            return False
+        if inp is not None and (inp.getNodeName() or inp.getInterfaceName()):
+            return False
+    return True
+
+
 def _vector2(text: str) -> tuple[float, float]:
     x, y = (float(v) for v in text.split(","))
     return (x, y)
@@ -286,6 +299,11 @@ class _MtlxAuthor:
                 if any(abs(new[i] - value[i]) > 1e-9 for i in range(2)):
                     _set_vector2(inp, new)
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {_fmt(new)}")
+        elif category.startswith(MtlxNames.GLTF_PREFIX) and not _gltf_identity(node):
+            self.result.findings.append(Finding(
+                Severity.WARNING, "uv-not-composed", prim_ref(node_path),
+                "gltf image node with its own UV transform: file replaced, scale its UVs by hand"))
+            total = (1.0, 1.0)
         else:
             total = self._place2d(node, scale, from_source)
         # provenance
