@@ -4,18 +4,18 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 
-from seamless_usd.discover.tokens import TransformKinds
 from seamless_usd.discover.types import TextureMap, TextureStack, UVChain
 
 __all__ = ["build_stacks", "chain_key"]
 
 
-def chain_key(uv: UVChain) -> str:
-    """Maps sharing this key share a UV chain. Like ``UVChain.key``, except that a ``tiledimage``'s
-    own ``uvtiling``/``uvoffset`` (a transform on each texture node) counts by value, so tiled
-    images with the same tiling over the same texcoord form one stack."""
+def chain_key(uv: UVChain, texture_node: str) -> str:
+    """Maps sharing this key share a UV chain. Like ``UVChain.key``, except that a transform held
+    by the texture node itself (``tiledimage`` uvtiling/uvoffset, a glTF image's place2d) counts by
+    value, so tiled images with the same tiling over the same texcoord form one stack."""
     transforms = [
-        [t.kind, list(t.scale), list(t.translation)] if t.kind == TransformKinds.UVTILING else t.node
+        [t.kind, list(t.scale), t.rotation, list(t.translation), list(t.pivot), t.operation_order]
+        if t.node == texture_node else t.node
         for t in uv.transforms
     ]
     return json.dumps([uv.primvar, uv.reader, transforms, uv.connected_from])
@@ -31,7 +31,7 @@ def build_stacks(maps: list[TextureMap]) -> list[TextureStack]:
     grouped: dict[tuple[str, str], list[TextureMap]] = {}
     chains = {}
     for m in maps:
-        key = (m.material, chain_key(m.uv))
+        key = (m.material, chain_key(m.uv, m.node))
         grouped.setdefault(key, []).append(m)
         chains.setdefault(key, m.uv)
     stacks: list[TextureStack] = []

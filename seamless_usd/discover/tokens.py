@@ -87,6 +87,7 @@ class MtlxCategories:
     EXTRACT = "extract"
     NORMALMAP = "normalmap"
     TEXTURES = frozenset({IMAGE, TILEDIMAGE, GLTF_IMAGE, GLTF_COLORIMAGE, GLTF_NORMALMAP})
+    GLTF_TEXTURES = frozenset({GLTF_IMAGE, GLTF_COLORIMAGE, GLTF_NORMALMAP})
 
 
 class MtlxInputs:

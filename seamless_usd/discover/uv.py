@@ -18,6 +18,11 @@ from seamless_usd.discover.types import AuthoredAt, UVChain, UVTransform
 __all__ = ["usd_uv_chain", "mtlx_uv_chain"]
 
 _MAX_CHAIN = 32
+GLTF_PIVOT = (0.0, 1.0)  # KHR_texture_transform pivot as in the MaterialX gltf_image nodedefs
+
+
+def _is_identity(t: UVTransform) -> bool:
+    return t.scale == (1.0, 1.0) and t.rotation == 0.0 and t.translation == (0.0, 0.0) and not t.authored
 
 
 def _pair(value, default=(0.0, 0.0)) -> tuple[float, float]:
@@ -36,7 +41,7 @@ def _usd_inputs(prim: Usd.Prim, spec: dict[str, tuple[str, object]]):
     return values, tuple(authored)
 
 
-def _usd_transform(prim: Usd.Prim, sid: str) -> UVTransform:
+def _usd_transform(prim: Usd.Prim, sid: str, pivot_default=(0.0, 0.0)) -> UVTransform:
     path = str(prim.GetPath())
     if sid == ShaderIds.TRANSFORM_2D:
         v, authored = _usd_inputs(
@@ -56,7 +61,8 @@ def _usd_transform(prim: Usd.Prim, sid: str) -> UVTransform:
     )
     return UVTransform(
         node=path, kind=TransformKinds.PLACE2D, scale=_pair(v["scale"], (1.0, 1.0)), rotation=float(v["rotate"]),
-        translation=_pair(v["offset"]), pivot=_pair(v["pivot"]), operation_order=int(v["order"]), authored=authored,
+        translation=_pair(v["offset"]), pivot=_pair(v["pivot"], pivot_default), operation_order=int(v["order"]),
+        authored=authored,
     )
 
 
@@ -78,6 +84,10 @@ def usd_uv_chain(texture: Usd.Prim, sid: str) -> UVChain | None:
     nearest: list[UVTransform] = []  # nearest the texture first
     if sid.startswith(ShaderIds.ND_TILEDIMAGE):
         nearest.append(_usd_uvtiling(texture))
+    elif sid.startswith(ShaderIds.ND_GLTF):
+        builtin = _usd_transform(texture, sid, GLTF_PIVOT)  # glTF image nodes hold a place2d
+        if not _is_identity(builtin):
+            nearest.append(builtin)
     inp = UsdShade.Shader(texture).GetInput(Inputs.ST if is_preview else MtlxInputs.TEXCOORD)
     sources = usdgraph.producing_outputs(inp) if inp else []
     if not sources:
@@ -128,6 +138,19 @@ def _mx_inputs(node: mx.Node, document: str, spec: dict[str, tuple[str, object]]
     return values, tuple(authored)
 
 
+def _mx_place2d(node: mx.Node, document: str, pivot_default=(0.0, 0.0)) -> UVTransform:
+    v, authored = _mx_inputs(
+        node, document,
+        {"scale": (MtlxInputs.SCALE, None), "rotate": (MtlxInputs.ROTATE, 0.0), "offset": (MtlxInputs.OFFSET, None),
+         "pivot": (MtlxInputs.PIVOT, None), "order": (MtlxInputs.OPERATIONORDER, 0)},
+    )
+    return UVTransform(
+        node=node.getNamePath(), kind=TransformKinds.PLACE2D, scale=_mx_pair(v["scale"], (1.0, 1.0)),
+        rotation=float(v["rotate"]), translation=_mx_pair(v["offset"]), pivot=_mx_pair(v["pivot"], pivot_default),
+        operation_order=int(v["order"]), authored=authored,
+    )
+
+
 def mtlx_uv_chain(texture: mx.Node, document: str) -> UVChain:
     """UV chain of a MaterialX texture node in a document (never None: the default is UV0)."""
     nearest: list[UVTransform] = []
@@ -137,6 +160,10 @@ def mtlx_uv_chain(texture: mx.Node, document: str) -> UVChain:
             UVTransform(node=texture.getNamePath(), kind=TransformKinds.UVTILING, scale=_mx_pair(v["tiling"], (1.0, 1.0)),
                         translation=_mx_pair(v["offset"]), authored=authored)
         )
+    elif texture.getCategory() in MtlxCategories.GLTF_TEXTURES:
+        builtin = _mx_place2d(texture, document, GLTF_PIVOT)  # glTF image nodes hold a place2d
+        if not _is_identity(builtin):
+            nearest.append(builtin)
     up = mtlxgraph.upstream(texture.getInput(MtlxInputs.TEXCOORD))
     if up is None:
         return UVChain(None, None, tuple(reversed(nearest)))
@@ -146,16 +173,7 @@ def mtlx_uv_chain(texture: mx.Node, document: str) -> UVChain:
     for _ in range(_MAX_CHAIN):
         category = node.getCategory()
         if category == MtlxCategories.PLACE2D:
-            v, authored = _mx_inputs(
-                node, document,
-                {"scale": (MtlxInputs.SCALE, None), "rotate": (MtlxInputs.ROTATE, 0.0), "offset": (MtlxInputs.OFFSET, None),
-                 "pivot": (MtlxInputs.PIVOT, None), "order": (MtlxInputs.OPERATIONORDER, 0)},
-            )
-            nearest.append(
-                UVTransform(node=node.getNamePath(), kind=TransformKinds.PLACE2D, scale=_mx_pair(v["scale"], (1.0, 1.0)),
-                            rotation=float(v["rotate"]), translation=_mx_pair(v["offset"]), pivot=_mx_pair(v["pivot"]),
-                            operation_order=int(v["order"]), authored=authored)
-            )
+            nearest.append(_mx_place2d(node, document))
             nxt = mtlxgraph.upstream(node.getInput(MtlxInputs.TEXCOORD))
             if nxt is None:
                 break
