@@ -123,3 +123,19 @@ def test_gltf_image_nodes_with_builtin_transform(tmp_path):
     assert orm.uv.transforms == ()
     # different tiling: two stacks in one material
     assert len(result.stacks) == 2
+
+
+def test_a_material_that_cannot_be_followed_is_an_error_and_the_rest_go_on(tmp_path, samples_dir):
+    # rotation authored as a string: the transform cannot be read
+    text = (samples_dir / "transform2d" / "scene.usda").read_text()
+    text = text.replace("float inputs:rotation = 90", 'string inputs:rotation = "ninety"')
+    text = text.replace("@../textures/", f"@{TEXTURES}/")
+    path = tmp_path / "bad.usda"
+    path.write_text(text)
+    other = tmp_path / "good.usda"
+    other.write_text((samples_dir / "orm" / "scene.usda").read_text().replace("@../textures/", f"@{TEXTURES}/"))
+    result = scan_paths([path, other])
+    (error,) = result.findings
+    assert error.severity.value == "error" and error.code == "discovery-error"
+    assert error.where == "</World/Looks/Wood>"
+    assert [s.material for s in result.stacks] == ["</World/Looks/BrickOrm>"]

@@ -13,11 +13,19 @@ import MaterialX as mx
 from seamless_usd.discover import mtlxgraph
 from seamless_usd.discover.colorspace import Label
 from seamless_usd.discover.maps import TextureUse
-from seamless_usd.discover.tokens import SEPARATE_OUTPUTS, UDIM_TOKEN, MtlxCategories, MtlxInputs, Terminals, Wrap
+from seamless_usd.discover.tokens import (
+    SEPARATE_OUTPUTS,
+    UDIM_TOKEN,
+    Codes,
+    MtlxCategories,
+    MtlxInputs,
+    Terminals,
+    Wrap,
+)
 from seamless_usd.discover.types import NORMAL_ROLES, Origin, RoleUse
 from seamless_usd.discover.uv import mtlx_uv_chain
 from seamless_usd.errors import InputError
-from seamless_usd.findings import asset_ref
+from seamless_usd.findings import Finding, Severity, asset_ref
 
 __all__ = ["read_document", "walk_document"]
 
@@ -40,7 +48,7 @@ def read_document(path: str | Path) -> mx.Document:
 
 def walk_document(
     doc: mx.Document, path: str | Path, *, under: str = "", only: str = ""
-) -> tuple[list[str], list[TextureUse]]:
+) -> tuple[list[str], list[TextureUse], list[Finding]]:
     """Materials and texture uses of a document.
 
     ``under`` is the USD prim a referenced document is attached to: its materials are named
@@ -50,6 +58,7 @@ def walk_document(
     document = str(Path(path).resolve())
     materials: list[str] = []
     uses: list[TextureUse] = []
+    errors: list[Finding] = []
     for material in doc.getMaterialNodes():
         if only and material.getName() != only:
             continue
@@ -58,15 +67,25 @@ def walk_document(
         else:
             name = f"<{material.getNamePath()}>"
         materials.append(name)
-        shaders = []
-        for shader_type in Terminals.MTLX_SHADER_TYPES:
-            shaders.extend(mx.getShaderNodes(material, shader_type))
-        for shader in shaders:
-            for inp in shader.getInputs():
-                consumer = f"<{shader.getNamePath()}.{inp.getName()}>"
-                for tex, channels, flip in _trace(inp, None, 0, False):
-                    uses.append(_texture_use(name, tex, RoleUse(inp.getName(), channels, consumer), flip, document))
-    return materials, uses
+        try:
+            uses.extend(_material_uses(material, name, document))
+        except Exception as exc:  # noqa: BLE001 - one bad material must not stop the scan
+            errors.append(Finding(Severity.ERROR, Codes.DISCOVERY_ERROR, f"{name} {asset_ref(document)}",
+                                  f"cannot follow the material network: {type(exc).__name__}: {exc}"))
+    return materials, uses, errors
+
+
+def _material_uses(material: mx.Node, name: str, document: str) -> list[TextureUse]:
+    uses: list[TextureUse] = []
+    shaders = []
+    for shader_type in Terminals.MTLX_SHADER_TYPES:
+        shaders.extend(mx.getShaderNodes(material, shader_type))
+    for shader in shaders:
+        for inp in shader.getInputs():
+            consumer = f"<{shader.getNamePath()}.{inp.getName()}>"
+            for tex, channels, flip in _trace(inp, None, 0, False):
+                uses.append(_texture_use(name, tex, RoleUse(inp.getName(), channels, consumer), flip, document))
+    return uses
 
 
 def _compose(inner: tuple[int, ...], outer: tuple[int, ...] | None) -> tuple[int, ...]:

@@ -54,9 +54,10 @@ class _Scan:
 
     def add_stage(self, stage: Usd.Stage, source: str) -> None:
         self.result.sources.append(source)
-        materials, uses, refs = usd.walk_stage(stage)
+        materials, uses, refs, errors = usd.walk_stage(stage)
         self.result.materials.extend(materials)
         self.uses.extend(uses)
+        self.result.findings.extend(errors)
         for err in stage.GetCompositionErrors():
             text = str(err.ToString()) if hasattr(err, "ToString") else str(err)
             if MTLX_SUFFIX in text.lower():
@@ -79,19 +80,21 @@ class _Scan:
                 )
                 continue
             only = Sdf.Path(ref.target).name if ref.target else ""
-            materials, uses = mtlx.walk_document(doc, ref.document, under=ref.prim, only=only)
+            materials, uses, errors = mtlx.walk_document(doc, ref.document, under=ref.prim, only=only)
             if ref.document not in self.result.sources:
                 self.result.sources.append(ref.document)
             self.result.materials.extend(materials)
             self.uses.extend(uses)
+            self.result.findings.extend(errors)
 
     def add_document(self, path: str | Path) -> None:
         doc = mtlx.read_document(path)
         source = str(Path(path).resolve())
         self.result.sources.append(source)
-        materials, uses = mtlx.walk_document(doc, source)
+        materials, uses, errors = mtlx.walk_document(doc, source)
         self.result.materials.extend(materials)
         self.uses.extend(uses)
+        self.result.findings.extend(errors)
 
     def finish(self) -> ScanResult:
         maps, findings = build_maps(self.uses, self.cache)

@@ -169,7 +169,7 @@ class Codes:
     NORMAL_SCALE_BIAS = "normal-scale-bias"
     COMPOSITION_ERROR = "composition-error"
     MTLX_UNREADABLE = "mtlx-unreadable"
-    NO_MATERIALS = "no-materials"
+    DISCOVERY_ERROR = "discovery-error"
 
 
 MIN_IMAGE_SIZE = 100  # px: the smallest crop synthesis samples (DESIGN: c_min)

@@ -22,13 +22,14 @@ from seamless_usd.discover.tokens import (
     UDIM_TOKEN,
     Inputs,
     MtlxInputs,
+    Codes,
     ShaderIds,
     Terminals,
     Wrap,
 )
 from seamless_usd.discover.types import NORMAL_ROLES, ColorSpace, Origin, RoleUse
 from seamless_usd.discover.uv import usd_uv_chain
-from seamless_usd.findings import prim_ref
+from seamless_usd.findings import Finding, Severity, prim_ref
 
 __all__ = ["MtlxReference", "walk_stage", "is_texture_id"]
 
@@ -61,17 +62,25 @@ def _is_uv_id(sid: str) -> bool:
     )
 
 
-def walk_stage(stage: Usd.Stage) -> tuple[list[str], list[TextureUse], list[MtlxReference]]:
-    """Materials (``<path>``), texture uses and ``.mtlx`` references of a composed stage."""
+def walk_stage(stage: Usd.Stage) -> tuple[list[str], list[TextureUse], list[MtlxReference], list[Finding]]:
+    """Materials (``<path>``), texture uses, ``.mtlx`` references and errors of a composed stage.
+
+    A material whose network cannot be followed is reported as an error finding; the rest go on.
+    """
     materials: list[str] = []
     uses: list[TextureUse] = []
     refs: list[MtlxReference] = []
+    errors: list[Finding] = []
     for prim in stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
         refs.extend(_mtlx_references(prim))
         if prim.IsA(UsdShade.Material):
             materials.append(prim_ref(prim.GetPath()))
-            uses.extend(_material_uses(UsdShade.Material(prim)))
-    return materials, uses, refs
+            try:
+                uses.extend(_material_uses(UsdShade.Material(prim)))
+            except Exception as exc:  # noqa: BLE001 - one bad material must not stop the scan
+                errors.append(Finding(Severity.ERROR, Codes.DISCOVERY_ERROR, prim_ref(prim.GetPath()),
+                                      f"cannot follow the material network: {type(exc).__name__}: {exc}"))
+    return materials, uses, refs, errors
 
 
 def _mtlx_references(prim: Usd.Prim) -> list[MtlxReference]:
