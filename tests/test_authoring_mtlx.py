@@ -200,3 +200,44 @@ def test_new_document_in_another_folder_rebases_paths(document: Path):
     image_file = new.getDescendant("NG_brick/albedo_file").getResolvedValueString()
     assert (out.parent / image_file).resolve() == (document.parent / "tileable" / "albedo_tile.png").resolve()
     assert result.layers_written == [out]
+
+
+def test_rerun_on_processed_tiles_composes_without_a_second_place2d(document: Path):
+    first = author_mtlx(document, results(document))
+    tiles = {"NG_brick/image_color": "albedo_tile.png", "NG_brick/tiled_rough": "rough_tile.png"}
+    from dataclasses import replace
+
+    # the pipeline processed the tiles themselves this time, with a UV scale of (2, 1)
+    again_results = []
+    for r in results(document):
+        maps = [MapResult(replace(m.map, document=str(first.output),
+                                  resolved=str(document.parent / "tileable" / tiles[m.map.node]),
+                                  file_at=replace(m.map.file_at, layer=str(first.output))),
+                          m.output_path) for m in r.maps]
+        again_results.append(replace(r, maps=maps, uv_scale=(2.0, 1.0)))
+    second = author_mtlx(first.output, again_results, output_path=document.with_name("second.mtlx"))
+    old, new = read(document), read(second.layers_written[0])
+    for node in tiles:
+        total = (SCALE[0] * 2.0, SCALE[1] * 1.0)
+        assert chain(new, node).close_to(chain(old, node).then(scale2d(total)), tol=1e-6)
+        assert read_mtlx_provenance(new.getDescendant(node)).uv_scale == pytest.approx(total)
+        assert read_mtlx_provenance(new.getDescendant(node)).source_asset.endswith(
+            "brick albedo é.png" if "image" in node else "rough.png")
+    place2ds = [n for n in new.getDescendant("NG_brick").getNodes() if n.getCategory() == "place2d"]
+    assert len(place2ds) == 2  # the original and one seamless_uv
+
+
+def test_address_modes_through_interface_inputs_and_missing_tile(document: Path):
+    text = document.read_text(encoding="utf-8").replace(
+        '<input name="uaddressmode" type="string" value="clamp" />',
+        '<input name="uaddressmode" type="string" interfacename="wrap" />').replace(
+        '<input name="albedo_file" type="filename" value="brick albedo é.png" />',
+        '<input name="albedo_file" type="filename" value="brick albedo é.png" />\n'
+        '    <input name="wrap" type="string" value="clamp" />')
+    document.write_text(text, encoding="utf-8")
+    (document.parent / "tileable" / "rough_tile.png").unlink()
+    result = author_mtlx(document, results(document))
+    assert [f.code for f in result.findings] == ["missing-output"]
+    new = read(result.output)
+    assert new.getDescendant("NG_brick/wrap").getValueString() == "periodic"
+    assert new.getDescendant("NG_brick/image_color").getInput("uaddressmode").getInterfaceName() == "wrap"

@@ -448,18 +448,22 @@ def test_missing_output_file_and_unreadable_stage(scene: Path):
         author_usd(root / "broken.usda", [plain_result(root)])
 
 
-def test_in_place_keeps_crate_format(scene: Path):
+@pytest.mark.parametrize("name, magic", [("looks.usdc", b"PXR-USDC"), ("looks.usd", b"#usda")])
+def test_in_place_keeps_the_layer_format(scene: Path, name: str, magic: bytes):
     root = scene.parent
-    crate = root / "looks.usdc"
-    Sdf.Layer.FindOrOpen(str(root / "looks.usda")).Export(str(crate))
-    (root / "scene.usda").write_text(ROOT_LAYER.replace("looks.usda", "looks.usdc"), encoding="utf-8")
+    crate = root / name
+    if name.endswith(".usd"):  # a .usd file holding text stays text
+        crate.write_text(LOOKS_LAYER, encoding="utf-8")
+    else:
+        Sdf.Layer.FindOrOpen(str(root / "looks.usda")).Export(str(crate))
+    (root / "scene.usda").write_text(ROOT_LAYER.replace("looks.usda", name), encoding="utf-8")
     results = [brick_result(root)]
     for r in results:  # discovery would report the crate layer as the opinion's layer
         for m in r.maps:
             object.__setattr__(m.map.file_at, "layer", str(crate))
     result = author_usd(scene, results, mode=WriteMode.IN_PLACE)
     assert result.layers_written == [crate]
-    assert crate.read_bytes().startswith(b"PXR-USDC")
+    assert crate.read_bytes().startswith(magic)
     stage = Usd.Stage.Open(str(scene))
     assert stage.GetPrimAtPath(f"{BRICK}/Albedo").HasAPI(Schema.TILE_API)
 
