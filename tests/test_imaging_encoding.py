@@ -77,6 +77,15 @@ def test_srgb_transfer_values() -> None:
         to_linear(v, "ACEScg")
 
 
+@pytest.mark.parametrize("dtype, top", [("uint8", 255), ("uint16", 65535)])
+def test_integer_encoding_picks_the_rounded_code(dtype: str, top: int) -> None:
+    x = np.random.default_rng(0).random(200_000) * 1.2 - 0.1  # includes values outside [0, 1]
+    by_table = from_linear(x, "sRGB", dtype)
+    by_rounding = np.rint(np.clip(from_linear(x, "sRGB"), 0, 1) * top) / top
+    assert np.array_equal(by_table, by_rounding)
+    assert np.array_equal(from_linear(x, "raw", dtype), x)  # raw: the writer rounds
+
+
 # values: round trips file -> network -> file -------------------------------------------------------
 
 

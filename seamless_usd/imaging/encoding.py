@@ -31,7 +31,7 @@ from enum import Enum
 import numpy as np
 
 from seamless_usd.discover.types import ColorSpace, ImageInfo, TextureMap
-from seamless_usd.imaging.transfer import from_linear, to_linear
+from seamless_usd.imaging.transfer import file_codes, from_linear, linear_table, to_linear
 from seamless_usd.imaging.io import alpha_channel
 from seamless_usd.imaging.normals import decode_normals, encode_normals, normal_scale_bias
 
@@ -220,12 +220,12 @@ class MapEncoding:
         value_range = alpha_range = ValueRange()
         fill = tuple(1.0 if i == alpha else 0.0 for i in range(n))
         if pixels is not None:
-            p = np.asarray(pixels, dtype=np.float64)
+            p = np.asarray(pixels)
             if p.ndim == 2:
                 p = p[..., None]
             if p.shape[-1] != n:
                 raise ValueError(f"pixels have {p.shape[-1]} channels, the header says {n}")
-            fill = tuple(float(np.nanmean(p[..., i])) if p[..., i].size else 0.0 for i in range(n))
+            fill = tuple(float(np.nanmean(p[..., i], dtype=np.float64)) if p[..., i].size else 0.0 for i in range(n))
             if not cls._integer(info.dtype):
                 values = [i for i in channels if i != alpha and (normal is None or i not in normal)]
                 if values:
@@ -321,18 +321,23 @@ def decode_map(pixels: np.ndarray, encoding: MapEncoding) -> np.ndarray:
     >>> decode_map(np.array([[0.0]]), enc).tolist()
     [[[-1.0]]]
     """
-    p = _as_hwc(pixels, encoding.file_channels, "pixels").astype(np.float64, copy=False)
+    p = _as_hwc(pixels, encoding.file_channels, "pixels")
     out = np.empty(p.shape[:2] + (encoding.network_channels,), dtype=np.float64)
     values, normals, alphas = encoding.channel_groups()
     if values:
         idx = [encoding.channels[j] for j in values]
-        linear = to_linear(p[..., idx], encoding.color_space, encoding.dtype)
-        out[..., values] = encoding.value_range.to_network(linear)
+        codes = file_codes(p[..., idx], encoding.dtype)
+        if codes is not None:  # integer file: one table lookup per texel
+            table = encoding.value_range.to_network(linear_table(encoding.color_space, encoding.dtype))
+            out[..., values] = np.take(table, codes)
+        else:
+            linear = to_linear(p[..., idx], encoding.color_space, encoding.dtype)
+            out[..., values] = encoding.value_range.to_network(linear)
     if normals:
         linear = to_linear(p[..., list(encoding.normal)], encoding.color_space, encoding.dtype)
         out[..., normals] = decode_normals(linear, encoding.normal_scale, encoding.normal_bias)
     if alphas:
-        out[..., alphas] = encoding.alpha_range.to_network(p[..., [encoding.alpha]])
+        out[..., alphas] = encoding.alpha_range.to_network(p[..., [encoding.alpha]].astype(np.float64))
     return out.astype(np.float32)
 
 
@@ -367,10 +372,10 @@ def encode_map(values: np.ndarray, encoding: MapEncoding) -> np.ndarray:
     if groups_values:
         idx = [encoding.channels[j] for j in groups_values]
         linear = encoding.value_range.from_network(v[..., groups_values])
-        out[..., idx] = from_linear(linear, encoding.color_space)
+        out[..., idx] = from_linear(linear, encoding.color_space, encoding.dtype)
     if normals:
         linear = encode_normals(v[..., normals], encoding.normal_scale, encoding.normal_bias)
-        out[..., list(encoding.normal)] = from_linear(linear, encoding.color_space)
+        out[..., list(encoding.normal)] = from_linear(linear, encoding.color_space, encoding.dtype)
     if alphas:
         out[..., [encoding.alpha]] = encoding.alpha_range.from_network(v[..., alphas])
     if encoding.is_integer:

@@ -19,7 +19,7 @@ with warnings.catch_warnings():  # colour-science warns about optional plotting 
     warnings.simplefilter("ignore")
     from colour.models import eotf_inverse_sRGB, eotf_sRGB
 
-__all__ = ["TRANSFER_FUNCTIONS", "to_linear", "from_linear"]
+__all__ = ["TRANSFER_FUNCTIONS", "to_linear", "from_linear", "file_codes", "linear_table"]
 
 
 def _identity(values: np.ndarray) -> np.ndarray:
@@ -50,7 +50,24 @@ def _functions(color_space: ColorSpace | str):
 @lru_cache(maxsize=None)
 def _decode_table(color_space: ColorSpace, code_max: int) -> np.ndarray:
     codes = np.arange(code_max + 1, dtype=np.float64) / code_max
-    return np.asarray(_functions(color_space)[0](codes), dtype=np.float64)
+    table = np.asarray(_functions(color_space)[0](codes), dtype=np.float64)
+    table.setflags(write=False)
+    return table
+
+
+def file_codes(values: np.ndarray, dtype: str) -> np.ndarray | None:
+    """Integer codes of normalised integer-file values (``None`` for float sample types)."""
+    code_max = _CODE_MAX.get(dtype)
+    if code_max is None:
+        return None
+    scaled = np.asarray(values, dtype=np.float32) * np.float32(code_max)
+    return np.clip(np.rint(scaled), 0, code_max).astype(np.int32)
+
+
+def linear_table(color_space: ColorSpace | str, dtype: str) -> np.ndarray | None:
+    """Linear value of every code of an integer sample type (``None`` for float types)."""
+    code_max = _CODE_MAX.get(dtype)
+    return None if code_max is None else _decode_table(_colour_space(color_space), code_max)
 
 
 def to_linear(values: np.ndarray, color_space: ColorSpace | str, dtype: str | None = None) -> np.ndarray:
@@ -79,19 +96,50 @@ def to_linear(values: np.ndarray, color_space: ColorSpace | str, dtype: str | No
     cs = _colour_space(color_space)
     if cs is ColorSpace.RAW:
         return np.asarray(values, dtype=np.float64)
-    code_max = _CODE_MAX.get(dtype or "")
-    if code_max is not None:
-        codes = np.rint(np.clip(np.asarray(values, dtype=np.float64), 0.0, 1.0) * code_max).astype(np.int64)
-        return _decode_table(cs, code_max)[codes]
+    codes = file_codes(values, dtype or "")
+    if codes is not None:
+        return np.take(linear_table(cs, dtype), codes)
     return np.asarray(_functions(cs)[0](np.asarray(values, dtype=np.float64)), dtype=np.float64)
 
 
-def from_linear(values: np.ndarray, color_space: ColorSpace | str) -> np.ndarray:
+@lru_cache(maxsize=None)
+def _code_thresholds(color_space: ColorSpace, code_max: int) -> np.ndarray:
+    """Linear values at the code midpoints ``(k + 0.5) / code_max``, k = 0 .. code_max - 1."""
+    mid = (np.arange(code_max, dtype=np.float64) + 0.5) / code_max
+    return np.asarray(_functions(color_space)[0](mid), dtype=np.float64)
+
+
+def from_linear(values: np.ndarray, color_space: ColorSpace | str, dtype: str | None = None) -> np.ndarray:
     """Linear values -> file values (float64); the inverse of :func:`to_linear`.
+
+    Parameters
+    ----------
+    values
+        Linear values, any shape.
+    color_space
+        ``sRGB`` or ``raw``.
+    dtype
+        The output file's sample type. For ``uint8`` / ``uint16`` the result is already the
+        nearest code, ``k / code_max`` in [0, 1]: the code whose interval (between the
+        colour-science EOTF of the code midpoints) holds the value, which is what rounding the
+        inverse EOTF gives, found by table search.
+
+    Returns
+    -------
+    np.ndarray
+        File values, same shape, float64.
 
     Examples
     --------
     >>> float(from_linear(to_linear(np.array(0.5), "sRGB"), "sRGB").round(12))
     0.5
+    >>> float(from_linear(np.array(0.2), "sRGB", "uint8") * 255)
+    124.0
     """
-    return np.asarray(_functions(color_space)[1](np.asarray(values, dtype=np.float64)), dtype=np.float64)
+    cs = _colour_space(color_space)
+    v = np.asarray(values, dtype=np.float64)
+    code_max = _CODE_MAX.get(dtype or "")
+    if code_max is not None and cs is not ColorSpace.RAW:
+        codes = np.searchsorted(_code_thresholds(cs, code_max), v, side="right")
+        return codes / float(code_max)
+    return np.asarray(_functions(cs)[1](v), dtype=np.float64)
