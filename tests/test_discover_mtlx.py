@@ -132,6 +132,7 @@ def test_gltf_colorimage_and_separate4_alpha(tmp_path):
     maps = _maps(scan_mtlx(doc))
     assert {r.role: r.channels for r in maps["brick_albedo.png"].roles} == {"base_color": "rgb", "alpha": "a"}
     assert {r.role: r.channels for r in maps["brick_orm.png"].roles} == {"occlusion": "r", "roughness": "g"}
+    assert maps["brick_orm.png"].node_type == "ND_gltf_image_vector3_vector3_1_0"
 
 
 def test_unreadable_document_raises_input_error_naming_it(tmp_path):

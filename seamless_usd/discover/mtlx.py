@@ -43,6 +43,7 @@ def read_document(path: str | Path) -> mx.Document:
     except Exception as exc:  # noqa: BLE001 - MaterialX raises several unrelated exception types
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{asset_ref(path)}: cannot read the MaterialX document: {first}") from None
+    doc.setDataLibrary(mtlxgraph.standard_library())  # node definitions, for nodedef names
     return doc
 
 

@@ -1,19 +1,35 @@
 """Small helpers over MaterialX documents: connections, interface values and node type names."""
 from __future__ import annotations
 
+from functools import lru_cache
+
 import MaterialX as mx
 
 from seamless_usd.discover.tokens import OUTPUT_CHANNELS, TYPE_CHANNELS
 from seamless_usd.discover.types import AuthoredAt
 
-__all__ = ["node_type_name", "upstream", "value_source", "authored_at", "input_value", "channels_of"]
+__all__ = ["standard_library", "node_type_name", "upstream", "value_source", "authored_at", "input_value", "channels_of"]
+
+
+@lru_cache(maxsize=1)
+def standard_library() -> mx.Document:
+    """The MaterialX standard libraries shipped with the package (loaded once, ~0.2 s)."""
+    lib = mx.createDocument()
+    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
+    return lib
 
 
 def node_type_name(node: mx.Node) -> str:
-    """The node's nodedef name (``ND_image_color3``): declared, or by standard-library naming."""
+    """The node's nodedef name (``ND_image_color3``, ``ND_gltf_image_color3_color3_1_0``).
+
+    From the document's data library when it has one, else by standard-library naming.
+    """
     declared = node.getNodeDefString()
     if declared:
         return declared
+    nodedef = node.getNodeDef()
+    if nodedef is not None:
+        return nodedef.getName()
     return f"ND_{node.getCategory()}_{node.getType()}"
 
 
