@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import PurePath
 
 from rich.console import Console
 from rich.markup import escape
@@ -68,6 +69,8 @@ def _stack_table(stack: TextureStack) -> Table:
             notes.append(f"scale {','.join(f'{v:g}' for v in m.scale)} bias {','.join(f'{v:g}' for v in m.bias)}")
         if m.normal_y_flip:
             notes.append("Y-flipped normal")
+        if m.resolved and PurePath(m.asset).name != PurePath(m.resolved.rstrip("]")).name:
+            notes.append(f"reads {PurePath(m.resolved.rstrip(']')).name}")  # fileprefix, package paths
         if m.in_package:
             notes.append("inside package")
         if m.file_at.prim != m.node:
