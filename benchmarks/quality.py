@@ -549,6 +549,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: benchmarks/results)")
     p.add_argument("--textures-dir", type=Path, default=SHARED_DIR, help="MaterialX images for the mx_* stacks (default: ../shared/textures from the repository root)")
     p.add_argument("--max-size", type=int, default=None, help="downscale inputs to at most this many px (quick runs)")
+    p.add_argument("--threads", type=int, default=None, help="torch CPU threads for SeamlessGAN (default: torch's choice)")
     p.add_argument("--no-gram", action="store_true", help="leave out the Gram distance (no torch needed)")
     p.add_argument("--no-pictures", action="store_true", help="do not write the 2x2 PNGs")
     a = p.parse_args(argv)
@@ -566,6 +567,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 file=sys.stderr,
             )
             return 2
+    if a.threads is not None:
+        import torch
+
+        torch.set_num_threads(max(1, a.threads))
     if SEAMLESSGAN in methods:
         try:
             _synthesis().get_preset(a.preset)
