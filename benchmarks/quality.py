@@ -90,6 +90,10 @@ def _figure(row: dict, key: str):
     return row.get(key)
 
 
+def _log(line: str) -> None:
+    print(line, flush=True)  # flushed: long runs are often watched through a redirected file
+
+
 @dataclass(frozen=True)
 class MapFile:
     """One map of a stack: a name, the file, its channels and whether it holds normals."""
@@ -253,7 +257,7 @@ def _synthesis():
 
 
 def run_seamlessgan(
-    stack: dict[str, tuple[np.ndarray, bool]], preset: str, seed: int, log: Callable[[str], None] = print
+    stack: dict[str, tuple[np.ndarray, bool]], preset: str, seed: int, log: Callable[[str], None] = _log
 ) -> MethodResult:
     """Train SeamlessGAN on the stack with ``preset`` and sample one tile per map."""
     syn = _synthesis()
@@ -371,7 +375,7 @@ def run(
     max_size: int | None = None,
     gram: bool = True,
     pictures: bool = True,
-    log: Callable[[str], None] = print,
+    log: Callable[[str], None] = _log,
     command: str | None = None,
 ) -> dict:
     """Run the benchmark and write ``quality.json``, ``quality.md`` and the pictures.
