@@ -25,6 +25,7 @@ EXIT_INTERNAL = 3
 # Sub-command name -> module with ``add_arguments(parser)`` and ``run(args) -> int``.
 COMMANDS: dict[str, str] = {
     "scan": "seamless_usd_cli.scan",
+    "process": "seamless_usd_cli.process",
 }
 
 

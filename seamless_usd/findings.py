@@ -19,6 +19,7 @@ class Finding:
     code: str  # stable machine-readable kind, e.g. "missing-file", "udim", "colorspace-mismatch"
     where: str  # USD notation: "<prim/path>" or "@asset/path@" (or both, space separated)
     message: str  # one line: what is wrong and what to do
+    material: str = ""  # "<material path>" the finding belongs to, when it belongs to one
 
     def __str__(self) -> str:
         return f"{self.severity.value}: {self.where}: {self.message}"
@@ -26,6 +27,8 @@ class Finding:
     def to_dict(self) -> dict:
         d = asdict(self)
         d["severity"] = self.severity.value
+        if not self.material:
+            del d["material"]
         return d
 
 

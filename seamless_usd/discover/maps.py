@@ -77,7 +77,9 @@ def _where(use: TextureUse) -> str:
 
 def _skip(use: TextureUse, code: str, message: str) -> Finding:
     doc = f" in {asset_ref(use.document)}" if use.document else ""
-    return Finding(Severity.SKIPPED, code, _where(use), f"{message} (material {use.material}{doc})")
+    return Finding(
+        Severity.SKIPPED, code, _where(use), f"{message} (material {use.material}{doc})", material=use.material
+    )
 
 
 def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | None, list[Finding]]:

@@ -1,1 +1,1 @@
-"""pipeline step (see DESIGN.md)."""
+"""Planning and running jobs: options, the content-addressed cache, the process core."""

@@ -96,6 +96,7 @@ class Report:
     layers_written: list[str] = field(default_factory=list)
     backups: list[str] = field(default_factory=list)
     plan: list[str] = field(default_factory=list)  # human-readable edits (dry run)
+    unreadable: list[str] = field(default_factory=list)  # inputs that could not be opened
     options: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     tool_version: str = ""
@@ -110,7 +111,9 @@ class Report:
 
     @property
     def exit_code(self) -> int:
-        """0 when all stacks passed, 1 when some failed or did not pass (the rest were written)."""
+        """0 all stacks passed; 1 some failed or did not pass (the rest were written); 2 unreadable input."""
+        if self.unreadable:
+            return 2
         return 0 if self.ok else 1
 
     def counts(self) -> dict[str, int]:
@@ -127,6 +130,7 @@ class Report:
         self.layers_written += other.layers_written
         self.backups += other.backups
         self.plan += other.plan
+        self.unreadable += other.unreadable
         for k, v in other.timings.items():
             self.timings[k] = self.timings.get(k, 0.0) + v
 
@@ -142,5 +146,6 @@ class Report:
             "layers_written": self.layers_written,
             "backups": self.backups,
             "plan": self.plan,
+            "unreadable": self.unreadable,
             "timings": self.timings,
         }

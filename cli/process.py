@@ -1,0 +1,144 @@
+"""Make the textures of a stage or MaterialX document tileable and write them back.
+
+Trains a SeamlessGAN per texture stack, samples a tileable stack, writes the maps beside the
+stage (``tileable/``) and, by default, a new layer ``<scene>.seamless.usda`` that sublayers the
+original and holds the edits. Exit codes: 0 all stacks passed; 1 some stack failed or did not
+pass (the rest were written); 2 usage error or unreadable input.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
+
+from seamless_usd.api import Options, process_paths
+from seamless_usd.authoring import WriteMode
+from seamless_usd.pipeline.options import ProgressEvent
+from seamless_usd.report import Report, StackStatus
+
+__all__ = ["add_arguments", "run"]
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("paths", nargs="+", metavar="PATH", help="USD stages (.usd/.usda/.usdc/.usdz) or .mtlx documents")
+    p.add_argument("--preset", default="default", help="synthesis preset: paper, default, draft, tiny (default: %(default)s)")
+    p.add_argument("--materials", action="append", default=[], metavar="GLOB",
+                   help="only materials whose path or name matches (repeatable)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--dry-run", action="store_true", help="show what would be done, write nothing")
+    mode.add_argument("--in-place", action="store_true", help="edit the source layers (keeps .bak copies)")
+    p.add_argument("-o", "--output-layer", type=Path, help="override layer to write (default <scene>.seamless.usda)")
+    p.add_argument("--output-dir", type=Path, help="folder for tileable maps (default <stage dir>/tileable)")
+    p.add_argument("--device", help="cpu, cuda, cuda:N (default: CUDA when present)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-size", type=int, help="working-resolution cap in pixels (longest side); default native")
+    p.add_argument("--iterations", type=int, help="override the preset's training iterations")
+    p.add_argument("--cache-dir", type=Path, help="trained models and checkpoints (default: user cache dir)")
+    p.add_argument("--report", type=Path, help="HTML report path (the JSON report is written beside it)")
+    p.add_argument("--json", action="store_true", help="print the JSON report on stdout")
+
+
+def _options(args: argparse.Namespace, progress) -> Options:
+    mode = WriteMode.DRY_RUN if args.dry_run else WriteMode.IN_PLACE if args.in_place else WriteMode.NEW_LAYER
+    return Options(
+        preset=args.preset,
+        materials=tuple(args.materials),
+        mode=mode,
+        output_layer=args.output_layer,
+        output_dir=args.output_dir,
+        device=args.device,
+        seed=args.seed,
+        report=args.report,
+        cache_dir=args.cache_dir,
+        max_size=args.max_size,
+        iterations=args.iterations,
+        progress=progress,
+    )
+
+
+class _ProgressView:
+    """Rich progress bars: one for the stacks, one for the current training or sampling."""
+
+    def __init__(self, console: Console):
+        self.progress = Progress(
+            TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+            TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn(),
+            console=console, transient=False,
+        )
+        self.stacks = None
+        self.step = None
+
+    def __enter__(self):
+        self.progress.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        return self.progress.__exit__(*exc)
+
+    def __call__(self, event: ProgressEvent) -> None:
+        p = self.progress
+        if self.stacks is None:
+            self.stacks = p.add_task("stacks", total=event.total, rate="")
+        if event.kind == "stack-start":
+            if self.step is not None:
+                p.remove_task(self.step)
+            self.step = p.add_task(f"  {event.stack_id[:40]}", total=None, rate="")
+        elif event.kind == "train" and self.step is not None and event.detail is not None:
+            d = event.detail
+            p.update(self.step, total=d.total, completed=d.iteration, rate=f"{d.it_per_s:.1f} it/s")
+        elif event.kind == "sample" and self.step is not None and event.detail is not None:
+            d = event.detail
+            c_h, c_w = d.candidate.crop_size
+            p.update(self.step, total=d.planned, completed=d.index, rate=f"Q search, crop {c_h}x{c_w}")
+        elif event.kind == "stack-done":
+            p.advance(self.stacks)
+
+
+def _summary(report: Report, console: Console) -> None:
+    if report.stacks:
+        _stack_table(report, console)
+    for f in report.findings:
+        text = f.message if f.where in f.message else f"{f.where}: {f.message}"
+        console.print(f"[bold]{f.severity.value}[/]: {text}", highlight=False, soft_wrap=True)
+    for layer in report.layers_written:
+        console.print(f"wrote {layer}", highlight=False, soft_wrap=True)
+    if report.options.get("mode") == "dry-run":
+        for line in report.plan:
+            console.print(f"would {line}", highlight=False, soft_wrap=True)
+
+
+def _stack_table(report: Report, console: Console) -> None:
+    table = Table(title="seamless-usd process", show_lines=False)
+    for col in ("material", "status", "maps", "crop", "tile", "UV scale", "Q", "time"):
+        table.add_column(col)
+    for s in report.stacks:
+        style = {StackStatus.PASSED: "green", StackStatus.NOT_PASSED: "yellow", StackStatus.FAILED: "red"}.get(s.status, "")
+        table.add_row(
+            s.material,
+            f"[{style}]{s.status.value}[/]" if style else s.status.value,
+            str(len(s.maps)),
+            "x".join(map(str, s.crop_size)) if s.crop_size else "-",
+            "x".join(map(str, s.tile_size)) if s.tile_size else "-",
+            ", ".join(f"{v:.3g}" for v in s.uv_scale) if s.uv_scale else "-",
+            "pass" if s.q.get("passed") else ("fail" if s.q else "-"),
+            f"{sum(s.timings.values()):.0f}s" if s.timings else "-",
+        )
+    console.print(table)
+
+
+def run(args: argparse.Namespace) -> int:
+    console = Console(stderr=True)
+    with _ProgressView(console) as view:
+        report = process_paths([Path(p) for p in args.paths], _options(args, view))
+    _summary(report, console)
+    if report.options.get("report_html"):
+        console.print(f"report: {report.options['report_html']}", highlight=False, soft_wrap=True)
+    if args.json:
+        json.dump(report.to_dict(), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    return report.exit_code

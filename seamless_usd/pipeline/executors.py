@@ -1,0 +1,119 @@
+"""Executors: where stack jobs run. One interface, chosen by a validated name.
+
+- ``None`` / ``"inprocess"``: one job after another in this process, using all cores for each
+  (the embedded default; fine-grained progress).
+- ``"local:N"``: a Dask ``LocalCluster`` of N single-threaded worker processes on this machine.
+- ``"tcp://host:port"``: an existing Dask scheduler; outputs and cache must be on shared storage.
+
+Workers only train, sample and write maps; stage and document edits happen in the client.
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator, Sequence
+from typing import Protocol
+
+from seamless_usd.errors import UsageError
+from seamless_usd.pipeline.stackjob import StackJob, StackOutcome, run_stack
+
+__all__ = ["Executor", "InProcessExecutor", "DaskExecutor", "make_executor", "EXECUTORS"]
+
+Progress = Callable[[StackJob, str, object], None]
+Result = StackOutcome | Exception
+
+
+class Executor(Protocol):
+    def run(self, jobs: Sequence[StackJob], progress: Progress) -> Iterator[tuple[StackJob, Result]]:
+        """Run ``jobs``; yield each with its outcome (or the exception that stopped it) as it ends."""
+
+
+class InProcessExecutor:
+    """Jobs one after another in this process; one failing job does not stop the others."""
+
+    name = "inprocess"
+
+    def run(self, jobs, progress):
+        for job in jobs:
+            progress(job, "stack-start", None)
+            try:
+                result: Result = run_stack(job, lambda kind, detail, job=job: progress(job, kind, detail))
+            except Exception as exc:  # noqa: BLE001 - reported per stack, the batch goes on
+                result = exc
+            yield job, result
+
+
+def _run_on_worker(job: StackJob, threads: int) -> Result:
+    """Entry point on a Dask worker: limit torch threads, run, return errors as values."""
+    import torch
+
+    torch.set_num_threads(max(1, threads))
+    try:
+        return run_stack(job, None)
+    except Exception as exc:  # noqa: BLE001 - the client reports it per stack
+        return exc
+
+
+class DaskExecutor:
+    """Jobs on a Dask cluster: a new local one (``local:N``) or an existing scheduler address."""
+
+    name = "dask"
+
+    def __init__(self, address: str, workers: int | None = None, threads_per_worker: int = 1):
+        self.address = address
+        self.workers = workers
+        self.threads_per_worker = threads_per_worker
+
+    def run(self, jobs, progress):
+        try:
+            from distributed import Client, LocalCluster, as_completed
+        except ImportError:  # pragma: no cover - depends on the install
+            raise UsageError("a Dask scheduler needs the 'dask[distributed]' extra: pip install 'seamless-usd[dask]'") from None
+        cluster = None
+        if self.address == "local":
+            cluster = LocalCluster(
+                n_workers=self.workers or 2, threads_per_worker=self.threads_per_worker,
+                processes=True, dashboard_address=None, host="127.0.0.1",
+            )
+            client = Client(cluster)
+        else:
+            client = Client(self.address)
+        try:
+            futures = {}
+            for job in jobs:
+                progress(job, "stack-start", None)
+                fut = client.submit(_run_on_worker, job, self.threads_per_worker, pure=False)
+                futures[fut] = job
+            for fut in as_completed(futures):
+                job = futures[fut]
+                try:
+                    result = fut.result()
+                except Exception as exc:  # noqa: BLE001 - a lost worker, say
+                    result = exc
+                yield job, result
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+
+
+def make_executor(scheduler: str | None, jobs: int | None = None) -> Executor:
+    """Validated choice of executor; a clear error lists the valid forms."""
+    if scheduler in (None, "", "inprocess"):
+        return InProcessExecutor()
+    if scheduler.startswith("local"):
+        _, _, n = scheduler.partition(":")
+        try:
+            workers = int(n) if n else (jobs or os.cpu_count() or 1)
+        except ValueError:
+            raise UsageError(f"--scheduler {scheduler!r}: expected local:N with N a whole number") from None
+        if workers < 1:
+            raise UsageError(f"--scheduler {scheduler!r}: N must be at least 1")
+        return DaskExecutor("local", workers=workers)
+    if scheduler.startswith(("tcp://", "tls://", "ucx://", "inproc://")):
+        return DaskExecutor(scheduler)
+    raise UsageError(
+        f"unknown scheduler {scheduler!r}; use one of: inprocess (default), local:N, tcp://host:port"
+    )
+
+
+EXECUTORS = ("inprocess", "local:N", "tcp://host:port")

@@ -1,0 +1,65 @@
+"""One options dataclass shared by the Python API, the CLI and the DCC hooks."""
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+__all__ = ["Options", "ProgressEvent"]
+
+
+@dataclass(frozen=True)
+class ProgressEvent:
+    """What a long run reports: a stack starting/finishing, or training/sampling progress."""
+
+    kind: str  # "stack-start", "train", "sample", "stack-done", "write"
+    stack_id: str
+    index: int  # 0-based index of the stack among the stacks to process
+    total: int  # stacks to process in this run
+    detail: Any = None  # synthesis progress record for "train"/"sample"; a StackReport for "stack-done"
+
+
+@dataclass(frozen=True)
+class Options:
+    """How to process: everything the CLI can say, as one value.
+
+    ``mode`` is a :class:`seamless_usd.authoring.WriteMode` (new layer by default, in place with
+    backups, or dry run). ``output_dir`` defaults to ``<stage dir>/tileable``; it is required for an
+    in-memory stage with an anonymous root layer.
+    """
+
+    preset: str = "default"  # synthesis preset name (see seamless_usd.synthesis.PRESETS)
+    materials: tuple[str, ...] = ()  # fnmatch patterns on material paths; empty = all
+    mode: Any = None  # WriteMode; None means WriteMode.NEW_LAYER
+    output_layer: Path | None = None  # NEW_LAYER: where the override layer goes (default scene.seamless.usda)
+    output_dir: Path | None = None  # where tileable maps go (default <stage dir>/tileable)
+    device: str | None = None  # "cpu", "cuda", "cuda:1"; None picks CUDA when present
+    seed: int = 0
+    report: Path | None = None  # HTML report path; the JSON report goes beside it (.json)
+    cache_dir: Path | None = None  # trained models and checkpoints; None = the user's cache dir
+    max_size: int | None = None  # working-resolution cap (longest side, px); None = native size
+    iterations: int | None = None  # override the preset's training iterations
+    scheduler: str | None = None  # None: in this process; "local:N": N local Dask workers; "tcp://host:port"
+    jobs: int | None = None  # stacks trained at once (local workers); None: 1 in process, N for local:N
+    progress: Callable[[ProgressEvent], None] | None = field(default=None, compare=False)
+
+    def with_(self, **changes: Any) -> "Options":
+        return replace(self, **changes)
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-friendly view for reports (no callables)."""
+        out = {}
+        for name in (
+            "preset", "materials", "mode", "output_layer", "output_dir", "device", "seed",
+            "cache_dir", "max_size", "iterations", "scheduler", "jobs",
+        ):
+            value = getattr(self, name)
+            if isinstance(value, Path):
+                value = str(value)
+            elif isinstance(value, tuple):
+                value = list(value)
+            elif hasattr(value, "value"):
+                value = value.value
+            out[name] = value
+        return out

@@ -1,0 +1,297 @@
+"""The main job: scan, train and sample each unique stack, write tiles, author the edits, report.
+
+``process_paths`` and ``process_stage`` share one core: a :class:`Run` keeps what was already
+done in this run (identical stacks are processed once and reused), stacks are processed one
+after another in this process, and stage/document edits happen after the stacks of a source
+are done. One failing stack is reported and the rest go on.
+"""
+from __future__ import annotations
+
+import fnmatch
+import time
+import traceback
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from seamless_usd import __version__
+from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
+from seamless_usd.discover.types import ScanResult, TextureMap, TextureStack
+from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
+from seamless_usd.pipeline.executors import Executor, make_executor
+from seamless_usd.pipeline.options import Options, ProgressEvent
+from seamless_usd.pipeline.stackjob import JobSettings, StackJob, StackOutcome
+from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
+
+__all__ = ["process_paths", "process_stage", "select_stacks"]
+
+USD_SUFFIXES = {".usd", ".usda", ".usdc", ".usdz"}
+# A texture of a material skipped for one of these reasons blocks the material's stacks: making
+# the other maps tileable (and rescaling their UVs) would misalign them with the skipped one.
+BLOCKING_SKIPS = frozenset({"missing-file", "unreadable-file", "udim", "too-small"})
+MTLX_SUFFIXES = {".mtlx"}
+
+
+def _authoring():
+    # Imported here so that the schema plugin is registered before any stage is opened.
+    from seamless_usd import authoring
+
+    return authoring
+
+
+def select_stacks(scan: ScanResult, patterns: Sequence[str]) -> list[TextureStack]:
+    """Stacks whose material path or name matches one of ``patterns`` (all when empty)."""
+    if not patterns:
+        return list(scan.stacks)
+    out = []
+    for stack in scan.stacks:
+        path = stack.material.strip("<>")
+        name = path.rsplit("/", 1)[-1]
+        if any(fnmatch.fnmatchcase(path, p) or fnmatch.fnmatchcase(name, p) for p in patterns):
+            out.append(stack)
+    return out
+
+
+@dataclass
+class Run:
+    """State of one process run across sources."""
+
+    options: Options
+    executor: Executor
+    report: Report = field(default_factory=Report)
+    outcomes: dict[str, StackOutcome | Exception] = field(default_factory=dict)  # content key -> result
+    blocked: dict[str, str] = field(default_factory=dict)  # stack id -> why it is left alone
+    total: int = 0
+    index: int = 0
+
+    def emit(self, kind: str, stack_id: str, detail=None) -> None:
+        if self.options.progress is not None:
+            self.options.progress(ProgressEvent(kind, stack_id, self.index, self.total, detail))
+
+
+def _output_dir(options: Options, source: Path | None) -> Path:
+    if options.output_dir is not None:
+        return Path(options.output_dir).resolve()
+    if source is None:
+        raise UsageError("the stage has no file on disk (anonymous root layer): give an output directory")
+    return source.resolve().parent / "tileable"
+
+
+def _run_jobs(run: Run, sources: Sequence[tuple[list[TextureStack], Path]]) -> None:
+    """Train and sample every unique stack once (identical stacks share the result)."""
+    jobs: list[StackJob] = []
+    seen: set[str] = set()
+    settings = JobSettings.from_options(run.options)
+    for stacks, out_dir in sources:
+        for stack in stacks:
+            if stack.id in run.blocked or stack.content_key in seen or stack.content_key in run.outcomes:
+                continue
+            seen.add(stack.content_key)
+            jobs.append(StackJob(stack=stack, settings=settings, output_dir=out_dir))
+    run.total = len(jobs)
+
+    def progress(job: StackJob, kind: str, detail) -> None:
+        run.emit(kind, job.stack.id, detail)
+
+    for job, result in run.executor.run(jobs, progress):
+        run.outcomes[job.stack.content_key] = result
+        run.emit("stack-done", job.stack.id, result)
+        run.index += 1
+
+
+def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_dir: Path) -> list:
+    """Turn the outcomes of ``stacks`` into stack reports; return authoring inputs for the done ones."""
+    authoring = _authoring()
+    results = []
+    dry = run.options.mode == authoring.WriteMode.DRY_RUN
+    first_of: dict[str, str] = {}
+    for stack in stacks:
+        report = StackReport(id=stack.id, material=stack.material, source=source_label, status=StackStatus.FAILED)
+        where = prim_ref(stack.material.strip("<>"))
+        if stack.id in run.blocked:
+            report.message = run.blocked[stack.id]
+            run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
+        elif dry:
+            report.status = StackStatus.PLANNED
+            report.maps = [_map_report(m, None) for m in stack.maps]
+            report.duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
+            if report.duplicate_of is None:
+                run.report.plan.append(
+                    f"train and sample {where} ({len(stack.maps)} maps: "
+                    f"{', '.join(Path(m.asset).name for m in stack.maps)}) and write tiles to {out_dir}"
+                )
+        else:
+            outcome = run.outcomes.get(stack.content_key)
+            if isinstance(outcome, StackOutcome):
+                reused = outcome.stack_id != stack.id
+                outcome.fill_report(report, stack, reused=reused)
+                results.append(outcome.stack_result(stack))
+            else:
+                message = _error_message(outcome)
+                report.message = message
+                run.report.findings.append(Finding(Severity.ERROR, "stack-failed", where, message, stack.material))
+        first_of.setdefault(stack.content_key, stack.id)
+        run.report.stacks.append(report)
+    return results
+
+
+def _error_message(exc: Exception | None) -> str:
+    if exc is None:
+        return "not processed"
+    if isinstance(exc, SeamlessUsdError):
+        return str(exc)
+    last = traceback.format_exception_only(type(exc), exc)[-1].strip()
+    return f"internal error: {last} (please report it)"
+
+
+def _map_report(m: TextureMap, output: Path | None) -> MapReport:
+    return MapReport(
+        node=m.node, asset=m.asset, output=str(output) if output else None,
+        roles=[r.role for r in m.roles], channels=m.channels_used, color_space=m.color_space.value,
+    )
+
+
+def _record_authoring(run: Run, result) -> None:
+    run.report.layers_written += [str(p) for p in result.layers_written]
+    run.report.backups += [str(p) for p in result.backups]
+    run.report.findings += list(result.findings)
+    run.report.plan += list(getattr(result, "plan", []) or [])
+
+
+@dataclass
+class _Source:
+    path: Path
+    kind: str  # "usd" or "mtlx"
+    scan: ScanResult
+    stacks: list[TextureStack]
+
+
+def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack]) -> dict[str, str]:
+    """Stacks left alone because a texture of their material was skipped (see BLOCKING_SKIPS)."""
+    out = {}
+    for stack in stacks:
+        reasons = [
+            f"{f.where} ({f.code})"
+            for f in scan.findings
+            if f.severity is Severity.SKIPPED and f.code in BLOCKING_SKIPS and f.material == stack.material
+        ]
+        if reasons:
+            out[stack.id] = (
+                f"left alone: {', '.join(reasons)} of this material cannot be processed, and tiling the other "
+                "maps would misalign them; fix or remove that texture and run again"
+            )
+    return out
+
+
+def _scan_source(path: Path, patterns: Sequence[str]) -> _Source:
+    """Open and scan one input; InputError when it cannot be read."""
+    if not path.exists():
+        raise InputError(f"{asset_ref(path)} does not exist")
+    suffix = path.suffix.lower()
+    if suffix in MTLX_SUFFIXES:
+        scan, kind = scan_mtlx(path), "mtlx"
+    elif suffix in USD_SUFFIXES:
+        _authoring()  # registers the schema plugin before the stage is opened
+        stage = open_stage(path)
+        scan, kind = scan_stage(stage), "usd"
+    else:
+        raise InputError(f"{asset_ref(path)} is neither a USD stage (.usd/.usda/.usdc/.usdz) nor a .mtlx document")
+    return _Source(path, kind, scan, select_stacks(scan, patterns))
+
+
+def _author_source(run: Run, src: _Source) -> None:
+    authoring = _authoring()
+    run.report.findings += src.scan.findings
+    results = _reports_for(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
+    if not results and run.options.mode != authoring.WriteMode.DRY_RUN:
+        return
+    if src.kind == "mtlx":
+        edit = authoring.author_mtlx(src.path, results, mode=run.options.mode)
+    else:
+        edit = authoring.author_usd(src.path, results, mode=run.options.mode, output_layer=run.options.output_layer)
+    _record_authoring(run, edit)
+
+
+def _finish(run: Run, started: float) -> Report:
+    from seamless_usd.report.html import write_html, write_json
+
+    report = run.report
+    report.tool_version = __version__
+    report.options = run.options.summary()
+    report.timings["total"] = time.perf_counter() - started
+    if run.options.report is not None:
+        target = Path(run.options.report)
+        html_path = target if target.suffix.lower() in (".html", ".htm") else target.with_suffix(".html")
+        json_path = html_path.with_suffix(".json")
+        html_path.parent.mkdir(parents=True, exist_ok=True)
+        write_html(report, html_path)
+        write_json(report, json_path)
+        report.options["report_html"] = str(html_path)
+        report.options["report_json"] = str(json_path)
+    return report
+
+
+def _new_run(options: Options) -> Run:
+    authoring = _authoring()
+    from seamless_usd.synthesis import get_preset
+
+    try:
+        get_preset(options.preset)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    if options.mode is None:
+        options = options.with_(mode=authoring.WriteMode.NEW_LAYER)
+    return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
+
+
+def process_paths(paths: Sequence[str | Path], options: Options | None = None) -> Report:
+    """Process stages and MaterialX documents; the report owns the exit code.
+
+    Every input is scanned first (so progress knows the total), then stacks are processed one
+    after another. An unreadable input is reported (exit code 2) and the other inputs go on.
+    """
+    started = time.perf_counter()
+    run = _new_run(options or Options())
+    sources = []
+    for raw in paths:
+        path = Path(raw)
+        run.report.sources.append(str(path))
+        try:
+            src = _scan_source(path, run.options.materials)
+            run.blocked.update(blocked_stacks(src.scan, src.stacks))
+            sources.append(src)
+        except InputError as exc:
+            run.report.unreadable.append(str(path))
+            run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", asset_ref(path), str(exc)))
+    if run.options.mode != _authoring().WriteMode.DRY_RUN:
+        _run_jobs(run, [(src.stacks, _output_dir(run.options, src.path)) for src in sources])
+    for src in sources:
+        _author_source(run, src)
+    return _finish(run, started)
+
+
+def process_stage(stage, options: Options | None = None) -> Report:
+    """Process an open stage in memory, as DCC export hooks receive it.
+
+    Tiles are written to ``options.output_dir`` (default ``<root layer dir>/tileable``) and the
+    edits are authored into the stage's current edit target; the stage is not saved.
+    """
+    started = time.perf_counter()
+    run = _new_run(options or Options())
+    authoring = _authoring()
+    root = stage.GetRootLayer()
+    source = None if root.anonymous else Path(root.realPath)
+    label = root.identifier
+    run.report.sources.append(label)
+    scan = scan_stage(stage)
+    run.report.findings += scan.findings
+    stacks = select_stacks(scan, run.options.materials)
+    run.blocked.update(blocked_stacks(scan, stacks))
+    out_dir = _output_dir(run.options, source)
+    if run.options.mode != authoring.WriteMode.DRY_RUN:
+        _run_jobs(run, [(stacks, out_dir)])
+    results = _reports_for(run, stacks, label, out_dir)
+    if results and run.options.mode != authoring.WriteMode.DRY_RUN:
+        _record_authoring(run, authoring.author_usd_stage(stage, results))
+    return _finish(run, started)

@@ -1,0 +1,267 @@
+"""One stack job: load pixels, train (or reuse the cache), sample, write the tiles, measure them.
+
+This is what runs on a worker: it takes and returns plain picklable values and never edits a
+stage or document (the client does that after the job returns).
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seamless_usd.discover.types import TextureMap, TextureStack
+from seamless_usd.fileio import confine
+from seamless_usd.pipeline.cache import StackCache, stack_key
+from seamless_usd.pipeline.naming import tile_filename
+from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
+
+__all__ = ["JobSettings", "StackJob", "StackOutcome", "MapOutcome", "run_stack", "map_identity"]
+
+PREVIEW_MAX = 384  # longest side of a 2x2 preview in the HTML report, px
+
+
+@dataclass(frozen=True)
+class JobSettings:
+    """The part of the options a worker needs (picklable, no callables)."""
+
+    preset: str = "default"
+    iterations: int | None = None
+    seed: int = 0
+    device: str | None = None
+    max_size: int | None = None
+    cache_dir: Path | None = None
+
+    @classmethod
+    def from_options(cls, options) -> "JobSettings":
+        return cls(
+            preset=options.preset, iterations=options.iterations, seed=options.seed,
+            device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
+        )
+
+
+@dataclass(frozen=True)
+class StackJob:
+    stack: TextureStack
+    settings: JobSettings
+    output_dir: Path
+
+
+def map_identity(m: TextureMap) -> tuple[str, str]:
+    """Maps of identical stacks are matched by file and channels used."""
+    return (m.resolved, m.channels_used)
+
+
+@dataclass
+class MapOutcome:
+    output: Path
+    metrics: dict[str, float]
+    source_metrics: dict[str, float]
+
+
+@dataclass
+class StackOutcome:
+    """What a job returns: per-map outputs and measurements, and the sampling facts."""
+
+    stack_id: str
+    maps: dict[tuple[str, str], MapOutcome]  # map_identity -> outcome
+    crop_size: tuple[int, int]
+    tile_size: tuple[int, int]
+    working_size: tuple[int, int]
+    resampled: dict[str, Any]
+    uv_scale: tuple[float, float]
+    q: dict[str, Any]
+    candidates: int
+    timings: dict[str, float]
+    model_hash: str
+    device: str
+    precision: str
+    cached: bool = False
+    previews: Previews = field(default_factory=Previews, repr=False)
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.q.get("passed"))
+
+    def fill_report(self, report: StackReport, stack: TextureStack, reused: bool) -> None:
+        report.status = (
+            StackStatus.REUSED if reused else StackStatus.PASSED if self.passed else StackStatus.NOT_PASSED
+        )
+        if reused:
+            report.duplicate_of = self.stack_id
+            report.message = f"identical to stack {self.stack_id}: its tiles are reused"
+        elif not self.passed:
+            report.message = "no candidate passed the quality function Q; the best one was written"
+        elif self.cached:
+            report.message = "result taken from the cache"
+        for name in ("crop_size", "tile_size", "working_size", "resampled", "uv_scale", "q", "candidates",
+                     "timings", "model_hash", "device", "precision"):
+            setattr(report, name, getattr(self, name))
+        report.previews = self.previews
+        report.maps = []
+        for m in stack.maps:
+            out = self.maps[map_identity(m)]
+            report.maps.append(
+                MapReport(
+                    node=m.node, asset=m.asset, output=str(out.output), roles=[r.role for r in m.roles],
+                    channels=m.channels_used, color_space=m.color_space.value,
+                    metrics=out.metrics, source_metrics=out.source_metrics,
+                )
+            )
+
+    def stack_result(self, stack: TextureStack):
+        """The authoring input for ``stack`` (possibly an identical stack of another material)."""
+        from seamless_usd import __version__
+        from seamless_usd.authoring import MapResult, Provenance, StackResult
+
+        prov = Provenance(
+            source_asset=", ".join(m.asset for m in stack.maps),
+            crop_size=self.crop_size,
+            uv_scale=self.uv_scale,
+            q_passed=self.passed,
+            q_tau=float(self.q.get("tau", 0.0)),
+            q_band_min=tuple(self.q.get("band_min", (0.0, 0.0))),
+            model_hash=self.model_hash,
+            tool_version=__version__,
+        )
+        maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
+        return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
+
+
+def _preview(img: np.ndarray) -> np.ndarray:
+    step = max(1, int(np.ceil(max(img.shape[:2]) / PREVIEW_MAX)))
+    return np.ascontiguousarray(img[::step, ::step])
+
+
+def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None) -> StackOutcome:
+    """Run one stack job end to end (see module docstring)."""
+    from seamless_usd import imaging, metrics, synthesis
+    from seamless_usd.authoring import uv_scale_for
+
+    emit = progress or (lambda kind, detail: None)
+    stack, settings = job.stack, job.settings
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    policy = imaging.WorkingResolution(max_size=settings.max_size)
+    pixels = imaging.load_stack_pixels(list(stack.maps), policy)
+    timings["load"] = time.perf_counter() - t0
+
+    names = [f"m{i}" for i in range(len(stack.maps))]
+    inputs = [
+        synthesis.MapInput(name=n, pixels=p, is_normal=m.is_normal)
+        for n, p, m in zip(names, pixels.values, stack.maps)
+    ]
+    config = synthesis.get_preset(settings.preset)
+    if settings.iterations is not None:
+        config = dataclasses.replace(config, iterations=settings.iterations)
+    key = stack_key(
+        (
+            (n, p.pixels, f"{m.channels_used}|{m.color_space.value}|{m.is_normal}|{sorted(r.role for r in m.roles)}")
+            for n, p, m in zip(names, inputs, stack.maps)
+        ),
+        dataclasses.asdict(config),
+        settings.seed,
+    )
+    entry = StackCache(settings.cache_dir).entry(key)
+    with entry.lock():
+        cached = entry.load()
+        if cached is None:
+            t1 = time.perf_counter()
+            model = synthesis.train(
+                inputs, config, seed=settings.seed, device=settings.device,
+                checkpoint_dir=entry.checkpoint_dir, progress=lambda p: emit("train", p),
+            )
+            timings["train"] = time.perf_counter() - t1
+            t2 = time.perf_counter()
+            tile = synthesis.sample(model, inputs, seed=settings.seed, progress=lambda p: emit("sample", p))
+            timings["sample"] = time.perf_counter() - t2
+            meta = {
+                "crop_size": list(tile.crop_size),
+                "q": _q_dict(tile),
+                "candidates": len(tile.candidates),
+                "model_hash": tile.model_hash,
+                "device": tile.device,
+                "precision": tile.precision,
+                "timings": dict(timings),
+            }
+            discriminator = _discriminator_preview(tile)
+            tiles = dict(tile.maps)
+            if discriminator is not None:
+                tiles["__discriminator__"] = discriminator.astype(np.float32)
+            entry.store(tiles, meta)
+        else:
+            tiles, meta = cached
+    discriminator = tiles.pop("__discriminator__", None)
+
+    t3 = time.perf_counter()
+    out_dir = Path(job.output_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    previews = Previews(discriminator=None if discriminator is None else discriminator.astype(np.uint8))
+    outcomes: dict[tuple[str, str], MapOutcome] = {}
+    for name, m, source, encoding, info in zip(names, stack.maps, pixels.values, pixels.encodings, pixels.infos):
+        values = tiles[name]
+        filename = tile_filename(m.asset, stack.id, imaging.output_extension(info))
+        target = confine(out_dir / filename, out_dir)
+        written = imaging.write_map(target, values, encoding, like=info)
+        outcomes[map_identity(m)] = MapOutcome(
+            output=Path(written),
+            metrics=metrics.map_metrics(values, source, is_normal=m.is_normal),
+            source_metrics=metrics.map_metrics(source, source, is_normal=m.is_normal),
+        )
+        previews.source_2x2[m.node] = _preview(
+            metrics.preview_uint8(metrics.tile_2x2(source), is_normal=m.is_normal)
+        )
+        previews.tile_2x2[m.node] = _preview(metrics.preview_uint8(metrics.tile_2x2(values), is_normal=m.is_normal))
+    timings = dict(meta.get("timings", {}))
+    timings["write"] = time.perf_counter() - t3
+
+    crop = tuple(int(v) for v in meta["crop_size"])
+    tile_hw = tuple(int(v) for v in next(iter(tiles.values())).shape[:2])
+    working = tuple(int(v) for v in pixels.working_size)
+    return StackOutcome(
+        stack_id=stack.id,
+        maps=outcomes,
+        crop_size=crop,
+        tile_size=tile_hw,
+        working_size=working,
+        resampled=dict(pixels.policy_record),
+        uv_scale=tuple(float(v) for v in uv_scale_for(working, (crop[1], crop[0]))),
+        q=dict(meta["q"]),
+        candidates=int(meta["candidates"]),
+        timings=timings,
+        model_hash=str(meta["model_hash"]),
+        device=str(meta["device"]),
+        precision=str(meta["precision"]),
+        cached=cached is not None,
+        previews=previews,
+    )
+
+
+def _q_dict(tile) -> dict[str, Any]:
+    q = tile.q
+    return {
+        "passed": bool(tile.passed),
+        "tau": float(q.tau),
+        "band_min": [float(q.band_min_vertical), float(q.band_min_horizontal)],
+        "margin": float(q.margin),
+    }
+
+
+def _discriminator_preview(tile) -> np.ndarray | None:
+    """The discriminator map as grey, with the seam bands tinted, as uint8 RGB."""
+    d = getattr(tile.q, "d_map", None)
+    if d is None:
+        return None
+    d = np.asarray(d, dtype=np.float32)
+    d = d.reshape(d.shape[-2], d.shape[-1]) if d.ndim > 2 else d
+    grey = np.clip(d, 0.0, 1.0)
+    rgb = np.stack([grey, grey, grey], axis=-1)
+    mask = np.asarray(tile.q.band_vertical, dtype=bool) | np.asarray(tile.q.band_horizontal, dtype=bool)
+    rgb[mask] = 0.6 * rgb[mask] + 0.4 * np.array([1.0, 0.55, 0.1])
+    scale = max(1, 256 // max(grey.shape))
+    rgb = rgb.repeat(scale, axis=0).repeat(scale, axis=1)
+    return (rgb * 255.0 + 0.5).astype(np.uint8)

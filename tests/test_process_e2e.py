@@ -1,0 +1,210 @@
+"""End to end: ``seamless-usd process`` on real sample scenes (tiny preset, shared cache)."""
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import jsonschema
+import OpenImageIO as oiio
+import pytest
+from pxr import Sdf, Usd, UsdShade
+
+from seamless_usd_cli.main import main
+from seamless_usd_schemas import json_schema
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
+
+
+def _hashes(root: Path) -> dict[str, str]:
+    return {
+        str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
+
+
+@pytest.fixture(scope="session")
+def model_cache(tmp_path_factory) -> Path:
+    """One cache for the whole session: each unique stack trains once."""
+    return tmp_path_factory.mktemp("cache")
+
+
+@pytest.fixture()
+def assets(tmp_path) -> Path:
+    dst = tmp_path / "assets"
+    shutil.copytree(SAMPLES, dst)
+    return dst
+
+
+def _process(*args: str, cache: Path) -> int:
+    return main(["process", "--preset", "tiny", "--cache-dir", str(cache), *args])
+
+
+def _texture_files(stage: Usd.Stage) -> dict[str, Path]:
+    """Texture prim path -> resolved file of its ``inputs:file``."""
+    out = {}
+    for prim in stage.Traverse():
+        shader = UsdShade.Shader(prim)
+        if not shader or shader.GetIdAttr().Get() != "UsdUVTexture":
+            continue
+        inp = shader.GetInput("file")
+        sources = inp.GetValueProducingAttributes()
+        attr = sources[0] if sources else inp.GetAttr()
+        value = attr.Get()
+        out[str(prim.GetPath())] = Path(value.resolvedPath) if value and value.resolvedPath else None
+    return out
+
+
+@pytest.fixture()
+def processed(assets, model_cache, capsys):
+    """The brick sample processed into a new layer, with an HTML + JSON report."""
+    scene = assets / "brick" / "scene.usda"
+    before = _hashes(assets)
+    report = assets / "out" / "report.html"
+    code = _process(str(scene), "--report", str(report), "--json", cache=model_cache)
+    payload = json.loads(capsys.readouterr().out)
+    return dict(assets=assets, scene=scene, before=before, code=code, report=report, payload=payload)
+
+
+def test_new_layer_edits_resolve_to_written_tiles(processed):
+    payload = processed["payload"]
+    assert processed["code"] == payload["exit_code"]
+    assert processed["code"] in (0, 1)
+    [stack] = payload["stacks"]
+    assert stack["status"] in ("passed", "not-passed")
+    assert (processed["code"] == 0) == (stack["status"] == "passed")
+    layer = processed["scene"].with_name("scene.seamless.usda")
+    assert str(layer) in payload["layers_written"]
+    stage = Usd.Stage.Open(str(layer))
+    assert stage is not None
+    files = _texture_files(stage)
+    assert set(files) == {"/World/Looks/Brick/Albedo", "/World/Looks/Brick/Normal", "/World/Looks/Brick/Roughness"}
+    tile_h, tile_w = stack["tile_size"]
+    for prim_path, path in files.items():
+        assert path is not None and path.is_file(), prim_path
+        assert path.parent == processed["scene"].parent / "tileable"
+        spec = oiio.ImageInput.open(str(path)).spec()
+        assert (spec.height, spec.width) == (tile_h, tile_w)
+        assert spec.format == oiio.UINT8 and path.suffix == ".png"  # 8-bit sources stay 8-bit PNG
+        texture = UsdShade.Shader(stage.GetPrimAtPath(prim_path))
+        assert texture.GetInput("wrapS").Get() == "repeat"
+        assert texture.GetInput("wrapT").Get() == "repeat"
+    # channel layout kept: roughness stays one channel, albedo and normal three
+    rough = oiio.ImageInput.open(str(files["/World/Looks/Brick/Roughness"])).spec()
+    assert rough.nchannels == 1
+
+
+def test_uv_transform_keeps_texel_scale(processed):
+    [stack] = processed["payload"]["stacks"]
+    W, H = stack["working_size"]
+    c_h, c_w = stack["crop_size"]
+    assert stack["uv_scale"] == pytest.approx([W / (2 * c_w), H / (2 * c_h)])
+    stage = Usd.Stage.Open(str(processed["scene"].with_name("scene.seamless.usda")))
+    albedo = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Brick/Albedo"))
+    [src] = albedo.GetInput("st").GetConnectedSources()[0]
+    transform = UsdShade.Shader(src.source.GetPrim())
+    assert transform.GetIdAttr().Get() == "UsdTransform2d"
+    assert tuple(transform.GetInput("scale").Get()) == pytest.approx(stack["uv_scale"])
+
+
+def test_sources_are_untouched_and_report_is_valid(processed):
+    after = _hashes(processed["assets"])
+    for rel, digest in processed["before"].items():
+        assert after[rel] == digest, f"{rel} was modified"
+    jsonschema.validate(processed["payload"], json_schema("report"))
+    on_disk = json.loads(processed["report"].with_suffix(".json").read_text())
+    jsonschema.validate(on_disk, json_schema("report"))
+    html = processed["report"].read_text()
+    assert html.count("data:image/png;base64,") >= 6 + 1  # 3 maps x (source, tile) + discriminator
+    assert "Brick" in html
+
+
+def test_second_run_on_the_output_is_clean(processed, model_cache):
+    layer = processed["scene"].with_name("scene.seamless.usda")
+    code = _process(str(layer), "--in-place", cache=model_cache)
+    assert code in (0, 1)
+    stage = Usd.Stage.Open(str(layer))
+    transforms = [
+        p for p in stage.Traverse()
+        if UsdShade.Shader(p) and UsdShade.Shader(p).GetIdAttr().Get() == "UsdTransform2d"
+    ]
+    assert len(transforms) == 1, [str(p.GetPath()) for p in transforms]
+
+
+def test_in_place_keeps_backups_equal_to_the_originals(assets, model_cache):
+    scene = assets / "brick" / "scene.usda"
+    original = scene.read_bytes()
+    textures = _hashes(assets / "textures")
+    code = _process(str(scene), "--in-place", cache=model_cache)
+    assert code in (0, 1)
+    assert scene.with_name("scene.usda.bak").read_bytes() == original
+    assert scene.read_bytes() != original
+    assert _hashes(assets / "textures") == textures
+    stage = Usd.Stage.Open(str(scene))
+    for path in _texture_files(stage).values():
+        assert path.is_file() and path.parent.name == "tileable"
+
+
+def test_dry_run_writes_nothing(assets, model_cache, capsys):
+    before = _hashes(assets)
+    code = _process(str(assets / "brick" / "scene.usda"), "--dry-run", "--json", cache=model_cache)
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert _hashes(assets) == before
+    assert [s["status"] for s in payload["stacks"]] == ["planned"]
+    assert payload["plan"], "a dry run lists the edits it would make"
+
+
+def test_unreadable_input_exits_2_and_names_the_file(assets, model_cache, capsys):
+    broken = assets / "broken.usda"
+    broken.write_text("#usda 1.0\ndef Xform \"A\" {\n")
+    code = _process(str(broken), str(assets / "missing.usda"), cache=model_cache)
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "broken.usda" in err and "missing.usda" in err
+    assert "Traceback" not in err
+
+
+def test_a_broken_texture_fails_its_stack_and_the_rest_is_written(assets, model_cache, capsys):
+    (assets / "textures" / "wood_roughness.png").write_bytes(b"\x89PNG\r\n\x1a\n not really a png")
+    brick, wood = assets / "brick" / "scene.usda", assets / "referenced" / "scene.usda"
+    code = _process(str(brick), str(wood), "--json", cache=model_cache)
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 1
+    by_source = {Path(s["source"]).parent.name: s for s in payload["stacks"]}
+    assert by_source["referenced"]["status"] == "failed"
+    assert "wood_roughness.png" in by_source["referenced"]["message"]
+    assert by_source["brick"]["status"] in ("passed", "not-passed")
+    assert brick.with_name("scene.seamless.usda").is_file()
+
+
+def test_every_sample_asset_processes(assets, model_cache, capsys):
+    scenes = sorted(str(p) for p in assets.rglob("*.usda") if "library" not in p.parts) + sorted(
+        str(p) for p in assets.rglob("*.mtlx")
+    )
+    code = _process(*scenes, "--json", cache=model_cache)
+    payload = json.loads(capsys.readouterr().out)
+    assert code in (0, 1), payload["findings"]
+    assert payload["stacks"], "the samples have stacks"
+    failed = [(s["material"], s["message"]) for s in payload["stacks"] if s["status"] == "failed"]
+    assert not failed
+    jsonschema.validate(payload, json_schema("report"))
+
+
+def test_process_stage_on_an_open_in_memory_stage(assets, model_cache, tmp_path):
+    import seamless_usd
+
+    stage = Usd.Stage.Open(str(assets / "brick" / "scene.usda"))
+    session = stage.GetSessionLayer()
+    stage.SetEditTarget(Usd.EditTarget(session))
+    options = seamless_usd.Options(preset="tiny", cache_dir=model_cache, output_dir=tmp_path / "tiles")
+    report = seamless_usd.process_stage(stage, options)
+    assert report.exit_code in (0, 1)
+    assert not (assets / "brick" / "scene.seamless.usda").exists()
+    albedo = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Brick/Albedo"))
+    value = albedo.GetInput("file").Get()
+    assert Path(value.resolvedPath).parent == tmp_path / "tiles"
+    assert session.GetPrimAtPath("/World/Looks/Brick/Albedo") is not None
+    assert Sdf.Layer.FindOrOpen(str(assets / "brick" / "scene.usda")).dirty is False
