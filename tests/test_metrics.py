@@ -72,6 +72,22 @@ def test_periodic_component_is_periodic_and_sums_back():
     assert M.seam_ratios(p)["seam_ratio_x"] < 1.3 < M.seam_ratios(img)["seam_ratio_x"]
 
 
+def test_periodic_component_has_the_interior_laplacian():
+    # Moisan's characterisation: laplacian_periodic(p) == laplacian_interior(u), where the interior
+    # Laplacian only counts neighbours inside the image.
+    u = window(load("wood_color.png"), size=40)[:, :33]
+    p, _ = M.periodic_smooth_decomposition(u)
+    lap_p = sum(np.roll(p, sh, axis=ax) for ax in (0, 1) for sh in (1, -1)) - 4 * p
+    pad = np.pad(u, ((1, 1), (1, 1), (0, 0)))
+    inside = np.pad(np.ones(u.shape[:2]), 1)[..., None]
+    lap_u = np.zeros_like(u)
+    for dy, dx in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+        nb = pad[1 + dy : 1 + dy + u.shape[0], 1 + dx : 1 + dx + u.shape[1]]
+        has = inside[1 + dy : 1 + dy + u.shape[0], 1 + dx : 1 + dx + u.shape[1]]
+        lap_u += has * (nb - u)
+    np.testing.assert_allclose(lap_p, lap_u, atol=1e-9)
+
+
 @pytest.mark.parametrize("name", ["brick_albedo.png", "brick_roughness.png", "wood_roughness.png", "cloth.png"])
 def test_window_of_real_texture_is_not_tileable(name):
     cut = window(load(name))
