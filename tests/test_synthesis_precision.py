@@ -61,7 +61,7 @@ def test_bf16_autocast_gradients_match_fp32_eager():
     for name in ref:
         assert torch.isfinite(fast[name]).all(), f"{name}: non-finite bf16 gradients"
         cos = torch.nn.functional.cosine_similarity(ref[name], fast[name], dim=0).item()
-        assert cos > 0.97, f"{name}: bf16 gradient cosine similarity {cos:.3f} vs fp32 (expected > 0.97)"
+        assert cos > 0.95, f"{name}: bf16 gradient cosine similarity {cos:.3f} vs fp32 (expected > 0.95)"
 
 
 def test_channels_last_is_not_the_default():

@@ -83,11 +83,13 @@ class SynthesisConfig:
 PRESETS: dict[str, SynthesisConfig] = {
     # The paper's numbers (section 5); meant for a GPU.
     "paper": SynthesisConfig(),
-    # CPU presets sized with benchmarks/speed.py (see benchmarks/results/speed.md).
-    "default": SynthesisConfig(k=64, ngf=32, ndf=32, n_res_blocks=5, iterations=3000, crop_step=32,
-                               max_candidates=12, checkpoint_every=250),
-    "draft": SynthesisConfig(k=48, ngf=16, ndf=16, n_res_blocks=3, iterations=800, crop_step=64,
-                             max_candidates=4, checkpoint_every=200),
+    # CPU presets sized with benchmarks/speed.py (figures in benchmarks/results/speed.md): on a shared 2-core
+    # AVX2 host a training step runs at 4-10 GFLOP/s, so width and crop are cut until the 512 px three-map
+    # stack trains and samples inside the budget (default <= 15 min, draft <= 3 min) with margin.
+    "default": SynthesisConfig(k=64, ngf=16, ndf=16, n_res_blocks=4, style_channels=16, iterations=1200,
+                               crop_step=32, max_candidates=12, checkpoint_every=200),
+    "draft": SynthesisConfig(k=32, ngf=16, ndf=16, n_res_blocks=3, style_channels=16, iterations=500,
+                             crop_step=64, max_candidates=4, checkpoint_every=100),
     # For tests: trains in about a second.
     "tiny": SynthesisConfig(k=16, ngf=8, ndf=8, n_res_blocks=1, iterations=4, style_scales=2, style_channels=8,
                             c_min=16, crop_step=8, max_candidates=6, checkpoint_every=2, progress_every=1),
