@@ -389,8 +389,28 @@ def run(
     log(gram_note)
     rows: list[dict] = []
     notes: list[str] = [gram_note]
+    result = {
+        "settings": {
+            "command": command,
+            "preset": preset if SEAMLESSGAN in methods else None,
+            "seed": seed,
+            "stacks": {},  # filled as stacks finish
+            "methods": list(methods),
+            "max_size": max_size,
+            "domain": "network domain: 2 v - 1 of file values v in [0, 1]; normal maps as vectors",
+            "band_fraction": M.BAND_FRACTION,
+            "highpass_sigma": M.HIGHPASS_SIGMA,
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+        },
+        "targets": [{"metric": k, "op": op, "value": v} for k, op, v in TARGETS],
+        "notes": notes,
+        "results": rows,
+        "complete": False,
+    }
     for stack_name in stacks:
         stack = load_stack(stack_name, textures_dir, max_size)
+        result["settings"]["stacks"][stack_name] = STACKS[stack_name].note
         for method in methods:
             log(f"{stack_name}: {method} ...")
             if method == SEAMLESSGAN:
@@ -420,29 +440,17 @@ def run(
                     f"  {map_name:<10} seam x {m['seam_ratio_x']:.2f} y {m['seam_ratio_y']:.2f}  "
                     f"p+s {m['ps_score']:.3f}  detail {m['detail_ratio']:.2f}  ssim {m['ssim']:.3f}"
                 )
-    result = {
-        "settings": {
-            "command": command,
-            "preset": preset if SEAMLESSGAN in methods else None,
-            "seed": seed,
-            "stacks": {s: STACKS[s].note for s in stacks},
-            "methods": list(methods),
-            "max_size": max_size,
-            "domain": "network domain: 2 v - 1 of file values v in [0, 1]; normal maps as vectors",
-            "band_fraction": M.BAND_FRACTION,
-            "highpass_sigma": M.HIGHPASS_SIGMA,
-            "python": platform.python_version(),
-            "numpy": np.__version__,
-        },
-        "targets": [{"metric": k, "op": op, "value": v} for k, op, v in TARGETS],
-        "notes": notes,
-        "results": rows,
-    }
+        _write(out, result)  # after every stack, so a long run leaves its figures as it goes
+    result["complete"] = True
+    _write(out, result)
+    log(f"wrote @{out / 'quality.md'}@ and @{out / 'quality.json'}@")
+    return result
+
+
+def _write(out: Path, result: dict) -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / "quality.json").write_text(json.dumps(result, indent=1) + "\n")
     (out / "quality.md").write_text(to_markdown(result))
-    log(f"wrote @{out / 'quality.md'}@ and @{out / 'quality.json'}@")
-    return result
 
 
 def _meets(v, op: str, threshold: float) -> bool:
@@ -461,6 +469,8 @@ def to_markdown(result: dict) -> str:
     """The benchmark's figures as Markdown: one table per stack and a target summary per method."""
     s = result["settings"]
     lines = ["# Quality benchmark", ""]
+    if not result.get("complete", True):
+        lines += ["**Partial: the run is still going or was stopped; only the stacks below are done.**", ""]
     if s.get("command"):
         lines += [f"Command: `{s['command']}`", ""]
     lines += [
