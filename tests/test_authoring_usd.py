@@ -534,3 +534,21 @@ def replace_map(tex: TextureMap) -> TextureMap:
     from dataclasses import replace
 
     return replace(tex, node_type="ND_tiledimage_color3")
+
+
+def test_open_stage_with_a_new_file_root_layer(scene: Path):
+    """As an export hook gets it: a root layer with a file name, not saved yet."""
+    root = scene.parent
+    out_dir = root / "export"
+    out_dir.mkdir()
+    stage = Usd.Stage.CreateNew(str(out_dir / "exported.usda"))
+    stage.GetRootLayer().ImportFromString(LOOKS_LAYER.replace('over "World"', 'def Xform "World"')
+                                          .replace('over "Looks"', 'def Scope "Looks"'))
+    result = author_usd_stage(stage, [plain_result(root)])
+    assert not result.findings and result.layers_written == []
+    tex = stage.GetPrimAtPath(f"{PLAIN_MAT}/Tex")
+    assert tex.GetAttribute("inputs:file").Get().path == "../tileable/plain_tile.png"
+    stage.Save()
+    reopened = Usd.Stage.Open(str(out_dir / "exported.usda"))
+    assert Path(reopened.GetPrimAtPath(f"{PLAIN_MAT}/Tex").GetAttribute("inputs:file").Get().resolvedPath) == \
+        (root / "tileable" / "plain_tile.png").resolve()

@@ -14,6 +14,7 @@ from seamless_usd.authoring.schema import (
     read_provenance,
     register_schemas,
     schemas_known,
+    write_provenance,
 )
 from seamless_usd.authoring.types import (
     AuthoringResult,
@@ -28,6 +29,7 @@ register_schemas()
 
 from seamless_usd.authoring.mtlx import author_mtlx, default_output_document, read_mtlx_provenance  # noqa: E402
 from seamless_usd.authoring.usd import (  # noqa: E402
+    Codes,
     author_usd,
     author_usd_stage,
     default_output_layer,
@@ -50,6 +52,8 @@ __all__ = [
     "register_schemas",
     "schemas_known",
     "read_provenance",
+    "write_provenance",
+    "Codes",
     "read_mtlx_provenance",
     "uv_affine",
     "Schema",

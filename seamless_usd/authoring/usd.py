@@ -175,8 +175,8 @@ def author_usd_stage(
     """
     target = Usd.EditTarget(edit_target_layer) if edit_target_layer else stage.GetEditTarget()
     layer = target.GetLayer()
-    if anchor_dir is None and not layer.anonymous and layer.realPath:
-        anchor_dir = Path(layer.realPath).parent
+    if anchor_dir is None and not layer.anonymous:  # a layer about to be saved may have no file yet
+        anchor_dir = Path(layer.realPath or layer.identifier).parent
     result = AuthoringResult()
     author = _Author(stage, result, anchor_dir=Path(anchor_dir) if anchor_dir else None)
     author.plan_all(results, lambda prim, prop=None: target)
