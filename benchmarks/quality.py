@@ -408,6 +408,8 @@ def run(
         "results": rows,
         "complete": False,
     }
+    if SEAMLESSGAN in methods:  # presets are tuned over time: keep what this run used
+        result["settings"]["preset_config"] = json.loads(_synthesis().get_preset(preset).to_json())
     for stack_name in stacks:
         stack = load_stack(stack_name, textures_dir, max_size)
         result["settings"]["stacks"][stack_name] = STACKS[stack_name].note
@@ -476,6 +478,13 @@ def to_markdown(result: dict) -> str:
     lines += [
         f"Methods: {', '.join(s['methods'])}"
         + (f"; SeamlessGAN preset `{s['preset']}`" if s.get("preset") else "")
+        + (
+            " (k={k}, ngf={ngf}, res blocks={n_res_blocks}, {iterations} iterations, tiling {tiling})".format(
+                **s["preset_config"]
+            )
+            if s.get("preset_config")
+            else ""
+        )
         + f"; seed {s['seed']}" + (f"; inputs downscaled to <= {s['max_size']} px" if s.get("max_size") else ""),
         "",
         "Columns: seam ratio per axis (first / second differences; about 1 when seamless), "
