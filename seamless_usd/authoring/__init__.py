@@ -18,6 +18,7 @@ from seamless_usd.authoring.schema import (
 )
 from seamless_usd.authoring.types import (
     AuthoringResult,
+    Codes,
     MapResult,
     Provenance,
     StackResult,
@@ -29,7 +30,6 @@ register_schemas()
 
 from seamless_usd.authoring.mtlx import author_mtlx, default_output_document, read_mtlx_provenance  # noqa: E402
 from seamless_usd.authoring.usd import (  # noqa: E402
-    Codes,
     author_usd,
     author_usd_stage,
     default_output_layer,

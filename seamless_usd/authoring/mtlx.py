@@ -17,7 +17,7 @@ from typing import Sequence
 import MaterialX as mx
 
 from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
-from seamless_usd.authoring.types import AuthoringResult, Provenance, StackResult, WriteMode
+from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, WriteMode
 from seamless_usd.discover.types import Origin
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
@@ -92,15 +92,18 @@ def author_mtlx(
     author = _MtlxAuthor(doc, src, out, result)
     if out.parent != src.parent:
         author.rebase_files()
+    checked = 0
     for stack_result in results:
         for map_result in stack_result.maps:
             tex_map = map_result.map
             if tex_map.origin is not Origin.MTLX or not _same_path(tex_map.document or tex_map.file_at.layer, src):
                 continue
             author.edit_map(map_result, stack_result.uv_scale, stack_result.provenance)
+            checked += 1
     if not author.changed:
-        result.findings.append(Finding(Severity.SKIPPED, "already-up-to-date", asset_ref(src),
-                                       "every texture already has these edits; nothing written"))
+        if checked and not result.findings:
+            result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(src),
+                                           "every texture already has these edits; nothing written"))
         return result
     if result.dry_run:
         return result
@@ -215,7 +218,7 @@ class _MtlxAuthor:
         """Keep this document's relative file paths valid from a new folder."""
         if any(e.getSourceUri() for e in self.doc.getChildren()):
             self.result.findings.append(Finding(
-                Severity.WARNING, "mtlx-includes-moved", asset_ref(self.out),
+                Severity.WARNING, Codes.MTLX_INCLUDES_MOVED, asset_ref(self.out),
                 "the new document is in another folder; its XIncludes keep their relative hrefs"))
         for elem in self.doc.traverseTree():
             if isinstance(elem, mx.Input) and elem.getType() == MtlxNames.FILENAME and elem.getValueString():
@@ -226,10 +229,10 @@ class _MtlxAuthor:
 
     def _set_file(self, inp: mx.Input, rel: str) -> None:
         rel = rel[2:] if rel.startswith("./") else rel
-        if inp.getActiveFilePrefix() and not inp.hasFilePrefix():
+        # the input's own fileprefix "./" overrides any inherited one: the value is doc-relative
+        if inp.getActiveFilePrefix() and (not inp.hasFilePrefix() or inp.getFilePrefix() != "./"):
             inp.setFilePrefix("./")
-        elif inp.hasFilePrefix() and inp.getFilePrefix() != "./":
-            inp.setFilePrefix("./")
+            self.changed = True
         if inp.getValueString() != rel:
             inp.setValueString(rel)
             self._plan(f"set {prim_ref(inp.getNamePath())} = {asset_ref(rel)}")
@@ -248,20 +251,20 @@ class _MtlxAuthor:
         node_path = tex_map.node.strip("<>")
         node = self.doc.getDescendant(node_path)
         if node is None or not isinstance(node, mx.Node):
-            self.result.findings.append(Finding(Severity.ERROR, "authoring-missing-prim",
+            self.result.findings.append(Finding(Severity.ERROR, Codes.MISSING_PRIM,
                                                 prim_ref(node_path), "MaterialX node not found"))
             return
         out_file = Path(map_result.output_path).resolve()
         if not out_file.is_file():
             self.result.findings.append(Finding(
-                Severity.ERROR, "missing-output", asset_ref(out_file),
+                Severity.ERROR, Codes.MISSING_OUTPUT, asset_ref(out_file),
                 f"tileable file for {prim_ref(node_path)} not found; nothing written for it"))
             return
         scale = (float(uv_scale[0]), float(uv_scale[1]))
         if node_path in self._done:
             if self._done[node_path][:2] != (out_file, scale):
                 self.result.findings.append(Finding(
-                    Severity.WARNING, "shared-texture-conflict", prim_ref(node_path),
+                    Severity.WARNING, Codes.SHARED_CONFLICT, prim_ref(node_path),
                     f"node shared by {self._done[node_path][2]} and {tex_map.material} with "
                     f"different results; kept {self._done[node_path][2]}'s"))
             return
@@ -301,7 +304,7 @@ class _MtlxAuthor:
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {_fmt(new)}")
         elif category.startswith(MtlxNames.GLTF_PREFIX) and not _gltf_identity(node):
             self.result.findings.append(Finding(
-                Severity.WARNING, "uv-not-composed", prim_ref(node_path),
+                Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(node_path),
                 "gltf image node with its own UV transform: file replaced, scale its UVs by hand"))
             total = (1.0, 1.0)
         else:

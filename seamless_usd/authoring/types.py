@@ -9,6 +9,7 @@ from seamless_usd.discover.types import TextureMap, TextureStack
 from seamless_usd.findings import Finding
 
 __all__ = [
+    "Codes",
     "WriteMode",
     "MapResult",
     "Provenance",
@@ -16,6 +17,22 @@ __all__ = [
     "AuthoringResult",
     "uv_scale_for",
 ]
+
+
+class Codes:
+    """Finding codes of the authoring step."""
+
+    MISSING_PRIM = "authoring-missing-prim"
+    MISSING_OUTPUT = "missing-output"
+    IN_PACKAGE = "in-package"
+    READ_ONLY = "read-only-layer"
+    INSTANCE_PROXY = "instance-proxy"
+    NO_UV = "no-uv-input"
+    SHARED_CONFLICT = "shared-texture-conflict"
+    ANONYMOUS_ANCHOR = "absolute-asset-path"
+    NOTHING_TO_DO = "already-up-to-date"
+    UNSUPPORTED_UV = "uv-not-composed"
+    MTLX_INCLUDES_MOVED = "mtlx-includes-moved"
 
 
 class WriteMode(str, Enum):

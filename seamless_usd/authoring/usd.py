@@ -24,7 +24,7 @@ from pxr import Ar, Gf, Sdf, Tf, Usd, UsdShade
 
 from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
 from seamless_usd.authoring.schema import PROPERTIES, Schema, is_seamless_uv_transform, read_provenance
-from seamless_usd.authoring.types import AuthoringResult, Provenance, StackResult, WriteMode
+from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, WriteMode
 from seamless_usd.authoring.uvmath import Affine2, place2d, scale2d, transform2d
 from seamless_usd.discover.types import Origin
 from seamless_usd.errors import InputError, UsageError
@@ -32,7 +32,6 @@ from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = [
     "Names",
-    "Codes",
     "author_usd",
     "author_usd_stage",
     "default_output_layer",
@@ -74,21 +73,6 @@ class Names:
     PERIODIC = "periodic"
     UV_TILING = "uvtiling"
     UV_OFFSET = "uvoffset"
-
-
-class Codes:
-    """Finding codes of the authoring step."""
-
-    MISSING_PRIM = "authoring-missing-prim"
-    MISSING_OUTPUT = "missing-output"
-    IN_PACKAGE = "in-package"
-    READ_ONLY = "read-only-layer"
-    INSTANCE_PROXY = "instance-proxy"
-    NO_UV = "no-uv-input"
-    SHARED_CONFLICT = "shared-texture-conflict"
-    ANONYMOUS_ANCHOR = "absolute-asset-path"
-    NOTHING_TO_DO = "already-up-to-date"
-    UNSUPPORTED_UV = "uv-not-composed"
 
 
 # ---------------------------------------------------------------------------------------------
