@@ -226,7 +226,7 @@ class MapEncoding:
             if p.shape[-1] != n:
                 raise ValueError(f"pixels have {p.shape[-1]} channels, the header says {n}")
             fill = tuple(float(np.nanmean(p[..., i], dtype=np.float64)) if p[..., i].size else 0.0 for i in range(n))
-            if not cls._integer(info.dtype):
+            if info.dtype not in _INTEGER_TYPES:  # float files: fit the range to the data
                 values = [i for i in channels if i != alpha and (normal is None or i not in normal)]
                 if values:
                     linear = to_linear(p[..., values], cs, info.dtype)
@@ -252,10 +252,6 @@ class MapEncoding:
             notes=tuple(notes),
             warnings=tuple(warnings),
         )
-
-    @staticmethod
-    def _integer(dtype: str) -> bool:
-        return dtype in _INTEGER_TYPES
 
     def channel_groups(self) -> tuple[list[int], list[int], list[int]]:
         """Network positions of the (value, normal, alpha) channels, three lists."""
