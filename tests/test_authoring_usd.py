@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import shutil
 from pathlib import Path
 
 import pytest
@@ -158,14 +157,14 @@ def provenance(source: str, scale=(4.0, 4.0)) -> Provenance:
 
 def texture_map(root: Path, material: str, node: str, asset: str, file_at: AuthoredAt,
                 resolved: Path | None = None) -> TextureMap:
-    layer = str(root / "looks.usda")
+    """A map as discovery describes it (built by hand: discovery is tested on its own)."""
     return TextureMap(
         material=f"<{material}>", node=node, node_type="UsdUVTexture", origin=Origin.USD,
         asset=asset, resolved=str(resolved or root / asset),
         file_at=file_at, roles=(RoleUse("diffuseColor", "rgb", f"<{material}/Surface.inputs:diffuseColor>"),),
         color_space=ColorSpace.SRGB, color_space_reason="test",
         uv=UVChain("st", f"{material}/Reader", (), connected_from=f"{material}/Reader.outputs:result"),
-    ) if layer else None
+    )
 
 
 def brick_result(root: Path, scale=None, albedo_resolved: Path | None = None) -> StackResult:
@@ -378,8 +377,6 @@ def test_open_in_memory_stage(tmp_path: Path, scene: Path):
         transform2d(SCALE, ROTATION, TRANSLATION).then(scale2d((4.0, 4.0))))
     assert not [f for f in result.findings if f.severity is Severity.ERROR]
     # into the session layer instead, with an anonymous layer and no anchor: absolute + a finding
-    stage2 = Usd.Stage.CreateInMemory()
-    stage2.GetRootLayer().ImportFromString(stage.GetRootLayer().ExportToString())
     plain = Usd.Stage.CreateInMemory()
     plain.GetRootLayer().ImportFromString(LOOKS_LAYER.replace('over "World"', 'def Xform "World"')
                                           .replace('over "Looks"', 'def Scope "Looks"'))

@@ -25,7 +25,7 @@ from pxr import Ar, Gf, Sdf, Tf, Usd, UsdShade
 from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
 from seamless_usd.authoring.schema import PROPERTIES, Schema, is_seamless_uv_transform, read_provenance
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, WriteMode
-from seamless_usd.authoring.uvmath import Affine2, place2d, scale2d, transform2d
+from seamless_usd.authoring.uvmath import Affine2, place2d, transform2d
 from seamless_usd.discover.types import Origin
 from seamless_usd.errors import InputError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
