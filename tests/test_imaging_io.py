@@ -133,6 +133,15 @@ def test_read_info_does_not_decode(tmp_path: Path) -> None:
     assert (info.width, info.height, info.channels, info.channel_names) == (200, 300, 1, ("Y",))
 
 
+# NaN / inf: read as stored (the stack loader replaces and reports them) -----------------------------
+
+
+def test_nonfinite_float_values_are_read_as_stored(tmp_path: Path) -> None:
+    data = np.array([[[np.nan, np.inf, -np.inf, 1.0]]], np.float16)
+    pixels, _ = read_image(write_with_oiio(tmp_path / "bad.exr", data, ("R", "G", "B", "A")))
+    assert np.isnan(pixels[0, 0, 0]) and np.isposinf(pixels[0, 0, 1]) and np.isneginf(pixels[0, 0, 2])
+
+
 # errors: missing, corrupt, truncated, huge -------------------------------------------------------
 
 

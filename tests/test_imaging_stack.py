@@ -144,6 +144,14 @@ def test_stack_of_different_sizes_goes_to_the_largest_and_records_it(samples_dir
     assert record["maps"][0] == {"asset": "textures/cloth.png", "original_size": [200, 200], "scale": [1.28, 1.28], "resampled": True}
 
 
+def test_stack_smallest_common_size(samples_dir: Path) -> None:
+    maps = [sample_map(samples_dir, "cloth.png"), sample_map(samples_dir, "brick_roughness.png")]
+    stack = load_stack_pixels(maps, WorkingResolution(common="smallest"))
+    assert stack.working_size == (200, 200)
+    assert stack.resampled == (False, True)
+    assert stack.scale_factors[1] == (200 / 256, 200 / 256)
+
+
 def test_stack_cap_downsamples_and_renormalises_normals(samples_dir: Path) -> None:
     maps = [sample_map(samples_dir, "brick_normal.png"), sample_map(samples_dir, "brick_albedo.png")]
     stack = load_stack_pixels(maps, WorkingResolution(max_size=100, filter="lanczos3"))
