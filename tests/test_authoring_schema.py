@@ -93,3 +93,24 @@ def test_schema_loads_from_an_installed_wheel(tmp_path: Path):
     assert Path(report["schemas"]).resolve().is_relative_to(site.resolve()), report
     assert Path(report["authoring"]).resolve().is_relative_to(site.resolve()), report
     assert report["known"] and report["has_api"] and report["uv_scale_type"] == "double2", report
+
+
+LATE = """
+from pxr import Usd
+stage = Usd.Stage.CreateInMemory()
+prim = stage.DefinePrim("/T", "Shader")  # builds USD's schema registry before the plugin is known
+import json, seamless_usd.authoring as authoring
+from seamless_usd.authoring.schema import write_provenance
+write_provenance(prim, authoring.Provenance("a.png", (8, 8), (2.0, 2.0), True, 0.1, (0.2, 0.3), "h", "v"))
+from seamless_usd.authoring.schema import has_applied
+print(json.dumps({"known": authoring.schemas_known(), "applied": has_applied(prim, "SeamlessTileAPI"),
+                  "read": authoring.read_provenance(prim).uv_scale}))
+"""
+
+
+def test_late_registration_still_writes_readable_provenance(tmp_path: Path):
+    run = subprocess.run([sys.executable, "-c", LATE], capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout.strip().splitlines()[-1])
+    assert not report["known"] and report["applied"], report
+    assert report["read"] == [2.0, 2.0]

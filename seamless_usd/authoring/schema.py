@@ -17,6 +17,7 @@ __all__ = [
     "Schema",
     "register_schemas",
     "schemas_known",
+    "has_applied",
     "write_provenance",
     "read_provenance",
     "mark_uv_transform",
@@ -79,6 +80,13 @@ def schemas_known() -> bool:
     return registry.FindAppliedAPIPrimDefinition(Schema.TILE_API) is not None
 
 
+def has_applied(prim: Usd.Prim, schema: str) -> bool:
+    """Whether ``schema`` is applied to ``prim``, also when this process's registry lacks it."""
+    if not prim:
+        return False
+    return schema in prim.GetAppliedSchemas() or schema in prim.GetPrimTypeInfo().GetAppliedAPISchemas()
+
+
 def write_provenance(prim: Usd.Prim, provenance: Provenance, source_asset: str | None = None) -> None:
     """Apply ``SeamlessTileAPI`` to ``prim`` and author its attributes at the edit target.
 
@@ -94,7 +102,7 @@ def write_provenance(prim: Usd.Prim, provenance: Provenance, source_asset: str |
 
 def read_provenance(prim: Usd.Prim) -> Provenance | None:
     """The provenance recorded on ``prim``, or None when it has no ``SeamlessTileAPI``."""
-    if Schema.TILE_API not in prim.GetAppliedSchemas():
+    if not has_applied(prim, Schema.TILE_API):
         return None
 
     def get(name, default):
@@ -122,4 +130,4 @@ def mark_uv_transform(prim: Usd.Prim) -> None:
 
 def is_seamless_uv_transform(prim: Usd.Prim) -> bool:
     """Whether ``prim`` is a UV transform inserted by seamless-usd."""
-    return bool(prim) and Schema.UV_TRANSFORM_API in prim.GetAppliedSchemas()
+    return has_applied(prim, Schema.UV_TRANSFORM_API)

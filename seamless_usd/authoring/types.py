@@ -33,6 +33,7 @@ class Codes:
     NOTHING_TO_DO = "already-up-to-date"
     UNSUPPORTED_UV = "uv-not-composed"
     MTLX_INCLUDES_MOVED = "mtlx-includes-moved"
+    SCHEMA_NOT_REGISTERED = "schema-not-registered"
 
 
 class WriteMode(str, Enum):

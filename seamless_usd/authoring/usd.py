@@ -23,7 +23,14 @@ from typing import Iterable, Sequence
 from pxr import Ar, Gf, Sdf, Tf, Usd, UsdShade
 
 from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
-from seamless_usd.authoring.schema import PROPERTIES, Schema, is_seamless_uv_transform, read_provenance
+from seamless_usd.authoring.schema import (
+    PROPERTIES,
+    Schema,
+    has_applied,
+    is_seamless_uv_transform,
+    read_provenance,
+    schemas_known,
+)
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, WriteMode
 from seamless_usd.authoring.uvmath import Affine2, place2d, transform2d
 from seamless_usd.discover.types import Origin
@@ -367,6 +374,10 @@ class _Author:
     def plan_all(self, results: Iterable[StackResult], target_for) -> None:
         """``target_for(prim, attr_or_None) -> Usd.EditTarget | Finding`` picks where edits go."""
         self.target_for = target_for
+        if not schemas_known():
+            self._find(Severity.WARNING, Codes.SCHEMA_NOT_REGISTERED, asset_ref(Schema.TILE_API),
+                       "USD's schema registry was built before seamless_usd.authoring was "
+                       "imported: provenance is written, but this process does not know the schema")
         for stack_result in results:
             for map_result in stack_result.maps:
                 if map_result.map.origin is Origin.USD:  # MaterialX documents: author_mtlx
@@ -587,7 +598,7 @@ class _Author:
         p = replace(provenance, uv_scale=tuple(applied), source_asset=source)
         if read_provenance(prim) == p:
             return
-        if Schema.TILE_API not in prim.GetAppliedSchemas():
+        if not has_applied(prim, Schema.TILE_API):
             self.edits.append(_Edit(target, _EditKind.SCHEMA, prim.GetPath(), value=Schema.TILE_API))
         for name, (type_name, convert) in PROPERTIES.items():
             self.edits.append(_Edit(target, _EditKind.VALUE, prim.GetPath().AppendProperty(name), type_name,
