@@ -45,10 +45,17 @@ def setup() -> None:
 
 
 def demo(extra: list[str]) -> int:
+    """Process the bundled brick scene with the draft preset; outputs go to out/demo/."""
     setup()
-    cmd = [_bin("seamless-usd"), "scan", DEMO_SCENE, *extra]
+    cmd = [
+        _bin("seamless-usd"), "process", DEMO_SCENE, "--preset", "draft",
+        "-o", DEMO_OUT / "scene.seamless.usda", "--output-dir", DEMO_OUT / "tileable",
+        "--report", DEMO_OUT / "report.html", *extra,
+    ]
     print("+", " ".join(str(c) for c in cmd), flush=True)
-    return subprocess.run([str(c) for c in cmd]).returncode
+    code = subprocess.run([str(c) for c in cmd]).returncode
+    print(f"\noutput stage: {DEMO_OUT / 'scene.seamless.usda'}\nreport:       {DEMO_OUT / 'report.html'}")
+    return code
 
 
 def tests(extra: list[str]) -> int:

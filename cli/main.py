@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import tempfile
 import traceback
@@ -15,7 +16,7 @@ from collections.abc import Sequence
 from seamless_usd import __version__
 from seamless_usd.errors import SeamlessUsdError
 
-__all__ = ["main", "EXIT_OK", "EXIT_FAILED_ITEMS", "EXIT_USAGE", "EXIT_INTERNAL"]
+__all__ = ["main", "run", "EXIT_OK", "EXIT_FAILED_ITEMS", "EXIT_USAGE", "EXIT_INTERNAL"]
 
 EXIT_OK = 0
 EXIT_FAILED_ITEMS = 1
@@ -70,5 +71,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERNAL
 
 
+def run() -> None:
+    """Console-script entry: ``main()``, then a fast exit.
+
+    With torch and colour-science (which loads OpenImageIO) in one process, interpreter shutdown
+    makes OpenImageIO's bindings print spurious "nanobind: leaked ..." lines. Every file this
+    command writes is complete (atomic) and every cluster closed before ``main`` returns, so the
+    process ends with ``os._exit`` after flushing its streams.
+    """
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

@@ -114,8 +114,9 @@ def _summary(report: Report, console: Console) -> None:
 
 def _stack_table(report: Report, console: Console) -> None:
     table = Table(title="seamless-usd process", show_lines=False)
-    for col in ("material", "status", "maps", "crop", "tile", "UV scale", "Q", "time"):
-        table.add_column(col)
+    table.add_column("material", overflow="fold", min_width=16)
+    for col in ("status", "maps", "crop", "tile", "UV scale", "Q", "time"):
+        table.add_column(col, no_wrap=True)
     for s in report.stacks:
         style = {StackStatus.PASSED: "green", StackStatus.NOT_PASSED: "yellow", StackStatus.FAILED: "red"}.get(s.status, "")
         table.add_row(

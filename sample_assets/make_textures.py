@@ -26,6 +26,10 @@ def window(src: Path, x: int, y: int, size: int, out_size: int) -> np.ndarray:
     return small.get_pixels(oiio.FLOAT)
 
 
+SRGB = {"oiio:ColorSpace": "srgb_rec709_scene"}  # PNG sRGB chunk: colour maps
+RAW = {"oiio:ColorSpace": "lin_rec709_scene"}  # no sRGB chunk: data maps read as raw under auto
+
+
 def write(name: str, pixels: np.ndarray, dtype=oiio.UINT8, extra: dict | None = None) -> None:
     if pixels.ndim == 2:
         pixels = pixels[..., None]
@@ -50,23 +54,23 @@ def main(src_dir: str) -> None:
     tint = np.array([0.62, 0.36, 0.27], np.float32)
     albedo_lin = lin * tint
     albedo = np.where(albedo_lin <= 0.0031308, albedo_lin * 12.92, 1.055 * albedo_lin ** (1 / 2.4) - 0.055)
-    write("brick_albedo.png", albedo)
-    write("brick_normal.png", window(src / "brick_normal.jpg", **at))
+    write("brick_albedo.png", albedo, extra=SRGB)
+    write("brick_normal.png", window(src / "brick_normal.jpg", **at), extra=RAW)
     rough = window(src / "brick_roughness.jpg", **at)[..., :1]
-    write("brick_roughness.png", rough)
+    write("brick_roughness.png", rough, extra=RAW)
     mask = window(src / "brick_mask.jpg", **at)[..., :1]
     # Packed ORM (glTF convention): R occlusion (mortar darker), G roughness, B metallic (none).
     occlusion = 1.0 - 0.45 * mask
-    write("brick_orm.png", np.concatenate([occlusion, rough, np.zeros_like(rough)], axis=-1))
+    write("brick_orm.png", np.concatenate([occlusion, rough, np.zeros_like(rough)], axis=-1), extra=RAW)
     # 16-bit roughness and a half-float EXR albedo (linear) for bit-depth coverage.
-    write("brick_roughness16.png", rough, oiio.UINT16)
-    write("brick_albedo_linear.exr", albedo_lin.astype(np.float32), oiio.HALF)
+    write("brick_roughness16.png", rough, oiio.UINT16, extra=RAW)
+    write("brick_albedo_linear.exr", albedo_lin.astype(np.float32), oiio.HALF, extra=RAW)
     # Wood: 900 px window at (413, 97), 256 px maps.
     at = dict(x=413, y=97, size=900, out_size=256)
-    write("wood_color.png", window(src / "wood_color.jpg", **at))
-    write("wood_roughness.png", window(src / "wood_roughness.jpg", **at)[..., :1])
+    write("wood_color.png", window(src / "wood_color.jpg", **at), extra=SRGB)
+    write("wood_roughness.png", window(src / "wood_roughness.jpg", **at)[..., :1], extra=RAW)
     # Cloth: 400 px window at (61, 133) of the 640 px photo, 200 px map.
-    write("cloth.png", window(src / "cloth.jpg", x=61, y=133, size=400, out_size=200))
+    write("cloth.png", window(src / "cloth.jpg", x=61, y=133, size=400, out_size=200), extra=SRGB)
 
 
 if __name__ == "__main__":

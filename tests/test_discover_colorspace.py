@@ -100,10 +100,22 @@ def test_data_role_labelled_srgb_is_kept_and_warned(tmp_path):
 
 
 def test_data_role_labelled_srgb_by_file_header_is_warned(tmp_path):
-    # the sample roughness PNG carries an sRGB chunk; with auto that is what the renderer uses
-    result = scan_paths([scene(tmp_path, str(TEXTURES / "brick_roughness.png"), "roughness", output="r")])
+    # a roughness PNG with an sRGB chunk: with auto that is what the renderer uses, so it is kept and warned
+    import OpenImageIO as oiio
+
+    tagged = tmp_path / "rough_srgb.png"
+    buf = oiio.ImageBuf(str(TEXTURES / "brick_roughness.png"))
+    buf.specmod().attribute("oiio:ColorSpace", "srgb_rec709_scene")
+    assert buf.write(str(tagged))
+    result = scan_paths([scene(tmp_path, str(tagged), "roughness", output="r")])
     assert _one(result).color_space is ColorSpace.SRGB
     assert [f.code for f in result.findings] == ["colorspace-mismatch"]
+
+
+def test_sample_data_maps_carry_no_srgb_chunk_and_read_as_raw_under_auto(tmp_path):
+    result = scan_paths([scene(tmp_path, str(TEXTURES / "brick_roughness.png"), "roughness", output="r")])
+    assert _one(result).color_space is ColorSpace.RAW
+    assert result.findings == []
 
 
 def test_unknown_colour_space_name_is_passed_over_with_a_warning(tmp_path):
