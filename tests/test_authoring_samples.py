@@ -108,3 +108,28 @@ def test_sample_document(samples_copy: Path, document: str):
                                         m.output_path) for m in r.maps]) for r in results]
     again = author_mtlx(result.output, moved, output_path=result.output.with_name("again.mtlx"))
     assert again.plan == [] and again.layers_written == []
+
+
+def test_sample_stage_referencing_a_materialx_document(samples_copy: Path):
+    from pxr import Sdf
+
+    path = samples_copy / "mtlx/scene.usda"
+    document = samples_copy / "mtlx/tiled.mtlx"
+    results = stand_in_results(path)
+    assert all(m.map.origin is Origin.MTLX for r in results for m in r.maps)
+    before = digest(samples_copy)
+    result = author_usd(path, results)
+    new_document = samples_copy / "mtlx/tiled.seamless.mtlx"
+    assert result.layers_written == [result.output, new_document]
+    after = digest(samples_copy)
+    assert {k: after[k] for k in before} == before
+    # the new layer points the stage's reference at the new document, keeping its prim path
+    layer = Sdf.Layer.FindOrOpen(str(result.output))
+    (spec,) = [s for s in [layer.GetPrimAtPath("/World/Looks/Wood")] if s]
+    (deleted,), (prepended,) = spec.referenceList.deletedItems, spec.referenceList.prependedItems
+    assert Path(layer.ComputeAbsolutePath(deleted.assetPath)) == document
+    assert Path(layer.ComputeAbsolutePath(prepended.assetPath)) == new_document
+    assert prepended.primPath == deleted.primPath
+    # in place: the document itself is edited (with a backup); no layer needs a change
+    in_place = author_usd(path, results, mode=WriteMode.IN_PLACE)
+    assert in_place.layers_written == [document] and in_place.backups == [Path(f"{document}.bak")]

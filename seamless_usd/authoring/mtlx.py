@@ -255,7 +255,7 @@ class _MtlxAuthor:
                                                 prim_ref(node_path), "MaterialX node not found"))
             return
         out_file = Path(map_result.output_path).resolve()
-        if not out_file.is_file():
+        if not out_file.is_file() and not self.result.dry_run:  # a dry run plans unwritten tiles
             self.result.findings.append(Finding(
                 Severity.ERROR, Codes.MISSING_OUTPUT, asset_ref(out_file),
                 f"tileable file for {prim_ref(node_path)} not found; nothing written for it"))

@@ -106,8 +106,10 @@ def author_usd(
     file changes. ``IN_PLACE`` edits the layers holding the opinions, saving only changed layers
     after ``.bak`` copies (kept from the first edit). ``DRY_RUN`` lists in ``plan`` the edits
     ``plan_mode`` (``NEW_LAYER`` or ``IN_PLACE``) would make and writes nothing. Maps of
-    MaterialX documents (``Origin.MTLX``) are left to :func:`author_mtlx`; maps whose output
-    file is missing are skipped with an error finding.
+    MaterialX documents the stage references (``Origin.MTLX``) are written by
+    :func:`author_mtlx` in the same mode; with a new layer, the stage's references to such a
+    document are pointed at the new document in that layer. Maps whose output file is missing
+    are skipped with an error finding. An existing output layer is replaced.
 
     Raises :class:`~seamless_usd.errors.UsageError` when the output layer is the input stage and
     :class:`~seamless_usd.errors.InputError` when the stage cannot be opened or a layer to edit
@@ -117,18 +119,43 @@ def author_usd(
     mode = WriteMode(mode)
     if not stage_path.is_file():
         raise InputError(f"{asset_ref(stage_path)}: no such stage")
-    if mode is WriteMode.IN_PLACE or (mode is WriteMode.DRY_RUN and WriteMode(plan_mode) is WriteMode.IN_PLACE):
-        return _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
+    in_place = mode is WriteMode.IN_PLACE or (
+        mode is WriteMode.DRY_RUN and WriteMode(plan_mode) is WriteMode.IN_PLACE)
     out = Path(output_layer).resolve() if output_layer else default_output_layer(stage_path)
-    if out == stage_path:
+    if out == stage_path and not in_place:
         raise UsageError(f"{asset_ref(out)}: the output layer must not be the input stage")
+    # MaterialX documents the stage references: written by author_mtlx in the same mode
+    from seamless_usd.authoring.mtlx import author_mtlx
+
+    documents = list(dict.fromkeys(
+        m.map.document for r in results for m in r.maps if m.map.origin is Origin.MTLX and m.map.document))
+    doc_results = [author_mtlx(doc, results, mode=mode, plan_mode=plan_mode) for doc in documents]
+    if in_place:
+        result = _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
+    else:
+        retarget = {Path(doc).resolve(): r.output for doc, r in zip(documents, doc_results)
+                    if r.output and (r.layers_written or (r.dry_run and r.plan))}
+        result = _author_new_layer(stage_path, results, out, mode is WriteMode.DRY_RUN, retarget)
+    for doc_result in doc_results:
+        result.layers_written += doc_result.layers_written
+        result.backups += doc_result.backups
+        result.edited_prims += doc_result.edited_prims
+        result.findings += doc_result.findings
+        result.plan += doc_result.plan
+    return result
+
+
+def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Path, dry_run: bool,
+                      retarget: dict[Path, Path]) -> AuthoringResult:
     source = _open_layer(stage_path)  # held while authoring: the sublayer below is this one
     overrides = Sdf.Layer.CreateAnonymous(".usda")
     overrides.subLayerPaths.append(str(stage_path))
     stage = Usd.Stage.Open(overrides, Usd.Stage.LoadNone)
-    result = AuthoringResult(dry_run=mode is WriteMode.DRY_RUN, output=out)
+    result = AuthoringResult(dry_run=dry_run, output=out)
     author = _Author(stage, result, anchor_dir=out.parent, layer_names={overrides: out.name})
     author.plan_all(results, lambda prim, prop=None: Usd.EditTarget(overrides))
+    for document, new_document in retarget.items():
+        author.plan_retarget(document, new_document, Usd.EditTarget(overrides))
     if not author.edits:
         if author.planned_maps and not result.findings:
             result.findings.append(
@@ -294,6 +321,7 @@ class _EditKind:
     CONNECT = "connect"  # replace an input's connections with one source
     DEFINE = "define"  # define a Shader prim
     SCHEMA = "schema"  # prepend an applied API schema
+    RETARGET = "retarget"  # delete a reference and prepend one to another file (value: (old, new))
 
 
 @dataclass
@@ -318,11 +346,21 @@ class _Edit:
             return f"connect {prim_ref(self.path)} -> {prim_ref(self.value)} {where}"
         if self.kind == _EditKind.DEFINE:
             return f"define {self.value} {prim_ref(self.path)} {where}"
+        if self.kind == _EditKind.RETARGET:
+            old, new = self.value
+            return (f"reference {prim_ref(self.path)}: {asset_ref(old.assetPath)} -> "
+                    f"{asset_ref(new.assetPath)} {where}")
         return f"apply {self.value} to {prim_ref(self.path)} {where}"
 
     def apply(self) -> None:
         layer = self.target.GetLayer()
         spec_path = self.target.MapToSpecPath(self.path)
+        if self.kind == _EditKind.RETARGET:
+            old, new = self.value
+            references = Sdf.CreatePrimInLayer(layer, spec_path).referenceList
+            references.deletedItems.append(old)
+            references.prependedItems.append(new)
+            return
         if self.kind in (_EditKind.DEFINE, _EditKind.SCHEMA):
             prim_spec = Sdf.CreatePrimInLayer(layer, spec_path)
             if self.kind == _EditKind.DEFINE:
@@ -384,6 +422,24 @@ class _Author:
                     self.planned_maps += 1
                     self._plan_map(map_result, stack_result.uv_scale, stack_result.provenance)
 
+    def plan_retarget(self, document: Path, new_document: Path, target: Usd.EditTarget) -> None:
+        """Point references to ``document`` at ``new_document`` (delete + prepend, so other
+        references of the prim stay as they are; Pcp anchors both before matching)."""
+        anchor = self.anchor_dir or document.parent
+        seen = set()
+        for prim in self.stage.TraverseAll():
+            for spec in prim.GetPrimStack():
+                for ref in spec.referenceList.GetAddedOrExplicitItems():
+                    if not ref.assetPath or (prim.GetPath(), ref.primPath) in seen:
+                        continue
+                    if not _same_file(spec.layer.ComputeAbsolutePath(ref.assetPath), str(document)):
+                        continue
+                    seen.add((prim.GetPath(), ref.primPath))
+                    old = Sdf.Reference(relative_asset_path(document, anchor), ref.primPath, ref.layerOffset)
+                    new = Sdf.Reference(relative_asset_path(new_document, anchor), ref.primPath,
+                                        ref.layerOffset)
+                    self.edits.append(_Edit(target, _EditKind.RETARGET, prim.GetPath(), value=(old, new)))
+
     def _find(self, severity: Severity, code: str, where: str, message: str) -> None:
         self.result.findings.append(Finding(severity, code, where, message))
 
@@ -408,7 +464,7 @@ class _Author:
                        "non-instanceable")
             return
         out = str(Path(map_result.output_path).resolve())
-        if not Path(out).is_file():
+        if not Path(out).is_file() and not self.result.dry_run:  # a dry run plans unwritten tiles
             self._find(Severity.ERROR, Codes.MISSING_OUTPUT, asset_ref(out),
                        f"tileable file for {prim_ref(node_path)} not found; nothing written for it")
             return
