@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import shutil
 from pathlib import Path
 
 import pytest
@@ -549,3 +550,10 @@ def test_open_stage_with_a_new_file_root_layer(scene: Path):
     reopened = Usd.Stage.Open(str(out_dir / "exported.usda"))
     assert Path(reopened.GetPrimAtPath(f"{PLAIN_MAT}/Tex").GetAttribute("inputs:file").Get().resolvedPath) == \
         (root / "tileable" / "plain_tile.png").resolve()
+
+
+def test_dry_run_before_tiles_exist(scene: Path):
+    root = scene.parent
+    shutil.rmtree(root / "tileable")
+    result = author_usd(scene, [brick_result(root)], mode=WriteMode.DRY_RUN)
+    assert not result.findings and result.plan and not (root / "tileable").exists()
