@@ -30,7 +30,9 @@ BPY = os.environ.get("SEAMLESS_USD_BPY", "bpy==5.0.1")  # 4.2's wheel has no pxr
 TORCH = "torch==2.13.0"  # the CPU build, as dev.py installs it
 BUNDLED_BY_BLENDER = {"usd-core", "materialx", "openimageio"}
 CONSTRAINTS = ["numpy<2", "colour-science<0.4.7"]
-EXTRA = ["pytest>=8"]
+# scikit-image: seamless_usd.metrics imports it while processing, but pyproject lists it only
+# under the test extras.
+EXTRA = ["pytest>=8", "scikit-image>=0.22"]
 
 
 def _bin(name: str) -> Path:

@@ -192,7 +192,7 @@ def test_export_writes_tileable_maps_with_uv_transform(prefs, brick_scene, monke
         return reports[-1]
 
     monkeypatch.setattr(common, "_default_process", keep_report)
-    prefs.preset = os.environ.get("SEAMLESS_USD_BLENDER_PRESET", "default")
+    prefs.preset = os.environ.get("SEAMLESS_USD_BLENDER_PRESET", "draft")
     prefs.iterations = int(os.environ.get("SEAMLESS_USD_BLENDER_ITERATIONS", "60"))
     prefs.max_size = int(os.environ.get("SEAMLESS_USD_BLENDER_MAX_SIZE", "128"))
     prefs.device = "cpu"
