@@ -4,6 +4,7 @@
     python3 dev.py demo      # set up, then process the bundled sample scene
     python3 dev.py tests     # set up, then run the test suite
     python3 dev.py setup     # set up only
+    python3 dev.py blender-tests   # optional: the Blender hook tests in their own .venv-blender
 
 Needs only Python 3.11+. The environment lives in ``.venv`` beside this file
 (``SEAMLESS_USD_VENV`` overrides it). PyTorch is installed first, pinned to a CPU
@@ -65,7 +66,16 @@ def tests(extra: list[str]) -> int:
     return subprocess.run([str(c) for c in cmd], cwd=ROOT).returncode
 
 
+def blender_tests(extra: list[str]) -> int:
+    """Optional: tests_blender/run.py sets up .venv-blender (bpy, no usd-core) and runs them."""
+    cmd = [sys.executable, str(ROOT / "tests_blender" / "run.py"), *extra]
+    print("+", " ".join(cmd), flush=True)
+    return subprocess.run(cmd, cwd=ROOT).returncode
+
+
 def main(argv: list[str]) -> int:
+    if argv and argv[0] == "blender-tests":
+        return blender_tests(argv[1:])
     if not argv or argv[0] not in {"setup", "demo", "tests"}:
         print(__doc__)
         return 2
