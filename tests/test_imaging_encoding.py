@@ -107,8 +107,26 @@ def test_16bit_round_trip_is_exact(color_space: ColorSpace) -> None:
     assert np.array_equal(quantise(back, 65535), quantise(pixels, 65535))
 
 
-def test_srgb_network_values_are_linear() -> None:
+def test_srgb_network_values_stay_perceptual_by_default() -> None:
     enc = MapEncoding.for_image(info(3), "sRGB")
+    mid = np.full((1, 1, 3), 128 / 255, np.float32)
+    assert np.allclose(decode_map(mid, enc), 2 * (128 / 255) - 1, atol=1e-6)
+    assert np.allclose(decode_map(np.ones((1, 1, 3)), enc), 1.0)
+    assert np.allclose(decode_map(np.zeros((1, 1, 3)), enc), -1.0)
+
+
+@pytest.mark.parametrize("dtype", ["uint8", "uint16", "half"])
+def test_srgb_round_trip_is_exact_in_both_domains(dtype: str) -> None:
+    codes = 255 if dtype == "uint8" else 65535
+    pixels = np.linspace(0, 1, codes + 1, dtype=np.float32).reshape(1, -1, 1).repeat(3, axis=2)
+    for perceptual in (True, False):
+        enc = MapEncoding.for_image(info(3, dtype), "sRGB", perceptual=perceptual)
+        back = encode_map(decode_map(pixels, enc), enc)
+        assert np.abs(back - pixels).max() <= 0.5 / codes + 1e-6
+
+
+def test_srgb_network_values_are_linear_when_not_perceptual() -> None:
+    enc = MapEncoding.for_image(info(3), "sRGB", perceptual=False)
     mid = np.full((1, 1, 3), 128 / 255, np.float32)
     assert np.allclose(decode_map(mid, enc), 2 * to_linear(128 / 255, "sRGB") - 1, atol=1e-6)
     assert np.allclose(decode_map(np.ones((1, 1, 3)), enc), 1.0)

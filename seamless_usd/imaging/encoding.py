@@ -7,8 +7,11 @@ What a map's encoding records, and how each network channel is made:
   channel whenever the file has one (alpha is kept, so the output keeps it). A map with no roles
   uses all channels. File channels left out are written back as a constant (``fill``: the
   source channel's mean).
-* **colour**: colour channels are decoded to linear with the map's colour space (sRGB EOTF from
-  colour-science, or raw); alpha is always linear.
+* **colour**: the value channels of an sRGB map stay sRGB-encoded in the network domain
+  (``perceptual=True``, the default): the GAN, its L1 and its Gram losses work best in a
+  perceptually uniform domain, as with the paper's ordinary sRGB images, and dark albedo keeps
+  its tonal resolution. ``perceptual=False`` decodes them to linear with the sRGB EOTF
+  (colour-science). Raw maps are taken as they are; alpha is always linear.
 * **normals**: the xyz channels of a normal map become unit vectors with the map's scale and bias
   (negative Y scale = the other Y convention), and go to the network as they are (already in
   [-1, 1]). Encoding renormalises, then inverts scale and bias.
@@ -109,8 +112,14 @@ class MapEncoding:
     value_range: ValueRange = ValueRange()  # colour / data channels
     alpha_range: ValueRange = ValueRange()
     fill: tuple[float, ...] = ()  # per file channel: the value written where a channel is not kept
+    perceptual: bool = True  # sRGB value channels stay sRGB-encoded for the network (see module docstring)
     notes: tuple[str, ...] = field(default=(), compare=False)  # what was decided and why
     warnings: tuple[str, ...] = field(default=(), compare=False)  # what the user should look at
+
+    @property
+    def value_transfer(self) -> ColorSpace:
+        """Transfer between file values and the network's value channels."""
+        return ColorSpace.RAW if self.perceptual else self.color_space
 
     @property
     def network_channels(self) -> int:
@@ -165,6 +174,7 @@ class MapEncoding:
         channels_used: str = "",
         normal_scale_bias: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None,
         pixels: np.ndarray | None = None,
+        perceptual: bool = True,
     ) -> MapEncoding:
         """The encoding of an image used with the given channels (``""`` = all channels).
 
@@ -229,7 +239,7 @@ class MapEncoding:
             if info.dtype not in _INTEGER_TYPES:  # float files: fit the range to the data
                 values = [i for i in channels if i != alpha and (normal is None or i not in normal)]
                 if values:
-                    linear = to_linear(p[..., values], cs, info.dtype)
+                    linear = to_linear(p[..., values], ColorSpace.RAW if perceptual else cs, info.dtype)
                     value_range = ValueRange.fit(linear)
                 if alpha is not None:
                     alpha_range = ValueRange.fit(p[..., alpha])
@@ -249,6 +259,7 @@ class MapEncoding:
             value_range=value_range,
             alpha_range=alpha_range,
             fill=fill,
+            perceptual=perceptual,
             notes=tuple(notes),
             warnings=tuple(warnings),
         )
@@ -324,10 +335,10 @@ def decode_map(pixels: np.ndarray, encoding: MapEncoding) -> np.ndarray:
         idx = [encoding.channels[j] for j in values]
         codes = file_codes(p[..., idx], encoding.dtype)
         if codes is not None:  # integer file: one table lookup per texel
-            table = encoding.value_range.to_network(linear_table(encoding.color_space, encoding.dtype))
+            table = encoding.value_range.to_network(linear_table(encoding.value_transfer, encoding.dtype))
             out[..., values] = np.take(table, codes)
         else:
-            linear = to_linear(p[..., idx], encoding.color_space, encoding.dtype)
+            linear = to_linear(p[..., idx], encoding.value_transfer, encoding.dtype)
             out[..., values] = encoding.value_range.to_network(linear)
     if normals:
         linear = to_linear(p[..., list(encoding.normal)], encoding.color_space, encoding.dtype)
@@ -368,7 +379,7 @@ def encode_map(values: np.ndarray, encoding: MapEncoding) -> np.ndarray:
     if groups_values:
         idx = [encoding.channels[j] for j in groups_values]
         linear = encoding.value_range.from_network(v[..., groups_values])
-        out[..., idx] = from_linear(linear, encoding.color_space, encoding.dtype)
+        out[..., idx] = from_linear(linear, encoding.value_transfer, encoding.dtype)
     if normals:
         linear = encode_normals(v[..., normals], encoding.normal_scale, encoding.normal_bias)
         out[..., list(encoding.normal)] = from_linear(linear, encoding.color_space, encoding.dtype)

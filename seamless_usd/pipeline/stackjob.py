@@ -210,7 +210,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         outcomes[map_identity(m)] = MapOutcome(
             output=Path(written),
             metrics=metrics.map_metrics(values, source, is_normal=m.is_normal),
-            source_metrics=metrics.map_metrics(source, source, is_normal=m.is_normal),
+            source_metrics=metrics.map_metrics(source, None, is_normal=m.is_normal),
         )
         previews.source_2x2[m.node] = _preview(
             metrics.preview_uint8(metrics.tile_2x2(source), is_normal=m.is_normal)

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from seamless_usd.fileio import atomic_write_text
+from seamless_usd.metrics import METRIC_KEYS
 from seamless_usd.report.model import Report, StackReport, StackStatus
 from seamless_usd.report.png import png_data_uri
 
@@ -29,7 +30,7 @@ table.metrics{font-size:12px;border-collapse:collapse} table.metrics td,table.me
 .findings li{margin:2px 0} code{font-size:12px}
 """
 
-_METRIC_ORDER = ("seam_ratio_x", "seam_ratio_y", "detail_ratio", "periodic_smooth", "ssim")
+_METRIC_ORDER = METRIC_KEYS
 
 
 def _esc(value: object) -> str:
@@ -43,6 +44,8 @@ def _img(pixels, caption: str) -> str:
 
 
 def _fmt(value: object) -> str:
+    if value is None:
+        return "-"
     if isinstance(value, float):
         return f"{value:.3g}"
     if isinstance(value, (list, tuple)):
@@ -50,10 +53,27 @@ def _fmt(value: object) -> str:
     return str(value)
 
 
+def _policy_text(record: dict) -> str | None:
+    """``{"policy": {...}, "working_size": [W, H], "maps": [...]}`` as one readable line."""
+    if not record:
+        return None
+    policy = record.get("policy", {})
+    cap = policy.get("max_size")
+    text = f"cap {cap} px" if cap else "native size (no cap)"
+    text += f", common size: {policy.get('common', 'largest')}, filter {policy.get('filter', 'auto')}"
+    changed = [m for m in record.get("maps", []) if m.get("resampled")]
+    if changed:
+        text += "; resampled: " + ", ".join(
+            f"@{m['asset']}@ {m['original_size'][0]}x{m['original_size'][1]}" for m in changed
+        )
+    else:
+        text += "; no map resampled"
+    return text
+
+
 def _metrics_table(new: dict, source: dict) -> str:
-    keys = [k for k in _METRIC_ORDER if k in new or k in source] + sorted(
-        k for k in set(new) | set(source) if k not in _METRIC_ORDER
-    )
+    present = {k for k, v in [*new.items(), *source.items()] if v is not None}
+    keys = [k for k in _METRIC_ORDER if k in present] + sorted(present - set(_METRIC_ORDER))
     if not keys:
         return ""
     rows = "".join(
@@ -69,7 +89,7 @@ def _stack_html(stack: StackReport) -> str:
         "crop size (h x w)": stack.crop_size,
         "tile size (h x w)": stack.tile_size,
         "working size (w x h)": stack.working_size,
-        "working-resolution policy": ", ".join(f"{k}: {v}" for k, v in stack.resampled.items()) or None,
+        "working resolution": _policy_text(stack.resampled),
         "UV scale": stack.uv_scale,
         "Q": ", ".join(f"{k} {_fmt(v)}" for k, v in stack.q.items()) or None,
         "candidates tried": stack.candidates or None,
