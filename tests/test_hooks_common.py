@@ -217,6 +217,7 @@ def test_report_lines_with_the_real_report_model():
     lines = common.report_lines(report)
     assert lines[0].text.startswith("seamless-usd: 1 stack(s): 1 passed")
     assert lines[-1].level is Level.ERROR
+    assert str(lines[-1]) == "error: seamless-usd: @x.png@: cannot read"
 
 
 def test_progress_logger_logs_stack_start_and_end_only():

@@ -220,4 +220,8 @@ def test_export_writes_tileable_maps_with_uv_transform(prefs, brick_scene, monke
         assert scale is not None and tuple(scale) != (1.0, 1.0), f"<{transform.GetPath()}> scale {scale}"
         reader = _connected_shader(transform, "in")
         assert reader is not None and reader.GetIdAttr().Get() == "UsdPrimvarReader_float2"
+        api = shader.GetPrim().GetMetadata("apiSchemas")
+        assert api is not None and "SeamlessTileAPI" in api.GetAddedOrExplicitItems()  # provenance
+        source = shader.GetPrim().GetAttribute("seamless:sourceAsset").Get()
+        assert source is not None and Path(source.resolvedPath).parent == out.parent / "textures"
     print("\n".join(str(line) for line in common.report_lines(report)))

@@ -353,7 +353,10 @@ def report_lines(report: object) -> list[LogLine]:
             if getattr(m, "output", None):
                 lines.append(LogLine(Level.INFO, f"{PREFIX}:   @{m.asset}@ -> @{m.output}@"))
     for f in getattr(report, "findings", []):
-        lines.append(LogLine(_SEVERITY_LEVEL.get(_value(f.severity), Level.WARNING), f"{PREFIX}: {f}"))
+        level = _SEVERITY_LEVEL.get(_value(f.severity), Level.WARNING)
+        # Warnings and errors carry their level already (LogLine.__str__); skipped items say so.
+        text = f"{PREFIX}: {f}" if level is Level.INFO else f"{PREFIX}: {f.where}: {f.message}"
+        lines.append(LogLine(level, text))
     return lines
 
 
