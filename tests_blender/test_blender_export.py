@@ -225,3 +225,51 @@ def test_export_writes_tileable_maps_with_uv_transform(prefs, brick_scene, monke
         source = shader.GetPrim().GetAttribute("seamless:sourceAsset").Get()
         assert source is not None and Path(source.resolvedPath).parent == out.parent / "textures"
     print("\n".join(str(line) for line in common.report_lines(report)))
+
+
+# --- installed as a Blender 4.2+ extension ------------------------------------------------------
+
+_EXTENSION_SCRIPT = r"""
+import sys
+import bpy
+bpy.utils.expose_bundled_modules()
+bpy.ops.wm.read_factory_settings(use_empty=True)
+assert bpy.ops.extensions.package_install_files(
+    filepath=sys.argv[1], repo="user_default", enable_on_install=True) == {"FINISHED"}
+prefs = bpy.context.preferences.addons["bl_ext.user_default.seamless_usd_export"].preferences
+prefs.dry_run = True
+bpy.ops.mesh.primitive_plane_add(size=2)
+mat = bpy.data.materials.new("Brick")
+if not getattr(mat, "node_tree", None):
+    mat.use_nodes = True
+tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
+tex.image = bpy.data.images.load(sys.argv[2])
+mat.node_tree.links.new(tex.outputs["Color"], mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"])
+bpy.context.active_object.data.materials.append(mat)
+print("EXPORT", bpy.ops.wm.usd_export(filepath=sys.argv[3]))
+"""
+
+
+@pytest.mark.skipif(not _process_stage_available(), reason="seamless_usd.process_stage is not in this checkout yet")
+def test_installs_and_runs_as_an_extension(tmp_path):
+    """The zip of blender_addon/seamless_usd_export installs as an extension (manifest checked by
+    Blender), and its hook runs on export (a dry run: the stack is planned, nothing written)."""
+    import subprocess
+    import sys
+
+    from conftest import ADDON_DIR, TEXTURES
+
+    package = tmp_path / "seamless_usd_export.zip"
+    with zipfile.ZipFile(package, "w") as zf:
+        for f in sorted((ADDON_DIR / ADDON).iterdir()):
+            if f.is_file() and f.suffix in {".py", ".toml"}:
+                zf.write(f, f"{ADDON}/{f.name}")
+    out = tmp_path / "ext" / "scene.usda"
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "blender_user"))
+    done = subprocess.run(
+        [sys.executable, "-c", _EXTENSION_SCRIPT, str(package), str(TEXTURES / "brick_albedo.png"), str(out)],
+        capture_output=True, text=True, env=env, timeout=300,
+    )
+    assert "EXPORT {'FINISHED'}" in done.stdout, done.stdout[-3000:] + done.stderr[-3000:]
+    assert "seamless-usd: 1 stack(s): 1 planned" in done.stdout, done.stdout[-3000:]
+    assert not (out.parent / "tileable").exists()
