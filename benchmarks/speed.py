@@ -126,11 +126,33 @@ def bench_steps(rounds: int, seconds_per_variant: float) -> dict:
     return out
 
 
+def _steprate_child(preset: str, threads: int, steps: int) -> None:
+    """Runs in a subprocess (so the OpenMP wait policy can differ): print the preset's training it/s."""
+    print(json.dumps({"it_per_s": StepRunner(get_preset(preset), resolve_precision("auto", torch.device("cpu")))
+                      .rate(steps, threads)}))
+
+
+def bench_wait_policy(rounds: int, preset: str = "default", steps: int = 8) -> dict:
+    """2 threads with spinning (ACTIVE) vs sleeping (PASSIVE) OpenMP waits vs 1 thread, interleaved."""
+    import os
+    variants = {"2 threads, OMP_WAIT_POLICY=ACTIVE": ("ACTIVE", 2), "2 threads, OMP_WAIT_POLICY=PASSIVE": ("PASSIVE", 2),
+                "1 thread": ("PASSIVE", 1)}
+    out: dict[str, list[float]] = {name: [] for name in variants}
+    for _ in range(rounds):
+        for name, (policy, threads) in variants.items():
+            env = dict(os.environ, OMP_WAIT_POLICY=policy)
+            proc = subprocess.run([sys.executable, __file__, "--_steprate", str(threads), "--preset", preset,
+                                   "--steps", str(steps)], capture_output=True, text=True, check=True, env=env)
+            out[name].append(json.loads(proc.stdout.strip().splitlines()[-1])["it_per_s"])
+            print(f"  {preset} {name}: {out[name][-1]:.2f} it/s", flush=True)
+    return {"preset": preset, "it_per_s": out, "median": {k: float(np.median(v)) for k, v in out.items()}}
+
+
 def _sample_child(size: int, preset: str, whole_search: bool) -> None:
     """Runs in a subprocess: sample an (untrained) model on a size x size 3-map stack; print JSON."""
     cfg = get_preset(preset)
-    if not whole_search:
-        cfg = cfg.replace(max_candidates=1)
+    # c_max alone, or the worst case of the whole search: gamma so high that no candidate passes
+    cfg = cfg.replace(gamma=1e9) if whole_search else cfg.replace(max_candidates=1)
     G, D = build_networks(cfg, CHANNELS, seed=0)
     dev = torch.device("cpu")
     model = TrainedModel(G.eval(), D.eval(), cfg, "bench", ["albedo", "normal", "roughness"], CHANNELS,
@@ -217,6 +239,101 @@ def end_to_end(preset: str) -> dict:
     return rec
 
 
+def seam_compare(preset: str, probs: tuple[float, ...] = (0.0, 0.3)) -> dict:
+    """Beyond the paper: train with a fraction of tiled-latent steps; compare seams at equal iterations.
+
+    The latent copies meet on the tile's centre lines, so seams are measured there: the tile is rolled by
+    half its size and ``metrics.seam_ratios`` read across the (now) wrap-around edges (about 1 = no seam),
+    plus Q's margin (band minimum minus tau; >= 0 passes) on the c_max candidate.
+    """
+    from seamless_usd import metrics as M
+    maps = load_brick_512()
+    out = {}
+    for p in probs:
+        cfg = get_preset(preset).replace(seam_training_prob=p, max_candidates=1)
+        t0 = time.perf_counter()
+        res = sample(train(maps, cfg, seed=0), maps, seed=0)
+        rec = {"seconds": time.perf_counter() - t0, "q_margin": res.q.margin, "passed": res.passed, "maps": {}}
+        for m in maps:
+            tile = res.maps[m.name]
+            rolled = np.roll(tile, (tile.shape[0] // 2, tile.shape[1] // 2), (0, 1))
+            rec["maps"][m.name] = M.seam_ratios(rolled, is_normal=m.is_normal)
+        out[str(p)] = rec
+        print(f"  seam_training_prob={p}: {rec['seconds']:.0f} s, Q margin {res.q.margin:+.3f}, centre seam x/y "
+              + ", ".join(f"{n} {v['seam_ratio_x']:.2f}/{v['seam_ratio_y']:.2f}" for n, v in rec["maps"].items()),
+              flush=True)
+    return {"preset": preset, "results": out}
+
+
+def write_markdown(record: dict, path: Path) -> None:
+    """The figures of ``speed.json`` as Markdown tables."""
+    m = record.get("machine", {})
+    lines = ["# Speed benchmark", "", f"Written by `benchmarks/speed.py`. Machine: {m.get('cpu')}, "
+             f"{m.get('threads')} threads, torch {m.get('torch')}, CPU capability {m.get('cpu_capability')}, "
+             f"native bf16: {m.get('native_bf16')}.", ""]
+    st = record.get("steps")
+    if st:
+        pk = st["matmul_gflops"]
+        lines += ["## Training steps (variants interleaved, median of rounds)", "",
+                  f"Precision chosen at run time: **{st['precision']}**. Matmul peaks measured in the same run "
+                  f"(2048x2048): fp32 {np.median(pk['fp32']):.1f} GFLOP/s (rounds: "
+                  f"{', '.join(f'{v:.1f}' for v in pk['fp32'])}), bf16 {np.median(pk['bf16']):.2f} GFLOP/s.", "",
+                  "| variant | k | ngf/ndf | res | threads | GFLOP/step | it/s (rounds) | GFLOP/s | of fp32 peak "
+                  "| of bf16 peak | preset iterations -> minutes |",
+                  "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|"]
+        for name, v in st["variants"].items():
+            lines.append(f"| {name} | {v['k']} | {v['ngf']}/{v['ndf']} | {v['res_blocks']} | {v['threads']} | "
+                         f"{v['gflop_per_step']:.2f} | {v['it_per_s_median']:.2f} "
+                         f"({', '.join(f'{r:.2f}' for r in v['it_per_s'])}) | {v['achieved_gflops']:.1f} | "
+                         f"{100 * v['fraction_of_fp32_peak']:.0f}% | {100 * v['fraction_of_bf16_peak']:.0f}% | "
+                         f"{v['iterations']} -> {v['train_minutes_at_median']:.1f} |")
+        lines.append("")
+    wp = record.get("wait_policy")
+    if wp:
+        lines += [f"## OpenMP wait policy ({wp['preset']} preset, subprocesses interleaved)", "",
+                  "| setting | it/s (rounds) | median |", "|---|---|---:|"]
+        for name, v in wp["it_per_s"].items():
+            lines.append(f"| {name} | {', '.join(f'{r:.2f}' for r in v)} | {wp['median'][name]:.2f} |")
+        lines.append("")
+    sm = record.get("sampling")
+    if sm:
+        lines += ["## Sampling (untrained weights; each row a fresh process)", "",
+                  "| preset | input | what | candidates | seconds | s/candidate | tile | peak RSS GiB |",
+                  "|---|---:|---|---:|---:|---:|---|---:|"]
+        for r in sm:
+            lines.append(f"| {r['preset']} | {r['size']} | {'whole search, none passing (worst case)' if r['whole_search'] else 'c_max only'} | "
+                         f"{r['candidates']} | {r['seconds']:.1f} | {r['seconds_per_candidate']:.1f} | "
+                         f"{r['tile'][0]}x{r['tile'][1]} | {r['peak_rss_gib']:.2f} |")
+        lines.append("")
+    e2e = record.get("end_to_end")
+    if e2e:
+        lines += ["## End to end: 512 px brick stack (albedo, normal, roughness)", "",
+                  "| preset | iterations | train s | sample s | total min | crop | passed | candidates |",
+                  "|---|---:|---:|---:|---:|---|---|---:|"]
+        for name, r in e2e.items():
+            lines.append(f"| {name} | {r['iterations']} | {r['train_s']:.0f} | {r['sample_s']:.0f} | "
+                         f"{r['total_s'] / 60:.1f} | {r['crop_size'][0]}x{r['crop_size'][1]} | {r['passed']} | "
+                         f"{r['candidates']} |")
+        lines += ["", "Tiles: `results/tiles/speed_<preset>__brick512__<map>.png` (2x2 tiling of the output, "
+                  "left; naive 2x2 tiling of the input, right).", ""]
+    sc = record.get("seam_training")
+    if sc:
+        lines += [f"## Beyond the paper: tiled-latent training steps ({sc['preset']} preset, brick 512, equal iterations)",
+                  "", "Centre-line seam ratios (first differences across the lines where latent copies meet; "
+                  "about 1 = no seam) and Q margin of the c_max candidate.", "",
+                  "| seam_training_prob | seconds | Q margin | " + " | ".join(
+                      f"{n} x/y" for n in next(iter(sc["results"].values()))["maps"]) + " |",
+                  "|---:|---:|---:|" + "---|" * len(next(iter(sc["results"].values()))["maps"])]
+        for p, r in sc["results"].items():
+            lines.append(f"| {p} | {r['seconds']:.0f} | {r['q_margin']:+.3f} | " + " | ".join(
+                f"{v['seam_ratio_x']:.2f}/{v['seam_ratio_y']:.2f}" for v in r["maps"].values()) + " |")
+        lines.append("")
+    notes = record.get("notes")
+    if notes:
+        lines += ["## Notes", ""] + [f"- {n}" for n in notes] + [""]
+    path.write_text("\n".join(lines))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rounds", type=int, default=3, help="interleaved rounds of the step benchmark")
@@ -226,9 +343,16 @@ def main(argv=None) -> int:
     ap.add_argument("--skip-steps", action="store_true")
     ap.add_argument("--skip-sampling", action="store_true")
     ap.add_argument("--e2e", default=None, help="train + sample a 512 px brick stack with this preset")
+    ap.add_argument("--seam-compare", default=None, help="compare seam_training_prob 0 vs 0.3 with this preset")
     ap.add_argument("--_sample", type=int, default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--_steprate", type=int, default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--steps", type=int, default=8, help=argparse.SUPPRESS)
+    ap.add_argument("--skip-policy", action="store_true")
     ap.add_argument("--whole", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
+    if a._steprate is not None:
+        _steprate_child(a.preset, a._steprate, a.steps)
+        return 0
     if a._sample is not None:
         _sample_child(a._sample, a.preset, a.whole)
         return 0
@@ -240,13 +364,21 @@ def main(argv=None) -> int:
                          "native_bf16": cpu_supports_bf16()}
     if a.e2e:
         record.setdefault("end_to_end", {})[a.e2e] = end_to_end(a.e2e)
+    elif a.seam_compare:
+        record["seam_training"] = seam_compare(a.seam_compare)
     else:
         if not a.skip_steps:
             record["steps"] = bench_steps(a.rounds, a.seconds)
+        if not a.skip_policy:
+            record["wait_policy"] = bench_wait_policy(a.rounds)
         if not a.skip_sampling:
             sizes = [int(s) for s in a.sizes.split(",")]
-            record["sampling"] = bench_sampling(a.preset, sizes, whole_search_sizes=[512])
+            new = bench_sampling(a.preset, sizes, whole_search_sizes=[512])
+            keep = [r for r in record.get("sampling", [])
+                    if (r["preset"], r["size"], r["whole_search"]) not in {(n["preset"], n["size"], n["whole_search"]) for n in new}]
+            record["sampling"] = keep + new
     json_path.write_text(json.dumps(record, indent=1))
+    write_markdown(record, RESULTS / "speed.md")
     print(f"wrote {json_path.relative_to(ROOT)}")
     return 0
 

@@ -132,3 +132,12 @@ def test_vgg19_weights_load_from_a_local_file(tmp_path):
         build_feature_extractor(cfg)
     with pytest.raises(ValueError, match="vgg_weights"):
         build_feature_extractor(get_preset("tiny").replace(style_features="vgg19"))
+
+
+def test_seam_training_option_trains_on_tiled_latents():
+    cfg = get_preset("tiny").replace(iterations=3, seam_training_prob=1.0)
+    seen = []
+    model = train(_stack(), cfg, progress=seen.append)
+    assert all(p.losses["l1"] == 0 for p in seen)  # tiled-latent steps have no pixel-aligned target
+    assert all(torch.isfinite(p).all() for p in model.G.parameters())
+    assert model.hash != train(_stack(), get_preset("tiny").replace(iterations=3)).hash

@@ -88,7 +88,7 @@ PRESETS: dict[str, SynthesisConfig] = {
     # stack trains and samples inside the budget (default <= 15 min, draft <= 3 min) with margin.
     "default": SynthesisConfig(k=64, ngf=16, ndf=16, n_res_blocks=4, style_channels=16, iterations=1200,
                                crop_step=32, max_candidates=12, checkpoint_every=200),
-    "draft": SynthesisConfig(k=32, ngf=16, ndf=16, n_res_blocks=3, style_channels=16, iterations=500,
+    "draft": SynthesisConfig(k=32, ngf=16, ndf=16, n_res_blocks=3, style_channels=16, iterations=350,
                              crop_step=64, max_candidates=4, checkpoint_every=100),
     # For tests: trains in about a second.
     "tiny": SynthesisConfig(k=16, ngf=8, ndf=8, n_res_blocks=1, iterations=4, style_scales=2, style_channels=8,
