@@ -7,8 +7,7 @@ in the preferences, or make them importable from Blender's Python. See docs/blen
 
 Works as a legacy add-on (``bl_info``) and as a Blender 4.2+ extension (``blender_manifest.toml``).
 """
-from __future__ import annotations
-
+# No "from __future__ import annotations": Blender reads the property annotations below as values.
 import importlib
 import os
 import sys

@@ -40,6 +40,7 @@ __all__ = [
     "options_for_stage",
     "report_lines",
     "progress_logger",
+    "HookRun",
     "run_hook",
     "process_layer",
 ]
