@@ -25,7 +25,8 @@ __all__ = ["add_arguments", "run"]
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("paths", nargs="+", metavar="PATH", help="USD stages (.usd/.usda/.usdc/.usdz) or .mtlx documents")
+    p.add_argument("paths", nargs="+", metavar="PATH",
+                   help="USD stages (.usd/.usda/.usdc/.usdz), .mtlx documents, folders (walked) or glob patterns")
     p.add_argument("--preset", default="default", help="synthesis preset: paper, default, draft, tiny (default: %(default)s)")
     p.add_argument("--materials", action="append", default=[], metavar="GLOB",
                    help="only materials whose path or name matches (repeatable)")
@@ -39,6 +40,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-size", type=int, help="working-resolution cap in pixels (longest side); default native")
     p.add_argument("--iterations", type=int, help="override the preset's training iterations")
     p.add_argument("--cache-dir", type=Path, help="trained models and checkpoints (default: user cache dir)")
+    p.add_argument("--jobs", "-j", type=int, help="stacks trained at once in local worker processes (default 1)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run stacks on Dask: local:N (a local cluster of N workers) or tcp://host:8786")
     p.add_argument("--report", type=Path, help="HTML report path (the JSON report is written beside it)")
     p.add_argument("--json", action="store_true", help="print the JSON report on stdout")
 
@@ -57,6 +61,8 @@ def _options(args: argparse.Namespace, progress) -> Options:
         cache_dir=args.cache_dir,
         max_size=args.max_size,
         iterations=args.iterations,
+        jobs=args.jobs,
+        scheduler=args.scheduler,
         progress=progress,
     )
 

@@ -2,6 +2,9 @@
 
 - ``None`` / ``"inprocess"``: one job after another in this process, using all cores for each
   (the embedded default; fine-grained progress).
+- ``jobs=N`` (N > 1) with no scheduler: N worker processes on this machine (no Dask needed), each
+  with ``cores // N`` torch threads: on few cores several 1-thread trainings give more
+  throughput than one many-thread training.
 - ``"local:N"``: a Dask ``LocalCluster`` of N single-threaded worker processes on this machine.
 - ``"tcp://host:port"``: an existing Dask scheduler; outputs and cache must be on shared storage.
 
@@ -16,7 +19,7 @@ from typing import Protocol
 from seamless_usd.errors import UsageError
 from seamless_usd.pipeline.stackjob import StackJob, StackOutcome, run_stack
 
-__all__ = ["Executor", "InProcessExecutor", "DaskExecutor", "make_executor", "EXECUTORS"]
+__all__ = ["Executor", "InProcessExecutor", "ProcessPoolExecutor", "DaskExecutor", "make_executor", "EXECUTORS"]
 
 Progress = Callable[[StackJob, str, object], None]
 Result = StackOutcome | Exception
@@ -43,7 +46,7 @@ class InProcessExecutor:
 
 
 def _run_on_worker(job: StackJob, threads: int) -> Result:
-    """Entry point on a Dask worker: limit torch threads, run, return errors as values."""
+    """Entry point on a worker process: limit torch threads, run, return errors as values."""
     import torch
 
     torch.set_num_threads(max(1, threads))
@@ -53,15 +56,47 @@ def _run_on_worker(job: StackJob, threads: int) -> Result:
         return exc
 
 
+def _threads_per_worker(workers: int) -> int:
+    return max(1, (os.cpu_count() or 1) // max(1, workers))
+
+
+class ProcessPoolExecutor:
+    """Jobs in N local worker processes (spawned, so no state is inherited from the client)."""
+
+    name = "processes"
+
+    def __init__(self, workers: int):
+        self.workers = workers
+
+    def run(self, jobs, progress):
+        import multiprocessing
+        from concurrent import futures
+
+        threads = _threads_per_worker(self.workers)
+        ctx = multiprocessing.get_context("spawn")
+        with futures.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx) as pool:
+            pending = {}
+            for job in jobs:
+                progress(job, "stack-start", None)
+                pending[pool.submit(_run_on_worker, job, threads)] = job
+            for fut in futures.as_completed(pending):
+                job = pending[fut]
+                try:
+                    result = fut.result()
+                except Exception as exc:  # noqa: BLE001 - a worker died (killed, out of memory)
+                    result = exc
+                yield job, result
+
+
 class DaskExecutor:
     """Jobs on a Dask cluster: a new local one (``local:N``) or an existing scheduler address."""
 
     name = "dask"
 
-    def __init__(self, address: str, workers: int | None = None, threads_per_worker: int = 1):
+    def __init__(self, address: str, workers: int | None = None, threads_per_worker: int | None = None):
         self.address = address
         self.workers = workers
-        self.threads_per_worker = threads_per_worker
+        self.threads_per_worker = threads_per_worker or _threads_per_worker(workers or 1)
 
     def run(self, jobs, progress):
         try:
@@ -99,7 +134,9 @@ class DaskExecutor:
 def make_executor(scheduler: str | None, jobs: int | None = None) -> Executor:
     """Validated choice of executor; a clear error lists the valid forms."""
     if scheduler in (None, "", "inprocess"):
-        return InProcessExecutor()
+        if jobs is not None and jobs < 1:
+            raise UsageError(f"--jobs {jobs}: needs at least 1")
+        return InProcessExecutor() if (jobs or 1) == 1 else ProcessPoolExecutor(jobs)
     if scheduler.startswith("local"):
         _, _, n = scheduler.partition(":")
         try:

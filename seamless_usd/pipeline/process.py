@@ -21,7 +21,8 @@ from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 from seamless_usd.pipeline.executors import Executor, make_executor
 from seamless_usd.pipeline.options import Options, ProgressEvent
-from seamless_usd.pipeline.stackjob import JobSettings, StackJob, StackOutcome
+from seamless_usd.pipeline.inputs import expand_inputs
+from seamless_usd.pipeline.stackjob import JobSettings, StackJob, StackOutcome, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 
 __all__ = ["process_paths", "process_stage", "select_stacks"]
@@ -62,6 +63,8 @@ class Run:
     report: Report = field(default_factory=Report)
     outcomes: dict[str, StackOutcome | Exception] = field(default_factory=dict)  # content key -> result
     blocked: dict[str, str] = field(default_factory=dict)  # stack id -> why it is left alone
+    placed: dict[tuple[str, Path], StackOutcome | Exception] = field(default_factory=dict)  # (key, dir) -> tiles there
+    claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
     total: int = 0
     index: int = 0
 
@@ -123,9 +126,15 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
                 )
         else:
             outcome = run.outcomes.get(stack.content_key)
+            if isinstance(outcome, StackOutcome) and outcome.output_dir != out_dir:
+                outcome = _place(run, stack, out_dir)
             if isinstance(outcome, StackOutcome):
-                reused = outcome.stack_id != stack.id
+                first = run.claimed.setdefault(stack.content_key, (source_label, stack.id))
+                reused = first != (source_label, stack.id)
                 outcome.fill_report(report, stack, reused=reused)
+                if reused:
+                    report.duplicate_of = first[1] if first[0] == source_label else f"{first[1]} in {first[0]}"
+                    report.message = f"identical to stack {report.duplicate_of}: its result is reused"
                 results.append(outcome.stack_result(stack))
             else:
                 message = _error_message(outcome)
@@ -134,6 +143,22 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
         first_of.setdefault(stack.content_key, stack.id)
         run.report.stacks.append(report)
     return results
+
+
+def _place(run: Run, stack: TextureStack, out_dir: Path) -> StackOutcome | Exception:
+    """Tiles of an identical stack written for another output folder: write them here too.
+
+    The model and tiles come from the cache (no training), so each source's layer refers to
+    tiles in its own output folder and stays self-contained.
+    """
+    key = (stack.content_key, out_dir)
+    if key not in run.placed:
+        job = StackJob(stack=stack, settings=JobSettings.from_options(run.options), output_dir=out_dir)
+        try:
+            run.placed[key] = run_stack(job, None)
+        except Exception as exc:  # noqa: BLE001 - reported per stack
+            run.placed[key] = exc
+    return run.placed[key]
 
 
 def _error_message(exc: Exception | None) -> str:
@@ -214,7 +239,7 @@ def _author_source(run: Run, src: _Source) -> None:
 
 
 def _finish(run: Run, started: float) -> Report:
-    from seamless_usd.report.html import write_html, write_json
+    from seamless_usd.report.html import write_html, write_json, write_library_html
 
     report = run.report
     report.tool_version = __version__
@@ -225,7 +250,10 @@ def _finish(run: Run, started: float) -> Report:
         html_path = target if target.suffix.lower() in (".html", ".htm") else target.with_suffix(".html")
         json_path = html_path.with_suffix(".json")
         html_path.parent.mkdir(parents=True, exist_ok=True)
-        write_html(report, html_path)
+        if len(report.sources) > 1:
+            write_library_html(report, html_path)
+        else:
+            write_html(report, html_path)
         write_json(report, json_path)
         report.options["report_html"] = str(html_path)
         report.options["report_json"] = str(json_path)
@@ -246,7 +274,7 @@ def _new_run(options: Options) -> Run:
 
 
 def process_paths(paths: Sequence[str | Path], options: Options | None = None) -> Report:
-    """Process stages and MaterialX documents; the report owns the exit code.
+    """Process stages and MaterialX documents (files, folders, glob patterns); the report owns the exit code.
 
     Every input is scanned first (so progress knows the total), then stacks are processed one
     after another. An unreadable input is reported (exit code 2) and the other inputs go on.
@@ -254,8 +282,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
     started = time.perf_counter()
     run = _new_run(options or Options())
     sources = []
-    for raw in paths:
-        path = Path(raw)
+    for path in expand_inputs(paths):
         run.report.sources.append(str(path))
         try:
             src = _scan_source(path, run.options.materials)

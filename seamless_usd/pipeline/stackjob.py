@@ -81,6 +81,8 @@ class StackOutcome:
     device: str
     precision: str
     cached: bool = False
+    output_dir: Path | None = None  # where the tiles were written
+    peak_rss_mb: float = 0.0  # peak resident memory of the process that ran the job
     previews: Previews = field(default_factory=Previews, repr=False)
 
     @property
@@ -91,9 +93,11 @@ class StackOutcome:
         report.status = (
             StackStatus.REUSED if reused else StackStatus.PASSED if self.passed else StackStatus.NOT_PASSED
         )
+        report.origin = "duplicate" if reused else "cache" if self.cached else "trained"
+        report.peak_rss_mb = round(self.peak_rss_mb, 1)
         if reused:
             report.duplicate_of = self.stack_id
-            report.message = f"identical to stack {self.stack_id}: its tiles are reused"
+            report.message = f"identical to stack {self.stack_id}: its result is reused"
         elif not self.passed:
             report.message = "no candidate passed the quality function Q; the best one was written"
         elif self.cached:
@@ -237,8 +241,18 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         device=str(meta["device"]),
         precision=str(meta["precision"]),
         cached=cached is not None,
+        output_dir=out_dir,
+        peak_rss_mb=_peak_rss_mb(),
         previews=previews,
     )
+
+
+def _peak_rss_mb() -> float:
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - Windows
+        return 0.0
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
 
 
 def _q_dict(tile) -> dict[str, Any]:

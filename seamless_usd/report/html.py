@@ -10,7 +10,7 @@ from seamless_usd.metrics import METRIC_KEYS
 from seamless_usd.report.model import Report, StackReport, StackStatus
 from seamless_usd.report.png import png_data_uri
 
-__all__ = ["render_html", "write_html", "write_json"]
+__all__ = ["render_html", "render_index", "write_html", "write_json", "write_library_html"]
 
 _CSS = """
 body{font:14px/1.45 system-ui,-apple-system,Segoe UI,sans-serif;margin:24px;color:#1d1f23;background:#fafafa}
@@ -97,6 +97,8 @@ def _stack_html(stack: StackReport) -> str:
         "device / precision": f"{stack.device} / {stack.precision}" if stack.device else None,
         "model hash": stack.model_hash or None,
         "same as": stack.duplicate_of,
+        "result from": stack.origin or None,
+        "peak memory (MB)": stack.peak_rss_mb or None,
     }
     rows = "".join(
         f"<tr><td class=muted>{_esc(k)}</td><td>{_esc(_fmt(v))}</td></tr>" for k, v in facts.items() if v
@@ -149,4 +151,62 @@ def write_html(report: Report, path: Path) -> Path:
 def write_json(report: Report, path: Path) -> Path:
     path = Path(path)
     atomic_write_text(path, json.dumps(report.to_dict(), indent=2))
+    return path
+
+
+def _source_report(report: Report, source: str) -> Report:
+    """The part of a library report that belongs to one source file."""
+    stacks = [s for s in report.stacks if s.source == source]
+    materials = {s.material for s in stacks}
+    return Report(
+        sources=[source],
+        stacks=stacks,
+        findings=[f for f in report.findings if f.material in materials or source in f.where],
+        tool_version=report.tool_version,
+        unreadable=[u for u in report.unreadable if u == source],
+    )
+
+
+def render_index(report: Report, pages: dict[str, str], title: str = "seamless-usd library report") -> str:
+    """The library page: one row per source with its counts and a link to its own report."""
+    rows = []
+    for source in report.sources:
+        part = _source_report(report, source)
+        counts = part.counts()
+        cells = "".join(f"<td>{counts[k] or ''}</td>" for k in ("passed", "not-passed", "failed", "reused", "trained", "from_cache"))
+        state = "unreadable" if part.unreadable else ("ok" if part.ok else "needs a look")
+        link = pages.get(source)
+        name = f'<a href="{_esc(link)}">{_esc(source)}</a>' if link else _esc(source)
+        rows.append(f"<tr><td>{name}</td>{cells}<td>{_esc(state)}</td></tr>")
+    problems = "".join(
+        f"<li><code>{_esc(f.severity.value)}</code> {_esc(f.where)}: {_esc(f.message)}</li>"
+        for f in report.findings if f.severity.value == "error"
+    )
+    counts = report.counts()
+    summary = "".join(f"<span><b>{v}</b> {k}</span>" for k, v in counts.items() if v)
+    total = report.timings.get("total")
+    return f"""<!doctype html><html lang="en"><head><meta charset="utf-8">
+<title>{_esc(title)}</title><style>{_CSS}
+table.lib{{border-collapse:collapse;background:#fff}} table.lib td,table.lib th{{border:1px solid #dde;padding:3px 8px;text-align:left}}</style></head><body>
+<h1>{_esc(title)}</h1><p class="muted">{len(report.sources)} files · seamless-usd {_esc(report.tool_version)} · exit code {report.exit_code}{f" · {total:.0f} s" if total else ""}</p>
+<p class="summary">{summary}</p>
+<table class="lib"><tr><th>file</th><th>passed</th><th>not passed</th><th>failed</th><th>reused</th><th>trained</th><th>from cache</th><th>state</th></tr>{"".join(rows)}</table>
+{"<h2>Failures</h2><ul class=findings>" + problems + "</ul>" if problems else ""}
+</body></html>
+"""
+
+
+def write_library_html(report: Report, path: Path) -> Path:
+    """The index page at ``path`` and one report per source beside it (``<stem>.files/``)."""
+    from seamless_usd.pipeline.naming import slug
+
+    path = Path(path)
+    folder = path.with_name(f"{path.stem}.files")
+    folder.mkdir(parents=True, exist_ok=True)
+    pages: dict[str, str] = {}
+    for n, source in enumerate(report.sources, 1):
+        page = folder / f"{n:04d}-{slug(Path(source).stem, 40)}.html"
+        atomic_write_text(page, render_html(_source_report(report, source), title=f"seamless-usd: {Path(source).name}"))
+        pages[source] = f"{folder.name}/{page.name}"
+    atomic_write_text(path, render_index(report, pages))
     return path

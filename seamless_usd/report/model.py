@@ -50,6 +50,8 @@ class StackReport:
     message: str = ""
     maps: list[MapReport] = field(default_factory=list)
     duplicate_of: str | None = None
+    origin: str = ""  # "trained", "cache" (finished entry reused), "duplicate" (same stack earlier in the run)
+    peak_rss_mb: float = 0.0  # peak memory of the process that ran the stack
     crop_size: tuple[int, int] | None = None  # (c_h, c_w) input crop of the chosen candidate
     tile_size: tuple[int, int] | None = None  # (H, W) pixels of the written tile
     working_size: tuple[int, int] | None = None  # (W, H) working resolution of the stack
@@ -71,6 +73,8 @@ class StackReport:
             "status": self.status.value,
             "message": self.message,
             "duplicate_of": self.duplicate_of,
+            "origin": self.origin,
+            "peak_rss_mb": self.peak_rss_mb,
             "crop_size": list(self.crop_size) if self.crop_size else None,
             "tile_size": list(self.tile_size) if self.tile_size else None,
             "working_size": list(self.working_size) if self.working_size else None,
@@ -120,6 +124,8 @@ class Report:
         out = {s.value: 0 for s in StackStatus}
         for s in self.stacks:
             out[s.status.value] += 1
+        out["trained"] = sum(1 for s in self.stacks if s.origin == "trained")
+        out["from_cache"] = sum(1 for s in self.stacks if s.origin == "cache")
         return out
 
     def merge(self, other: "Report") -> None:

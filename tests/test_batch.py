@@ -1,0 +1,215 @@
+"""Batch fixing of a material library: folders, de-duplication, cache, resume, executors."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import jsonschema
+import pytest
+from pxr import Usd, UsdShade
+
+from seamless_usd.errors import UsageError
+from seamless_usd.pipeline.executors import (
+    DaskExecutor,
+    InProcessExecutor,
+    ProcessPoolExecutor,
+    make_executor,
+)
+from seamless_usd.pipeline.inputs import expand_inputs
+from seamless_usd_cli.main import main
+from seamless_usd_schemas import json_schema
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
+
+TWO_MATERIALS = """#usda 1.0
+(
+    defaultPrim = "World"
+)
+
+def Xform "World"
+{
+    def Scope "Looks"
+    {
+        def Material "Brick"
+        {
+            token outputs:surface.connect = </World/Looks/Brick/Surface.outputs:surface>
+            def Shader "Surface"
+            {
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor.connect = </World/Looks/Brick/Albedo.outputs:rgb>
+                token outputs:surface
+            }
+            def Shader "St"
+            {
+                uniform token info:id = "UsdPrimvarReader_float2"
+                string inputs:varname = "st"
+                float2 outputs:result
+            }
+            def Shader "Albedo"
+            {
+                uniform token info:id = "UsdUVTexture"
+                asset inputs:file = @../textures/brick_albedo.png@
+                float2 inputs:st.connect = </World/Looks/Brick/St.outputs:result>
+                float3 outputs:rgb
+            }
+        }
+        def Material "Wood"
+        {
+            token outputs:surface.connect = </World/Looks/Wood/Surface.outputs:surface>
+            def Shader "Surface"
+            {
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor.connect = </World/Looks/Wood/Albedo.outputs:rgb>
+                token outputs:surface
+            }
+            def Shader "St"
+            {
+                uniform token info:id = "UsdPrimvarReader_float2"
+                string inputs:varname = "st"
+                float2 outputs:result
+            }
+            def Shader "Albedo"
+            {
+                uniform token info:id = "UsdUVTexture"
+                asset inputs:file = @../textures/wood_color.png@
+                float2 inputs:st.connect = </World/Looks/Wood/St.outputs:result>
+                float3 outputs:rgb
+            }
+        }
+    }
+}
+"""
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("batch-cache")
+
+
+def _library(root: Path, copies: int = 3) -> Path:
+    """A library: the brick scene in ``copies`` folders (one stack, duplicated) plus a two-material layer."""
+    lib = root / "library"
+    shutil.copytree(SAMPLES / "textures", lib / "textures")
+    for n in range(copies):
+        (lib / f"brick{n}").mkdir()
+        shutil.copy(SAMPLES / "brick" / "scene.usda", lib / f"brick{n}" / "scene.usda")
+    (lib / "looks").mkdir()
+    (lib / "looks" / "two.usda").write_text(TWO_MATERIALS)
+    return lib
+
+
+def _run(*args: str, capsys) -> tuple[int, dict]:
+    code = main(["process", "--preset", "tiny", "--json", *args])
+    return code, json.loads(capsys.readouterr().out)
+
+
+def test_expand_inputs_walks_folders_and_globs_and_leaves_outputs_out(tmp_path):
+    lib = _library(tmp_path, copies=2)
+    (lib / "brick0" / "scene.seamless.usda").write_text("#usda 1.0\n")
+    (lib / "brick0" / "scene.usda.bak").write_text("#usda 1.0\n")
+    (lib / "brick0" / "tileable").mkdir()
+    (lib / "brick0" / "tileable" / "x.usda").write_text("#usda 1.0\n")
+    found = [p.relative_to(lib).as_posix() for p in expand_inputs([lib])]
+    assert found == ["brick0/scene.usda", "brick1/scene.usda", "looks/two.usda"]
+    globbed = [p.relative_to(lib).as_posix() for p in expand_inputs([str(lib / "brick*" / "*.usda")])]
+    assert globbed == ["brick0/scene.usda", "brick1/scene.usda"]
+    assert expand_inputs([lib / "brick0" / "scene.usda", lib / "brick0" / "scene.usda"]) == [lib / "brick0" / "scene.usda"]
+    with pytest.raises(UsageError, match="matches no"):
+        expand_inputs([str(lib / "nothing*" / "*.usda")])
+
+
+def test_make_executor_validates_names():
+    assert isinstance(make_executor(None), InProcessExecutor)
+    assert isinstance(make_executor(None, 2), ProcessPoolExecutor)
+    assert isinstance(make_executor("local:2"), DaskExecutor)
+    assert isinstance(make_executor("tcp://127.0.0.1:8786"), DaskExecutor)
+    for bad in ("local:x", "local:0", "ssh://farm", "kubernetes"):
+        with pytest.raises(UsageError):
+            make_executor(bad)
+
+
+def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, cache, capsys):
+    lib = _library(tmp_path)
+    report = tmp_path / "out" / "library.html"
+    code, first = _run(str(lib), "--cache-dir", str(tmp_path / "cold"), "--report", str(report), capsys=capsys)
+    assert code in (0, 1)
+    jsonschema.validate(first, json_schema("report"))
+    assert len(first["sources"]) == 4
+    # brick x3 (one unique stack) + brick and wood albedo in two.usda: the brick albedo alone is another
+    # stack (one map, not three), so three unique stacks train.
+    assert first["counts"]["trained"] == 3
+    assert first["counts"]["reused"] == 2
+    for n in range(3):  # every file gets its own outputs and edits
+        layer = lib / f"brick{n}" / "scene.seamless.usda"
+        stage = Usd.Stage.Open(str(layer))
+        tex = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Brick/Albedo"))
+        resolved = Path(tex.GetInput("file").Get().resolvedPath)
+        assert resolved.parent == lib / f"brick{n}" / "tileable" and resolved.is_file()
+    index = report.read_text()
+    assert index.count('href="library.files/') == 4
+    assert all((report.parent / "library.files").glob("*.html"))
+    code, second = _run(str(lib), "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    assert second["counts"]["trained"] == 0
+    assert second["counts"]["from_cache"] == 3
+
+
+def test_two_stacks_editing_one_layer_in_place_both_land(tmp_path, cache, capsys):
+    lib = _library(tmp_path, copies=0)
+    layer = lib / "looks" / "two.usda"
+    code, payload = _run(str(layer), "--in-place", "--cache-dir", str(cache), capsys=capsys)
+    assert code in (0, 1) and len(payload["stacks"]) == 2
+    stage = Usd.Stage.Open(str(layer))
+    for material in ("Brick", "Wood"):
+        tex = UsdShade.Shader(stage.GetPrimAtPath(f"/World/Looks/{material}/Albedo"))
+        assert "tileable" in tex.GetInput("file").Get().path
+        assert tex.GetInput("wrapS").Get() == "repeat"
+    assert (lib / "looks" / "two.usda.bak").read_text() == TWO_MATERIALS
+
+
+@pytest.mark.parametrize("flags", [["--scheduler", "local:2"], ["--jobs", "2"]], ids=["dask-local-cluster", "processes"])
+def test_worker_processes_process_two_stacks(tmp_path, cache, capsys, flags):
+    lib = _library(tmp_path, copies=0)
+    code, payload = _run(str(lib / "looks" / "two.usda"), "--cache-dir", str(tmp_path / "c"), *flags, capsys=capsys)
+    assert code in (0, 1)
+    assert [s["status"] in ("passed", "not-passed") for s in payload["stacks"]] == [True, True]
+    assert payload["counts"]["trained"] == 2
+    assert all(s["peak_rss_mb"] > 0 for s in payload["stacks"])
+    assert (lib / "looks" / "two.seamless.usda").is_file()
+
+
+def _tiles(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.rglob("*.tile.*"))}
+
+
+def test_a_run_killed_after_the_first_stack_resumes_to_the_same_outputs(tmp_path):
+    env = dict(os.environ)
+    cmd = [sys.executable, "-m", "seamless_usd_cli.main", "process", "--preset", "tiny"]
+    # uninterrupted reference
+    ref = _library(tmp_path / "ref", copies=0)
+    subprocess.run([*cmd, "--cache-dir", str(tmp_path / "ref-cache"), str(ref / "looks")], check=False, env=env,
+                   capture_output=True, timeout=600)
+    expected = _tiles(ref / "looks" / "tileable")
+    assert len(expected) == 2
+    # killed once the first stack's tile is written, then run again
+    lib = _library(tmp_path / "run", copies=0)
+    cache = tmp_path / "run-cache"
+    proc = subprocess.Popen([*cmd, "--cache-dir", str(cache), str(lib / "looks")], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and proc.poll() is None:
+        if list((lib / "looks" / "tileable").glob("*.tile.png")):
+            proc.send_signal(signal.SIGKILL)
+            break
+        time.sleep(0.05)
+    proc.wait(timeout=60)
+    assert not (lib / "looks" / "two.seamless.usda").exists(), "killed before the layer was written"
+    done = subprocess.run([*cmd, "--cache-dir", str(cache), str(lib / "looks")], env=env, capture_output=True, timeout=600)
+    assert done.returncode in (0, 1), done.stderr.decode()[-2000:]
+    assert _tiles(lib / "looks" / "tileable") == expected
+    assert (lib / "looks" / "two.seamless.usda").is_file()
