@@ -117,6 +117,19 @@ def test_keep_mode_packed_image_is_written_before_processing(prefs, brick_scene,
     assert Path(rough[1]) == brick_scene["src"] / "brick_roughness.png" and rough[2]  # KEEP: the source file
 
 
+def test_keep_mode_generated_image_is_saved_before_processing(prefs, brick_scene, recorder, tmp_path):
+    """A generated image (no file, not packed) in KEEP mode: the hook saves a copy of it."""
+    image = bpy.data.images.new("GeneratedAlbedo", 64, 64)
+    image.generated_type = "COLOR_GRID"
+    brick_scene["albedo"].image = image
+    out = tmp_path / "keepgen" / "scene.usda"
+    assert export_usd(out, export_textures_mode="KEEP") == {"FINISHED"}
+    (call,) = recorder.calls
+    asset, resolved, exists = call.textures[f"{MATERIAL}/Albedo"]
+    assert exists, f"@{asset}@ not written"
+    assert Path(resolved).stat().st_size > 0 and image.filepath == ""  # the datablock keeps no path
+
+
 def test_usdz_maps_written_beside_the_staging_layer_are_packaged(prefs, brick_scene, recorder, tmp_path):
     """A .usdz is staged in a temporary folder; maps written to <staging dir>/tileable (the default)
     and referenced from the stage end up inside the package."""

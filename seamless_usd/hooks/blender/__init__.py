@@ -128,8 +128,11 @@ def write_missing_textures(export_context, bl_material, usd_material) -> list[Pa
         asset = getattr(value, "path", "") if value is not None else ""
         if not asset or "<UDIM>" in asset:
             continue
-        anchored = Sdf.ComputeAssetPathRelativeToLayer(root, asset) if not root.anonymous else asset
-        target = Path(anchored)
+        target = Path(Sdf.ComputeAssetPathRelativeToLayer(root, asset) if not root.anonymous else asset)
+        if not target.is_absolute() and not root.anonymous:
+            # A search-path style name (generated images in KEEP mode: @GeneratedAlbedo.png@):
+            # the resolver looks beside the layer first, so that is where it goes.
+            target = Path(root.realPath).parent / asset
         if target.exists() or not target.is_absolute():
             continue
         image = _image_for(bl_material, shader.GetPrim().GetName(), target.name)
