@@ -230,6 +230,15 @@ def test_progress_logger_logs_stack_start_and_end_only():
     assert [ln.text for ln in got] == ["seamless-usd: stack 1/2: brick", "seamless-usd: stack 1/2 passed"]
 
 
+def test_progress_logger_forwards_every_event():
+    seen = []
+    progress = common.progress_logger(lambda _: None, seen.append)
+    events = [SimpleNamespace(kind=k, stack_id="s", index=0, total=1) for k in ("stack-start", "train", "sample")]
+    for e in events:
+        progress(e)
+    assert seen == events
+
+
 # --- run_hook --------------------------------------------------------------------------------------
 
 

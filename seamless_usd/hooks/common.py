@@ -370,10 +370,15 @@ def _failed(report: object) -> bool:
     return any(_value(f.severity) == "error" for f in getattr(report, "findings", []))
 
 
-def progress_logger(emit: Callable[[LogLine], None]) -> Callable[[Any], None]:
-    """An ``Options.progress`` callback that logs each stack's start and end (not every step)."""
+def progress_logger(
+    emit: Callable[[LogLine], None], also: Callable[[Any], None] | None = None
+) -> Callable[[Any], None]:
+    """An ``Options.progress`` callback that logs each stack's start and end (not every step),
+    and hands every event to ``also`` (a DCC's progress bar) when given."""
 
     def progress(event: Any) -> None:
+        if also is not None:
+            also(event)
         kind = getattr(event, "kind", "")
         if kind == "stack-start":
             emit(LogLine(Level.INFO, f"{PREFIX}: stack {event.index + 1}/{event.total}: {event.stack_id}"))
@@ -410,9 +415,11 @@ def run_hook(
     export_path: Path | None = None,
     emit: Callable[[LogLine], None] | None = None,
     process: Callable[[object, object], object] | None = None,
+    on_progress: Callable[[Any], None] | None = None,
 ) -> HookRun:
     """Run ``process_stage`` on a stage a DCC is exporting; never leave the DCC with a half error.
 
+    ``on_progress`` gets every :class:`seamless_usd.ProgressEvent` (for a DCC progress bar).
     Edits go into the stage's current edit target and the stage is not saved (the DCC saves it).
     Expected errors (:class:`seamless_usd.errors.SeamlessUsdError`) are logged as one line;
     unexpected ones with their traceback. With ``settings.strict`` a failure raises
@@ -430,7 +437,7 @@ def run_hook(
         say(LogLine(Level.INFO, f"{PREFIX}: disabled, textures left as exported"))
         return run
     try:
-        options = options_for_stage(settings, stage, export_path=export_path, progress=progress_logger(say))
+        options = options_for_stage(settings, stage, export_path=export_path, progress=progress_logger(say, on_progress))
         run.report = (process or _default_process)(stage, options)
     except SeamlessUsdError as exc:
         run.ok = False

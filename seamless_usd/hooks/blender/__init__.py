@@ -157,8 +157,19 @@ def on_export(export_context, settings: HookSettings) -> bool:
         return True
     ensure_pxr()
     stage = export_context.get_stage()
-    run = common.run_hook(stage, settings, emit=console_emit)
-    return run.ok
+    wm = getattr(bpy.context, "window_manager", None)
+    if wm is None or bpy.app.background:
+        return common.run_hook(stage, settings, emit=console_emit).ok
+    wm.progress_begin(0, 1000)  # the export blocks the UI while stacks train: show where it is
+
+    def progress(event) -> None:
+        done = event.index + (1 if event.kind in ("stack-done", "write") else 0)
+        wm.progress_update(int(1000 * done / max(event.total, 1)))
+
+    try:
+        return common.run_hook(stage, settings, emit=console_emit, on_progress=progress).ok
+    finally:
+        wm.progress_end()
 
 
 # --- registration for pipeline scripts (the add-on registers its own hook class) ---------------
