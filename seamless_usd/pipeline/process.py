@@ -268,6 +268,12 @@ def _new_run(options: Options) -> Run:
         get_preset(options.preset)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    from seamless_usd.discover.tokens import MIN_IMAGE_SIZE
+
+    if options.max_size is not None and options.max_size < MIN_IMAGE_SIZE:
+        raise UsageError(
+            f"--max-size {options.max_size} is below the {MIN_IMAGE_SIZE} px minimum crop; use {MIN_IMAGE_SIZE} or more"
+        )
     if options.mode is None:
         options = options.with_(mode=authoring.WriteMode.NEW_LAYER)
     return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
