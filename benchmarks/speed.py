@@ -316,8 +316,8 @@ def write_markdown(record: dict, path: Path) -> None:
                          f"{r['candidates']} |")
         lines += ["", "Tiles: `results/tiles/speed_<preset>__brick512__<map>.png` (2x2 tiling of the output, "
                   "left; naive 2x2 tiling of the input, right).", ""]
-    sc = record.get("seam_training")
-    if sc:
+    for key in sorted(k for k in record if k.startswith("seam_training")):
+        sc = record[key]
         lines += [f"## Beyond the paper: tiled-latent training steps ({sc['preset']} preset, brick 512, equal iterations)",
                   "", "Centre-line seam ratios (first differences across the lines where latent copies meet; "
                   "about 1 = no seam) and Q margin of the c_max candidate.", "",
@@ -343,7 +343,8 @@ def main(argv=None) -> int:
     ap.add_argument("--skip-steps", action="store_true")
     ap.add_argument("--skip-sampling", action="store_true")
     ap.add_argument("--e2e", default=None, help="train + sample a 512 px brick stack with this preset")
-    ap.add_argument("--seam-compare", default=None, help="compare seam_training_prob 0 vs 0.3 with this preset")
+    ap.add_argument("--seam-compare", default=None, help="compare seam_training_prob values with this preset")
+    ap.add_argument("--probs", default="0,0.3", help="seam_training_prob values for --seam-compare")
     ap.add_argument("--_sample", type=int, default=None, help=argparse.SUPPRESS)
     ap.add_argument("--_steprate", type=int, default=None, help=argparse.SUPPRESS)
     ap.add_argument("--steps", type=int, default=8, help=argparse.SUPPRESS)
@@ -365,7 +366,11 @@ def main(argv=None) -> int:
     if a.e2e:
         record.setdefault("end_to_end", {})[a.e2e] = end_to_end(a.e2e)
     elif a.seam_compare:
-        record["seam_training"] = seam_compare(a.seam_compare)
+        res = seam_compare(a.seam_compare, tuple(float(p) for p in a.probs.split(",")))
+        key = f"seam_training_{a.seam_compare}"
+        if key in record and record[key]["preset"] == res["preset"]:
+            res["results"] = {**record[key]["results"], **res["results"]}
+        record[key] = res
     else:
         if not a.skip_steps:
             record["steps"] = bench_steps(a.rounds, a.seconds)

@@ -126,6 +126,10 @@ def test_vgg19_weights_load_from_a_local_file(tmp_path):
     assert [f.shape[1] for f in feats] == [64, 128, 256]
     with pytest.raises(AssertionError, match="lacks"):
         VGG19Features(path)  # default layers need up to relu5_1
+    from safetensors.torch import save_file
+    save_file(state, str(tmp_path / "vgg19.safetensors"))
+    net2 = VGG19Features(tmp_path / "vgg19.safetensors", layers=(1, 6, 11))
+    assert all(torch.equal(a, b) for a, b in zip(net(torch.ones(1, 3, 16, 16)), net2(torch.ones(1, 3, 16, 16))))
     # and through the config, used by training
     cfg = get_preset("tiny").replace(style_features="vgg19", vgg_weights=str(path), iterations=1)
     with pytest.raises(AssertionError, match="lacks"):

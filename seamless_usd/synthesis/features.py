@@ -9,6 +9,8 @@ from typing import Callable
 
 import torch
 import torch.nn.functional as F
+from safetensors import SafetensorError
+from safetensors.torch import load_file
 from torch import nn
 
 __all__ = ["RandomFeatures", "VGG19Features", "FEATURE_EXTRACTORS", "build_feature_extractor", "to_rgb_batch",
@@ -100,8 +102,6 @@ class VGG19Features(nn.Module):
 def load_state_dict_file(path: str | Path) -> dict[str, torch.Tensor]:
     """Tensors from a safetensors file, or a torch.save file with ``weights_only=True`` (never a full unpickle)."""
     path = Path(path)
-    from safetensors import SafetensorError
-    from safetensors.torch import load_file
     try:
         return load_file(str(path))
     except (SafetensorError, OSError, ValueError) as e:
