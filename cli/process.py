@@ -30,9 +30,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preset", default="default", help="synthesis preset: paper, default, draft, tiny (default: %(default)s)")
     p.add_argument("--materials", action="append", default=[], metavar="GLOB",
                    help="only materials whose path or name matches (repeatable)")
-    mode = p.add_mutually_exclusive_group()
-    mode.add_argument("--dry-run", action="store_true", help="show what would be done, write nothing")
-    mode.add_argument("--in-place", action="store_true", help="edit the source layers (keeps .bak copies)")
+    p.add_argument("--dry-run", action="store_true",
+                   help="show what would be done, write nothing (with --in-place: the in-place edits)")
+    p.add_argument("--in-place", action="store_true", help="edit the source layers (keeps .bak copies)")
     p.add_argument("-o", "--output-layer", type=Path, help="override layer to write (default <scene>.seamless.usda)")
     p.add_argument("--output-dir", type=Path, help="folder for tileable maps (default <stage dir>/tileable)")
     p.add_argument("--device", help="cpu, cuda, cuda:N (default: CUDA when present)")
@@ -48,11 +48,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _options(args: argparse.Namespace, progress) -> Options:
-    mode = WriteMode.DRY_RUN if args.dry_run else WriteMode.IN_PLACE if args.in_place else WriteMode.NEW_LAYER
+    writing = WriteMode.IN_PLACE if args.in_place else WriteMode.NEW_LAYER
     return Options(
         preset=args.preset,
         materials=tuple(args.materials),
-        mode=mode,
+        mode=WriteMode.DRY_RUN if args.dry_run else writing,
+        plan_mode=writing,
         output_layer=args.output_layer,
         output_dir=args.output_dir,
         device=args.device,

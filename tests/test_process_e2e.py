@@ -208,3 +208,13 @@ def test_process_stage_on_an_open_in_memory_stage(assets, model_cache, tmp_path)
     assert Path(value.resolvedPath).parent == tmp_path / "tiles"
     assert session.GetPrimAtPath("/World/Looks/Brick/Albedo") is not None
     assert Sdf.Layer.FindOrOpen(str(assets / "brick" / "scene.usda")).dirty is False
+
+
+def test_dry_run_of_in_place_lists_source_layer_edits_and_writes_nothing(assets, model_cache, capsys):
+    before = _hashes(assets)
+    code = _process(str(assets / "brick" / "scene.usda"), "--dry-run", "--in-place", "--json", cache=model_cache)
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert _hashes(assets) == before
+    assert payload["options"]["plan_mode"] == "in-place"
+    assert any("scene.usda" in line and "seamless" not in line.split(" in ")[-1] for line in payload["plan"])

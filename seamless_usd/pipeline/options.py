@@ -32,6 +32,7 @@ class Options:
     preset: str = "default"  # synthesis preset name (see seamless_usd.synthesis.PRESETS)
     materials: tuple[str, ...] = ()  # fnmatch patterns on material paths; empty = all
     mode: Any = None  # WriteMode; None means WriteMode.NEW_LAYER
+    plan_mode: Any = None  # DRY_RUN: which writing mode to plan for (WriteMode.NEW_LAYER or IN_PLACE)
     output_layer: Path | None = None  # NEW_LAYER: where the override layer goes (default scene.seamless.usda)
     output_dir: Path | None = None  # where tileable maps go (default <stage dir>/tileable)
     device: str | None = None  # "cpu", "cuda", "cuda:1"; None picks CUDA when present
@@ -51,7 +52,7 @@ class Options:
         """JSON-friendly view for reports (no callables)."""
         out = {}
         for name in (
-            "preset", "materials", "mode", "output_layer", "output_dir", "device", "seed",
+            "preset", "materials", "mode", "plan_mode", "output_layer", "output_dir", "device", "seed",
             "cache_dir", "max_size", "iterations", "scheduler", "jobs",
         ):
             value = getattr(self, name)

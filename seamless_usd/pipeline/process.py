@@ -22,6 +22,7 @@ from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 from seamless_usd.pipeline.executors import Executor, make_executor
 from seamless_usd.pipeline.options import Options, ProgressEvent
 from seamless_usd.pipeline.inputs import expand_inputs
+from seamless_usd.pipeline.naming import tile_filename
 from seamless_usd.pipeline.stackjob import JobSettings, StackJob, StackOutcome, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 
@@ -117,13 +118,18 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
         elif dry:
             report.status = StackStatus.PLANNED
-            report.maps = [_map_report(m, None) for m in stack.maps]
+            planned = _planned_result(stack, out_dir, run.options)
+            report.maps = [_map_report(mr.map, mr.output_path) for mr in planned.maps]
+            report.uv_scale = planned.uv_scale
             report.duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
             if report.duplicate_of is None:
                 run.report.plan.append(
                     f"train and sample {where} ({len(stack.maps)} maps: "
-                    f"{', '.join(Path(m.asset).name for m in stack.maps)}) and write tiles to {out_dir}"
+                    f"{', '.join(Path(m.asset).name for m in stack.maps)}) and write tiles to {out_dir} "
+                    f"(UV scale {planned.uv_scale[0]:g} x {planned.uv_scale[1]:g} if the whole texture passes Q; "
+                    "a smaller crop gives a larger scale)"
                 )
+            results.append(planned)
         else:
             outcome = run.outcomes.get(stack.content_key)
             if isinstance(outcome, StackOutcome) and outcome.output_dir != out_dir:
@@ -143,6 +149,27 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
         first_of.setdefault(stack.content_key, stack.id)
         run.report.stacks.append(report)
     return results
+
+
+def _planned_result(stack: TextureStack, out_dir: Path, options: Options):
+    """What a dry run shows authoring: the tile paths that would be written, and the UV scale if the
+    first candidate (the whole texture, c = working size) passes Q."""
+    from seamless_usd.authoring import MapResult, Provenance, StackResult, uv_scale_for
+    from seamless_usd.imaging import WorkingResolution, output_extension
+
+    sizes = [(m.image.width, m.image.height) for m in stack.maps if m.image is not None]
+    working = WorkingResolution(max_size=options.max_size).working_size(sizes) if sizes else (1, 1)
+    uv = uv_scale_for(working, working)
+    maps = [
+        MapResult(map=m, output_path=out_dir / tile_filename(m.asset, stack.id, output_extension(m.image)))
+        for m in stack.maps
+        if m.image is not None
+    ]
+    prov = Provenance(
+        source_asset=", ".join(m.asset for m in stack.maps), crop_size=working, uv_scale=uv, q_passed=False,
+        q_tau=0.0, q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__,
+    )
+    return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov)
 
 
 def _place(run: Run, stack: TextureStack, out_dir: Path) -> StackOutcome | Exception:
@@ -231,10 +258,13 @@ def _author_source(run: Run, src: _Source) -> None:
     results = _reports_for(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
     if not results and run.options.mode != authoring.WriteMode.DRY_RUN:
         return
+    plan = run.options.plan_mode or authoring.WriteMode.NEW_LAYER
     if src.kind == "mtlx":
-        edit = authoring.author_mtlx(src.path, results, mode=run.options.mode)
+        edit = authoring.author_mtlx(src.path, results, mode=run.options.mode, plan_mode=plan)
     else:
-        edit = authoring.author_usd(src.path, results, mode=run.options.mode, output_layer=run.options.output_layer)
+        edit = authoring.author_usd(
+            src.path, results, mode=run.options.mode, output_layer=run.options.output_layer, plan_mode=plan
+        )
     _record_authoring(run, edit)
 
 

@@ -16,6 +16,8 @@ import numpy as np
 
 from seamless_usd.discover.types import TextureMap, TextureStack
 from seamless_usd.fileio import confine
+from seamless_usd.findings import Finding
+from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.pipeline.naming import tile_filename
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
@@ -35,12 +37,14 @@ class JobSettings:
     device: str | None = None
     max_size: int | None = None
     cache_dir: Path | None = None
+    max_pixels: int | None = DEFAULT_MAX_PIXELS  # header limit per image file (width * height)
 
     @classmethod
     def from_options(cls, options) -> "JobSettings":
         return cls(
             preset=options.preset, iterations=options.iterations, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
+            max_pixels=getattr(options, "max_pixels", DEFAULT_MAX_PIXELS),
         )
 
 
@@ -84,6 +88,7 @@ class StackOutcome:
     output_dir: Path | None = None  # where the tiles were written
     peak_rss_mb: float = 0.0  # peak resident memory of the process that ran the job
     previews: Previews = field(default_factory=Previews, repr=False)
+    findings: list[Finding] = field(default_factory=list)  # warnings while loading (e.g. non-finite pixels)
 
     @property
     def passed(self) -> bool:
@@ -124,7 +129,7 @@ class StackOutcome:
 
         prov = Provenance(
             source_asset=", ".join(m.asset for m in stack.maps),
-            crop_size=self.crop_size,
+            crop_size=(self.crop_size[1], self.crop_size[0]),  # authoring records (c_w, c_h)
             uv_scale=self.uv_scale,
             q_passed=self.passed,
             q_tau=float(self.q.get("tau", 0.0)),
@@ -151,7 +156,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     policy = imaging.WorkingResolution(max_size=settings.max_size)
-    pixels = imaging.load_stack_pixels(list(stack.maps), policy)
+    pixels = imaging.load_stack_pixels(list(stack.maps), policy, max_pixels=settings.max_pixels)
     timings["load"] = time.perf_counter() - t0
 
     names = [f"m{i}" for i in range(len(stack.maps))]
@@ -174,6 +179,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     with entry.lock():
         cached = entry.load()
         if cached is None:
+            _drop_unusable_checkpoint(entry.checkpoint_dir)
             t1 = time.perf_counter()
             model = synthesis.train(
                 inputs, config, seed=settings.seed, device=settings.device,
@@ -244,7 +250,25 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         output_dir=out_dir,
         peak_rss_mb=_peak_rss_mb(),
         previews=previews,
+        findings=list(pixels.findings),
     )
+
+
+def _drop_unusable_checkpoint(checkpoint_dir: Path) -> None:
+    """Remove a checkpoint that is not a safetensors file of ours (torn, planted, foreign).
+
+    Training resumes from a checkpoint it can load; one it refuses would fail the stack on every
+    run, so it is removed (never unpickled) and training starts over.
+    """
+    from seamless_usd.synthesis.checkpoint import CHECKPOINT_NAME, load_checkpoint
+
+    path = Path(checkpoint_dir) / CHECKPOINT_NAME
+    if not path.exists():
+        return
+    try:
+        load_checkpoint(path)
+    except (ValueError, KeyError):
+        path.unlink(missing_ok=True)
 
 
 def _peak_rss_mb() -> float:
