@@ -48,10 +48,11 @@ def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None]) -> Pat
     Raises
     ------
     InputError
-        When the directory does not exist or is not writable (names the file as ``@path@``).
+        When the directory does not exist or is not writable, or writing failed with an
+        :class:`OSError` (disk full, quota, read-only file system); names the file as ``@path@``.
     Exception
-        Whatever ``writer`` raised; the temporary file is removed and the old target, if any,
-        is unchanged.
+        Whatever else ``writer`` raised. In every case the temporary file is removed and the old
+        target, if any, is unchanged.
 
     Examples
     --------
@@ -85,6 +86,12 @@ def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None]) -> Pat
         _fsync_file(tmp)
         _keep_mode(tmp, target)
         os.replace(tmp, target)
+    except OSError as exc:  # disk full, quota, read-only or vanished folder: the user can act on it
+        tmp.unlink(missing_ok=True)
+        reason = exc.strerror or str(exc) or type(exc).__name__
+        raise InputError(
+            f"{asset_ref(target)}: cannot write it ({reason}); check free disk space and permissions"
+        ) from exc
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise

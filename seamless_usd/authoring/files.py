@@ -6,29 +6,63 @@ import shutil
 from pathlib import Path
 from typing import Callable
 
+from pxr import Sdf, Tf
+
+from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write
 from seamless_usd.findings import asset_ref
 
-__all__ = ["BACKUP_SUFFIX", "write_atomically", "backup_once", "relative_asset_path"]
+__all__ = ["BACKUP_SUFFIX", "write_atomically", "check_layer", "backup_once", "relative_asset_path"]
 
 BACKUP_SUFFIX = ".bak"
 
 
-def write_atomically(dest: Path, write: Callable[[Path], object]) -> Path:
+def write_atomically(dest: Path, write: Callable[[Path], object],
+                     check: Callable[[Path], None] | None = None) -> Path:
     """Call ``write(tmp)`` on a temporary file beside ``dest``, then rename it over ``dest``.
 
     The temporary name keeps ``dest``'s extension (USD picks the file format from it). A reader
     sees the old file or the new one, never a half-written one. ``write`` returning ``False``
-    (as ``Sdf.Layer.Export`` does on failure) is an error.
+    (as ``Sdf.Layer.Export`` does on failure) or raising a USD error is an
+    :class:`~seamless_usd.errors.InputError` naming ``dest``; ``check(tmp)``, when given, runs
+    on the complete temporary file and raises to refuse it (e.g. it does not read back).
     """
     dest = Path(dest)
-    dest.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        dest.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"{asset_ref(dest)}: cannot create its folder ({exc.strerror}); "
+                         "check permissions or choose another output") from exc
 
     def checked(tmp: Path) -> None:
-        if write(tmp) is False:
-            raise OSError(f"could not write {asset_ref(dest)}")
+        try:
+            ok = write(tmp)
+        except Tf.ErrorException as exc:
+            raise InputError(f"{asset_ref(dest)}: cannot write it ({_first_line(exc)}); "
+                             "check free disk space and permissions") from None
+        if ok is False:
+            raise InputError(f"{asset_ref(dest)}: cannot write it; check free disk space and permissions")
+        if check is not None:
+            check(tmp)
 
     return atomic_write(dest, checked)
+
+
+def _first_line(exc: BaseException) -> str:
+    """The useful part of a Tf error on one line (``Error occurred writing file: ...``)."""
+    text = str(exc)
+    quoted = [part.split(" : ", 1)[-1].strip(" '") for part in text.splitlines() if " : " in part]
+    return quoted[0] if quoted else " ".join(text.split()) or type(exc).__name__
+
+
+def check_layer(tmp: Path) -> None:
+    """Refuse a written layer that does not open again as a USD layer (short write, disk full)."""
+    try:
+        layer = Sdf.Layer.OpenAsAnonymous(str(tmp))
+    except Tf.ErrorException as exc:
+        raise InputError(f"the written layer does not read back ({_first_line(exc)})") from None
+    if not layer:
+        raise InputError("the written layer does not read back")
 
 
 def backup_once(path: Path) -> Path:
@@ -36,7 +70,13 @@ def backup_once(path: Path) -> Path:
     path = Path(path)
     bak = path.with_name(path.name + BACKUP_SUFFIX)
     if not bak.exists():
-        write_atomically(bak, lambda tmp: shutil.copyfile(path, tmp))
+        size = path.stat().st_size
+
+        def same_size(tmp: Path) -> None:
+            if tmp.stat().st_size != size:
+                raise InputError(f"{asset_ref(bak)}: the backup copy is incomplete; check free disk space")
+
+        write_atomically(bak, lambda tmp: shutil.copyfile(path, tmp), check=same_size)
     return bak
 
 

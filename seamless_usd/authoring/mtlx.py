@@ -109,7 +109,10 @@ def author_mtlx(
         return result
     if mode is WriteMode.IN_PLACE:
         result.backups.append(backup_once(src))
-    write_atomically(out, lambda tmp: mx.writeToXmlFile(doc, str(tmp)))
+    # Written through Python: MaterialX's own file writer ignores write errors (a full disk gives
+    # an empty document), Python raises them.
+    text = mx.writeToXmlString(doc)
+    write_atomically(out, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     result.layers_written.append(out)
     return result
 

@@ -22,7 +22,7 @@ from typing import Iterable, Sequence
 
 from pxr import Ar, Gf, Sdf, Tf, Usd, UsdShade
 
-from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
+from seamless_usd.authoring.files import backup_once, check_layer, relative_asset_path, write_atomically
 from seamless_usd.authoring.schema import (
     PROPERTIES,
     Schema,
@@ -170,7 +170,7 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
     saved = Sdf.Layer.CreateAnonymous(".usda")
     saved.TransferContent(overrides)
     saved.subLayerPaths[0] = relative_asset_path(stage_path, out.parent)
-    write_atomically(out, lambda tmp: saved.Export(str(tmp)))
+    write_atomically(out, lambda tmp: saved.Export(str(tmp)), check=check_layer)
     stale = Sdf.Layer.Find(str(out))
     if stale:  # a previous version is open in this process: show it the new content
         stale.Reload(force=True)
@@ -788,7 +788,7 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
             path = Path(layer.realPath)
             result.backups.append(backup_once(path))
             args = _format_args(layer)
-            write_atomically(path, lambda tmp, layer=layer: layer.Export(str(tmp), args=args))
+            write_atomically(path, lambda tmp, layer=layer: layer.Export(str(tmp), args=args), check=check_layer)
             result.layers_written.append(path)
     finally:
         for layer in changed:

@@ -93,13 +93,23 @@ def _compose(inner: tuple[int, ...], outer: tuple[int, ...] | None) -> tuple[int
     return inner if outer is None else tuple(inner[i] for i in outer if i < len(inner))
 
 
-def _trace(inp: mx.Input, pick, depth: int, flip: bool):
+def _trace(inp: mx.Input, pick, depth: int, flip: bool, seen: set | None = None):
+    """Yield ``(texture node, channels, normal_y_flip)`` for every texture node feeding ``inp``.
+
+    ``seen`` holds the (node, output, channel pick, flip) visits of this trace, so cycles end and
+    shared upstream nodes are walked once, not once per path.
+    """
     if depth > _MAX_DEPTH:
         return
     up = mtlxgraph.upstream(inp)
     if up is None:
         return
     node, out_name = up
+    seen = set() if seen is None else seen
+    visit = (node.getNamePath(), out_name, pick, flip)
+    if visit in seen:
+        return
+    seen.add(visit)
     category = node.getCategory()
     if category in MtlxCategories.TEXTURES:
         channels = mtlxgraph.channels_of(node.getType(), out_name) or "rgb"
@@ -110,17 +120,17 @@ def _trace(inp: mx.Input, pick, depth: int, flip: bool):
     if category in (MtlxCategories.PLACE2D, MtlxCategories.TEXCOORD, MtlxCategories.GEOMPROPVALUE):
         return
     if category in MtlxCategories.SEPARATE and out_name in SEPARATE_OUTPUTS:
-        yield from _trace(node.getInput(MtlxInputs.IN), _compose((SEPARATE_OUTPUTS[out_name],), pick), depth + 1, flip)
+        yield from _trace(node.getInput(MtlxInputs.IN), _compose((SEPARATE_OUTPUTS[out_name],), pick), depth + 1, flip, seen)
         return
     if category == MtlxCategories.EXTRACT:
         index, _ = mtlxgraph.input_value(node, MtlxInputs.INDEX, 0, "")
-        yield from _trace(node.getInput(MtlxInputs.IN), _compose((int(index),), pick), depth + 1, flip)
+        yield from _trace(node.getInput(MtlxInputs.IN), _compose((int(index),), pick), depth + 1, flip, seen)
         return
     if category == MtlxCategories.NORMALMAP:
         scale, _ = mtlxgraph.input_value(node, MtlxInputs.SCALE, 1.0, "")
         flip = flip or (not isinstance(scale, (int, float)) and float(scale[1]) < 0)
     for upstream in node.getInputs():
-        yield from _trace(upstream, pick, depth + 1, flip)
+        yield from _trace(upstream, pick, depth + 1, flip, seen)
 
 
 def _texture_use(material: str, tex: mx.Node, role: RoleUse, flip: bool, document: str) -> TextureUse:

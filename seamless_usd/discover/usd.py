@@ -131,11 +131,21 @@ def _compose(inner: tuple[int, ...], outer: tuple[int, ...] | None) -> tuple[int
     return inner if outer is None else tuple(inner[i] for i in outer if i < len(inner))
 
 
-def _trace(inp, pick, depth, flip):
-    """Yield ``(texture prim, channels, normal_y_flip)`` for every texture node feeding ``inp``."""
+def _trace(inp, pick, depth, flip, seen=None):
+    """Yield ``(texture prim, channels, normal_y_flip)`` for every texture node feeding ``inp``.
+
+    ``seen`` holds the (node, output, channel pick, flip) visits of this trace: a node reached
+    again the same way yields nothing new, so cycles end and shared upstream nodes (diamonds,
+    a mix fed twice by one node) are walked once instead of once per path (exponential).
+    """
     if depth > _MAX_DEPTH:
         return
+    seen = set() if seen is None else seen
     for prim, out_name, out_type in usdgraph.producing_outputs(inp):
+        visit = (str(prim.GetPath()), out_name, pick, flip)
+        if visit in seen:
+            continue
+        seen.add(visit)
         sid = usdgraph.shader_id(prim)
         if is_texture_id(sid):
             channels = channels_of(out_type, out_name) if sid != ShaderIds.UV_TEXTURE else out_name
@@ -145,18 +155,18 @@ def _trace(inp, pick, depth, flip):
             continue
         shader = UsdShade.Shader(prim)
         if sid.startswith(ShaderIds.ND_SEPARATE) and out_name in SEPARATE_OUTPUTS:
-            yield from _trace(shader.GetInput(MtlxInputs.IN), _compose((SEPARATE_OUTPUTS[out_name],), pick), depth + 1, flip)
+            yield from _trace(shader.GetInput(MtlxInputs.IN), _compose((SEPARATE_OUTPUTS[out_name],), pick), depth + 1, flip, seen)
             continue
         if sid.startswith(ShaderIds.ND_EXTRACT):
             index, _ = usdgraph.input_value(prim, MtlxInputs.INDEX, 0)
-            yield from _trace(shader.GetInput(MtlxInputs.IN), _compose((int(index),), pick), depth + 1, flip)
+            yield from _trace(shader.GetInput(MtlxInputs.IN), _compose((int(index),), pick), depth + 1, flip, seen)
             continue
         if sid.startswith(ShaderIds.ND_NORMALMAP):
             scale, _ = usdgraph.input_value(prim, MtlxInputs.SCALE, 1.0)
             flip = flip or _negative_y(scale)
         for upstream in shader.GetInputs():
             if upstream.HasConnectedSource():
-                yield from _trace(upstream, pick, depth + 1, flip)
+                yield from _trace(upstream, pick, depth + 1, flip, seen)
 
 
 def _negative_y(scale) -> bool:

@@ -201,10 +201,12 @@ def read_image(
         info = _info_from(inp, p)
         _check_size(info, p, max_pixels)
         pixels = inp.read_image(0, 0, 0, info.channels, oiio.FLOAT)
-        error = " ".join(inp.geterror().split()) if pixels is None else ""
+        # A truncated JPEG decodes "successfully" (the missing rows grey) with only an error
+        # message left behind: any error recorded while decoding makes the pixels untrustworthy.
+        error = " ".join(inp.geterror().split())
     finally:
         inp.close()
-    if pixels is None or not isinstance(pixels, np.ndarray):
+    if pixels is None or not isinstance(pixels, np.ndarray) or error:
         raise InputError(
             f"{asset_ref(p)}: the image data cannot be decoded ({error or 'read failed'}); "
             "the file is truncated or corrupt: re-export or re-download it"
@@ -334,13 +336,38 @@ def write_pixels(
         try:
             if not out.open(str(tmp), spec) or not out.write_image(data):
                 raise InputError(
-                    f"{asset_ref(target)}: writing failed ({out.geterror().strip()}); "
+                    f"{asset_ref(target)}: writing failed ({' '.join(out.geterror().split())}); "
                     "check free disk space and permissions"
                 )
         finally:
             out.close()
+        _check_written(tmp, target, data.shape)
 
     return atomic_write(target, writer)
+
+
+def _check_written(tmp: Path, target: Path, shape: tuple[int, ...]) -> None:
+    """Read the new file back before it replaces anything.
+
+    Some writers (OpenImageIO's PNG writer among them) report success on a full disk and leave
+    a short or empty file; decoding it is the one check that catches every such case.
+    """
+    inp = oiio.ImageInput.open(str(tmp), _input_config())
+    error = "" if inp is not None else " ".join((oiio.geterror() or "unreadable").split())
+    if inp is not None:
+        try:
+            spec = inp.spec()
+            pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+            error = " ".join(inp.geterror().split())
+            if not error and (pixels is None or (spec.height, spec.width, spec.nchannels) != tuple(shape)):
+                error = "incomplete image"
+        finally:
+            inp.close()
+    if error:
+        raise InputError(
+            f"{asset_ref(target)}: the written file does not read back ({error}); "
+            "check free disk space and permissions"
+        )
 
 
 def alpha_channel(info: ImageInfo) -> int | None:

@@ -1,0 +1,344 @@
+"""Reliability: a corpus of bad inputs, generated here as real files, through ``seamless-usd process``.
+
+Every bad item sits in its own material of one library, beside a good material. For each item
+the run must report one clear line naming ``<prim>`` or ``@asset@``, go on with the rest, leave
+no temporary file behind and end with exit code 1 (2 only for an unreadable top-level input).
+The helpers here (scene and texture writers) are shared by the other reliability tests.
+"""
+from __future__ import annotations
+
+import errno
+import hashlib
+import json
+import os
+import shutil
+import struct
+import subprocess
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+from pxr import Sdf, Usd
+
+from seamless_usd import fileio
+from seamless_usd_cli.main import main
+
+TEX = 112  # just above the 100 px minimum crop: small stacks train in a second with --preset tiny
+PROCESS_ARGS = ("--preset", "tiny", "--max-size", str(TEX))
+
+
+# real files ------------------------------------------------------------------------------------
+
+
+def texture(seed: int, size: int = TEX, channels: int = 3) -> np.ndarray:
+    """A non-tileable pattern (bricks with noise), float32 in [0, 1], (H, W, C)."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:size, 0:size].astype(np.float32)
+    bricks = ((x + 8 * (y // 16 % 2)) % 32 > 2) & (y % 16 > 1)
+    base = 0.25 + 0.5 * bricks[..., None] + 0.15 * rng.random((size, size, channels))
+    return np.clip(base * (0.6 + 0.4 * np.linspace(0, 1, channels)), 0, 1).astype(np.float32)
+
+
+def write_image(path: Path, pixels: np.ndarray, fmt=oiio.UINT8) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    h, w, c = pixels.shape
+    out = oiio.ImageOutput.create(str(path))
+    assert out is not None, oiio.geterror()
+    assert out.open(str(path), oiio.ImageSpec(w, h, c, fmt)), out.geterror()
+    assert out.write_image(np.ascontiguousarray(pixels, dtype=np.float32)), out.geterror()
+    out.close()
+    return path
+
+
+def png_claiming(path: Path, width: int, height: int) -> Path:
+    """A small valid PNG whose IHDR claims ``width x height`` (valid CRC, same image data)."""
+    small = write_image(path.with_name("_small_" + path.name), texture(9, 8))
+    data = small.read_bytes()
+    small.unlink()
+    out, pos = [data[:8]], 8
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos: pos + 4])
+        raw = data[pos: pos + 12 + length]
+        if raw[4:8] == b"IHDR":
+            body = struct.pack(">II", width, height) + raw[16:21]
+            raw = struct.pack(">I", 13) + b"IHDR" + body + struct.pack(">I", zlib.crc32(b"IHDR" + body))
+        out.append(raw)
+        pos += 12 + length
+    path.write_bytes(b"".join(out))
+    return path
+
+
+MATERIAL = """
+        def Material "{name}"
+        {{
+            token outputs:surface.connect = </Root/Looks/{name}/Surface.outputs:surface>
+
+            def Shader "Surface"
+            {{
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor.connect = </Root/Looks/{name}/Tex.outputs:rgb>
+                token outputs:surface
+            }}
+
+            def Shader "St"
+            {{
+                uniform token info:id = "UsdPrimvarReader_float2"
+                string inputs:varname = "st"
+                float2 outputs:result
+            }}
+
+            def Shader "Tex"
+            {{
+                uniform token info:id = "UsdUVTexture"
+                asset inputs:file = @{asset}@
+                float2 inputs:st.connect = </Root/Looks/{name}/St.outputs:result>
+                float3 outputs:rgb
+            }}
+        }}
+"""
+
+
+def write_scene(path: Path, materials: dict[str, str], sublayers: tuple[str, ...] = (),
+                references: tuple[str, ...] = (), extra: str = "") -> Path:
+    """A ``.usda`` with one UsdPreviewSurface material per ``name -> texture asset path``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    subs = f"    subLayers = [{', '.join(f'@{s}@' for s in sublayers)}]\n" if sublayers else ""
+    refs = "".join(
+        f'    def "Ref{i}" (prepend references = @{r}@)\n    {{\n    }}\n' for i, r in enumerate(references)
+    )
+    body = "".join(MATERIAL.format(name=n, asset=a) for n, a in materials.items())
+    path.write_text(
+        f'#usda 1.0\n(\n    defaultPrim = "Root"\n{subs})\n\ndef Xform "Root"\n{{\n{refs}'
+        f'    def Scope "Looks"\n    {{{body}{extra}\n    }}\n}}\n',
+        encoding="utf-8",
+    )
+    assert Usd.Stage.Open(str(path)), f"{path} must be a valid stage"
+    return path
+
+
+def hashes(root: Path) -> dict[str, str]:
+    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def leftovers(root: Path) -> list[str]:
+    """Temporary files of atomic writes left anywhere under ``root``."""
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*") if ".tmp" in p.name)
+
+
+def image_size(path: Path) -> tuple[int, int]:
+    inp = oiio.ImageInput.open(str(path))
+    assert inp is not None, f"{path} does not open: {oiio.geterror()}"
+    try:
+        spec = inp.spec()
+        pixels = inp.read_image(oiio.FLOAT)
+        assert pixels is not None, f"{path} does not decode: {inp.geterror()}"
+        return spec.width, spec.height
+    finally:
+        inp.close()
+
+
+def _pixels(path: Path) -> np.ndarray:
+    inp = oiio.ImageInput.open(str(path))
+    try:
+        return inp.read_image(oiio.FLOAT)
+    finally:
+        inp.close()
+
+
+def run_cli(capsys, *args: str) -> tuple[int, dict, str]:
+    code = main(["process", *PROCESS_ARGS, "--json", *args])
+    captured = capsys.readouterr()
+    return code, json.loads(captured.out), captured.err
+
+
+# the corpus ------------------------------------------------------------------------------------
+
+
+@dataclass
+class Bad:
+    name: str  # material name
+    asset: str  # as authored in the stage
+    expect: str  # "error" (a one-line error naming the item) or "ok" (processed into a valid tile)
+
+
+def _corpus(tex: Path, far: Path) -> list[Bad]:
+    """Write the bad texture files under ``tex`` and list the materials using them."""
+    png = write_image(tex / "good.png", texture(1)).read_bytes()
+    jpg = write_image(tex / "good.jpg", texture(2)).read_bytes()
+    exr = write_image(tex / "good.exr", texture(3), oiio.HALF).read_bytes()
+    (tex / "good.jpg").unlink()
+    (tex / "good.exr").unlink()
+    rng = np.random.default_rng(0)
+
+    def garble(data: bytes, start: int) -> bytes:
+        return data[:start] + rng.integers(0, 256, len(data) - start, dtype=np.uint8).tobytes()
+
+    files = {
+        "trunc.png": png[: len(png) * 2 // 5],
+        "corrupt.png": garble(png, 60),
+        "trunc.jpg": jpg[: len(jpg) // 3],
+        "corrupt.jpg": jpg[:2] + garble(jpg, 2)[2:],
+        "trunc.exr": exr[: len(exr) // 2],
+        "corrupt.exr": garble(exr, len(exr) // 3),
+        "empty.png": b"",
+        "text.png": b"this is not an image\n" * 10,
+    }
+    for name, data in files.items():
+        (tex / name).write_bytes(data)
+    write_image(tex / "one_pixel.png", texture(4, 1))
+    png_claiming(tex / "huge.png", 50_000, 50_000)
+    # wrong extensions: a PNG named .jpg / .exr, an EXR named .png
+    write_image(tex / "other.png", texture(5))
+    (tex / "other.png").rename(tex / "png_named.jpg")
+    (tex / "exr_named.png").write_bytes(exr)
+    (tex / "png_as.exr").write_bytes(png)
+    nonfinite = texture(6)
+    nonfinite[3:9, 3:9, 0] = np.nan
+    nonfinite[20:24, 50:60, 1] = np.inf
+    nonfinite[40, 40, 2] = -np.inf
+    write_image(tex / "nonfinite.exr", nonfinite, oiio.FLOAT)
+    write_image(tex / "dir with spaces" / "bríck ñ 木 tex.png", texture(7))
+    write_image(far / "far.png", texture(8))
+
+    items = [Bad(f"Bad_{Path(n).stem}_{Path(n).suffix[1:]}", f"./tex/{n}", "error") for n in files]
+    items += [
+        Bad("Bad_one_pixel", "./tex/one_pixel.png", "error"),
+        Bad("Bad_huge_header", "./tex/huge.png", "error"),
+        Bad("Bad_missing_file", "./tex/not_there.png", "error"),
+        Bad("Odd_png_named_jpg", "./tex/png_named.jpg", "ok"),
+        Bad("Odd_exr_named_png", "./tex/exr_named.png", "ok"),
+        Bad("Odd_png_named_exr", "./tex/png_as.exr", "ok"),
+        Bad("Odd_nonfinite_exr", "./tex/nonfinite.exr", "ok"),
+        Bad("Odd_unicode_path", "./tex/dir with spaces/bríck ñ 木 tex.png", "ok"),
+        # outputs are named from the stem only: a source far up the tree still lands in the output folder
+        Bad("Odd_escaping_asset", f"../../{far.parent.name}/{far.name}/../{far.name}/far.png", "ok"),
+    ]
+    return items
+
+
+CYCLE = """
+        def Material "Bad_cycle"
+        {
+            token outputs:surface.connect = </Root/Looks/Bad_cycle/Surface.outputs:surface>
+
+            def Shader "Surface"
+            {
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor.connect = </Root/Looks/Bad_cycle/A.outputs:out>
+                token outputs:surface
+            }
+
+            def NodeGraph "A"
+            {
+                color3f inputs:in.connect = </Root/Looks/Bad_cycle/B.outputs:out>
+                color3f outputs:out.connect = </Root/Looks/Bad_cycle/B.outputs:out>
+            }
+
+            def NodeGraph "B"
+            {
+                color3f outputs:out.connect = </Root/Looks/Bad_cycle/A.outputs:out>
+            }
+
+            def Shader "Mix"
+            {
+                uniform token info:id = "ND_mix_color3"
+                color3f inputs:fg.connect = </Root/Looks/Bad_cycle/Mix.outputs:out>
+                color3f inputs:bg.connect = </Root/Looks/Bad_cycle/Mix.outputs:out>
+                color3f outputs:out
+            }
+        }
+"""
+
+
+@pytest.fixture(scope="module")
+def shared_cache(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("reliability-cache")
+
+
+def test_bad_input_corpus_each_item_one_line_rest_goes_on(tmp_path, capsys, shared_cache):
+    lib = tmp_path / "lib"
+    items = _corpus(lib / "tex", tmp_path / "far")
+    good = {"Good": "./tex/good.png"}
+    scene = write_scene(
+        lib / "scene.usda",
+        {**good, **{b.name: b.asset for b in items}},
+        sublayers=("./missing_sublayer.usda",),
+        references=("./missing_reference.usda",),
+        extra=CYCLE + CYCLE.replace("Bad_cycle", "Bad_cycle2").replace(
+            "color3f inputs:diffuseColor.connect = </Root/Looks/Bad_cycle2/A.outputs:out>",
+            "color3f inputs:diffuseColor.connect = </Root/Looks/Bad_cycle2/Mix.outputs:out>"),
+    )
+    broken_stage = lib / "broken.usda"
+    broken_stage.write_text("#usda 1.0\ndef Xform (\n", encoding="utf-8")
+    before = hashes(lib)
+
+    code, report, err = run_cli(capsys, str(scene), "--cache-dir", str(shared_cache))
+    assert code == 1, err
+    by_material = {s["material"]: s for s in report["stacks"]}
+    findings = report["findings"]
+    handled, problems, tried = [], [], 0
+
+    def mentions(item: Bad) -> list[dict]:
+        asset = Path(item.asset).name
+        return [f for f in findings if f"/Looks/{item.name}" in f["where"] + f["message"] + f.get("material", "")
+                or asset in f["where"] + f["message"]]
+
+    for item in items:
+        tried += 1
+        stack = by_material.get(f"</Root/Looks/{item.name}>")
+        about = mentions(item)
+        if item.expect == "error":
+            errors = [f for f in about if f["severity"] in ("error", "skipped")]
+            ok = bool(errors) and all("\n" not in f["message"] for f in about)
+            ok = ok and all(("<" in f["where"] or "@" in f["where"]) for f in errors)
+            ok = ok and (stack is None or stack["status"] == "failed")
+        else:
+            ok = stack is not None and stack["status"] in ("passed", "not-passed")
+            for m in stack["maps"] if ok else []:
+                ok = ok and bool(np.isfinite(_pixels(Path(m["output"]))).all())
+        if ok:
+            handled.append(item.name)
+        else:
+            problems.append((item.name, stack and stack["status"], stack and stack["message"], about))
+    # cycles: the scan goes on, the material is simply without maps (or reported), never a crash
+    for name in ("Bad_cycle", "Bad_cycle2"):
+        tried += 1
+        cyc = [f for f in findings if name in f["where"] + f.get("material", "")]
+        if all("\n" not in f["message"] for f in cyc):
+            handled.append(name)
+        else:
+            problems.append((name, cyc))
+    # missing sublayer and reference: warnings naming the asset; the rest composed
+    for asset in ("missing_sublayer.usda", "missing_reference.usda"):
+        tried += 1
+        if any(asset in f["message"] or asset in f["where"] for f in findings if f["code"] == "composition-error"):
+            handled.append(asset)
+        else:
+            problems.append((asset, [f for f in findings if f["code"] == "composition-error"]))
+    assert by_material["</Root/Looks/Good>"]["status"] in ("passed", "not-passed")
+    for stack in report["stacks"]:
+        for m in stack["maps"]:
+            if m["output"]:
+                w, h = image_size(Path(m["output"]))
+                assert (w, h) == tuple(stack["tile_size"][::-1])
+                assert Path(m["output"]).parent == (lib / "tileable").resolve()
+    assert leftovers(lib) == []
+    assert hashes(lib) == {**before, **{k: v for k, v in hashes(lib).items() if k not in before}}
+    assert (lib / "scene.seamless.usda").is_file() and Usd.Stage.Open(str(lib / "scene.seamless.usda"))
+
+    # an unreadable top-level stage among good ones: exit 2, the good one still processed
+    tried += 1
+    code2, report2, _ = run_cli(capsys, str(broken_stage), str(scene), "--cache-dir", str(shared_cache))
+    if code2 == 2 and report2["unreadable"] == [str(broken_stage)] and any(
+            s["status"] in ("passed", "not-passed", "reused") for s in report2["stacks"]):
+        handled.append("broken.usda")
+    else:
+        problems.append(("broken.usda", code2, report2["unreadable"]))
+    with capsys.disabled():
+        print(f"\nbad inputs (one process run): tried {tried}, handled cleanly {len(handled)}")
+    assert not problems, problems
+    assert len(handled) == tried
