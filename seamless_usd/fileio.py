@@ -14,7 +14,10 @@ Example
 """
 from __future__ import annotations
 
+import glob
 import os
+import re
+import socket
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -26,6 +29,7 @@ __all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine"]
 
 _UMASK = os.umask(0o022)  # read once at import (os.umask can only be read by setting it)
 os.umask(_UMASK)
+_OWNER = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname())[:32] or "host"  # in temporary file names
 
 
 def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None]) -> Path:
@@ -38,7 +42,8 @@ def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None]) -> Pat
     writer
         Called once with the temporary path; it must create that file (it may write it by name,
         e.g. an image library choosing the format from the extension: the temporary name keeps
-        the target's suffix, ``.name.<random>.tmp.png``).
+        the target's suffix, ``.name.<host>-<pid>.<random>.tmp.png``). Temporary files of the
+        same target left by a killed process on this host are removed first.
 
     Returns
     -------
@@ -70,8 +75,10 @@ def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None]) -> Pat
             "create it or choose another output folder"
         )
     suffix = "".join(target.suffixes[-1:])  # keep ".png" so format-by-extension writers work
+    _remove_stale_temps(target, suffix)
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".tmp{suffix}", dir=directory)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.stem}.{_OWNER}-{os.getpid()}.", suffix=f".tmp{suffix}",
+                                        dir=directory)
     except OSError as exc:
         raise InputError(
             f"{asset_ref(target)}: cannot write in {asset_ref(directory)} ({exc.strerror}); "
@@ -97,6 +104,42 @@ def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None]) -> Pat
         raise
     _fsync_dir(directory)
     return target
+
+
+def _remove_stale_temps(target: Path, suffix: str) -> None:
+    """Remove temporary files of ``target`` left by a killed writer on this host.
+
+    Temporary names carry the host and process id of their writer (``.a.host-123.x1y2.tmp.png``);
+    one whose process no longer exists is a leftover (SIGKILL, power loss) and goes. Files of
+    live processes, of other hosts (shared storage) or of other names are never touched.
+    """
+    pattern = re.compile(
+        re.escape(f".{target.stem}.") + r"(?P<owner>[A-Za-z0-9_]+)-(?P<pid>\d+)\.[^.]+" + re.escape(f".tmp{suffix}")
+    )
+    try:
+        siblings = list(target.parent.glob(f".{glob.escape(target.stem)}.*.tmp{glob.escape(suffix)}"))
+    except OSError:
+        return
+    for path in siblings:
+        match = pattern.fullmatch(path.name)
+        if match is None or match["owner"] != _OWNER or _alive(int(match["pid"])):
+            continue
+        try:
+            path.unlink()
+        except OSError:
+            pass
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # exists, owned by someone else
+        return True
+    return True
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:

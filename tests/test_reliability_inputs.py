@@ -342,3 +342,20 @@ def test_bad_input_corpus_each_item_one_line_rest_goes_on(tmp_path, capsys, shar
         print(f"\nbad inputs (one process run): tried {tried}, handled cleanly {len(handled)}")
     assert not problems, problems
     assert len(handled) == tried
+
+
+def test_temporary_files_of_killed_writers_are_removed_by_the_next_write(tmp_path):
+    target = tmp_path / "albedo.tile.png"
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    owner = fileio._OWNER
+    stale = tmp_path / f".albedo.tile.{owner}-{dead.pid}.abc123.tmp.png"
+    alive = tmp_path / f".albedo.tile.{owner}-{os.getpid()}.def456.tmp.png"
+    other_host = tmp_path / f".albedo.tile.elsewhere-{dead.pid}.ghi789.tmp.png"
+    other_file = tmp_path / f".brick.{owner}-{dead.pid}.jkl000.tmp.png"
+    for p in (stale, alive, other_host, other_file):
+        p.write_bytes(b"partial")
+    fileio.atomic_write_bytes(target, b"new")
+    assert target.read_bytes() == b"new"
+    assert not stale.exists()
+    assert alive.exists() and other_host.exists() and other_file.exists()
