@@ -7,6 +7,7 @@ The helpers here (scene and texture writers) are shared by the other reliability
 """
 from __future__ import annotations
 
+import contextlib
 import errno
 import hashlib
 import json
@@ -359,3 +360,98 @@ def test_temporary_files_of_killed_writers_are_removed_by_the_next_write(tmp_pat
     assert target.read_bytes() == b"new"
     assert not stale.exists()
     assert alive.exists() and other_host.exists() and other_file.exists()
+
+
+# read-only output folder, full disk -------------------------------------------------------------
+
+
+@contextlib.contextmanager
+def small_filesystem(path: Path, size: str, read_only: bool = False):
+    """A real tmpfs of ``size`` mounted at ``path`` (as root), else None."""
+    path.mkdir(parents=True)
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        yield None
+        return
+    options = f"size={size}" + (",ro" if read_only else "")
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(path)], capture_output=True).returncode:
+        yield None
+        return
+    try:
+        yield path
+    finally:
+        subprocess.run(["umount", "-l", str(path)], capture_output=True)
+
+
+def _three_materials(lib: Path) -> Path:
+    names = {f"M{i}": f"./tex/m{i}.png" for i in range(3)}
+    for i in range(3):
+        write_image(lib / "tex" / f"m{i}.png", texture(20 + i))
+    return write_scene(lib / "scene.usda", names)
+
+
+def _write_failures(report: dict) -> list[str]:
+    return [s["message"] for s in report["stacks"] if s["status"] == "failed"]
+
+
+def _one_line_naming_asset(message: str) -> bool:
+    return "\n" not in message and message.count("@") >= 2
+
+
+def test_read_only_output_folder(tmp_path, capsys, shared_cache):
+    scene = _three_materials(tmp_path / "lib")
+    with small_filesystem(tmp_path / "ro", "1m", read_only=True) as mounted:
+        out = mounted
+        if out is None:
+            if os.geteuid() == 0:
+                pytest.skip("running as root without mount: a chmod'ed folder stays writable")
+            out = tmp_path / "ro"
+            out.chmod(0o555)
+        code, report, _ = run_cli(capsys, str(scene), "--output-dir", str(out), "--cache-dir", str(shared_cache))
+        failures = _write_failures(report)
+        assert code == 1
+        assert len(failures) == 3 and all(_one_line_naming_asset(m) for m in failures), failures
+        assert all("read-only" in m.lower() or "permission" in m.lower() for m in failures), failures
+        assert list(out.iterdir()) == []
+    assert leftovers(tmp_path / "lib") == []
+
+
+def test_full_disk_real_small_filesystem(tmp_path, capsys, shared_cache):
+    scene = _three_materials(tmp_path / "lib")
+    with small_filesystem(tmp_path / "full", "200k") as out:
+        if out is None:
+            pytest.skip("cannot mount a small tmpfs here; the fault-injecting test covers a full disk")
+        code, report, _ = run_cli(capsys, str(scene), "--output-dir", str(out), "--cache-dir", str(shared_cache))
+        failures = _write_failures(report)
+        written = [Path(m["output"]) for s in report["stacks"] if s["status"] != "failed" for m in s["maps"]]
+        assert code == 1 and failures and written, report["stacks"]
+        assert all(_one_line_naming_asset(m) for m in failures), failures
+        assert all("space" in m.lower() or "read back" in m.lower() for m in failures), failures
+        for path in written:
+            image_size(path)  # complete: opens and decodes
+        assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in written)  # no partial file
+        layer = scene.with_name("scene.seamless.usda")
+        assert Usd.Stage.Open(str(layer))  # the layer holds the stacks that were written
+
+
+def test_full_disk_fault_injected_at_flush(tmp_path, capsys, shared_cache, monkeypatch):
+    """Portable: the second tile's flush fails with ENOSPC, as a full disk makes it."""
+    scene = _three_materials(tmp_path / "lib")
+    real_fsync = fileio._fsync_file
+    calls = []
+
+    def failing_fsync(path: Path) -> None:
+        if path.suffix == ".png":
+            calls.append(path)
+            if len(calls) == 2:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        real_fsync(path)
+
+    monkeypatch.setattr(fileio, "_fsync_file", failing_fsync)
+    code, report, _ = run_cli(capsys, str(scene), "--cache-dir", str(shared_cache))
+    failures = _write_failures(report)
+    assert code == 1 and len(failures) == 1, report["stacks"]
+    assert _one_line_naming_asset(failures[0]) and "No space left on device" in failures[0]
+    out = tmp_path / "lib" / "tileable"
+    assert leftovers(tmp_path / "lib") == []
+    assert len(list(out.iterdir())) == 2
+    assert Usd.Stage.Open(str(scene.with_name("scene.seamless.usda")))
