@@ -141,6 +141,8 @@ def _stack_table(report: Report, console: Console) -> None:
 
 def run(args: argparse.Namespace) -> int:
     console = Console(stderr=True)
+    if not console.is_terminal:
+        console = Console(stderr=True, width=120)  # logs and CI: wide enough that prim paths stay whole
     with _ProgressView(console) as view:
         report = process_paths([Path(p) for p in args.paths], _options(args, view))
     _summary(report, console)
