@@ -220,3 +220,59 @@ def test_two_runs_at_once_share_library_and_cache(library, tmp_path):
         for stack in report["stacks"]:
             origins.setdefault(stack["material"], []).append(stack["origin"])
     assert all(sorted(o) == ["cache", "trained"] for o in origins.values()), origins
+
+
+def test_two_in_place_runs_at_once_keep_the_originals_in_their_backups(library, tmp_path):
+    cache = tmp_path / "cache"
+    originals = {scene: scene.read_bytes() for scene in _scenes(library)}
+    runs = [_start(library, cache, "--json", "--in-place", "--iterations", "6") for _ in range(2)]
+    reports = [_finish(run)[1] for run in runs]
+    for scene, original in originals.items():
+        backup = scene.with_name(scene.name + ".bak")
+        assert backup.read_bytes() == original, "the backup must hold the original, not the other run's edit"
+        stage = Usd.Stage.Open(str(scene))
+        for prim in stage.Traverse():
+            shader = UsdShade.Shader(prim)
+            if shader and shader.GetIdAttr().Get() == "UsdUVTexture":
+                assert "tileable" in shader.GetInput("file").Get().path
+        transforms = [p for p in stage.Traverse()
+                      if UsdShade.Shader(p) and UsdShade.Shader(p).GetIdAttr().Get() == "UsdTransform2d"]
+        textures = [p for p in stage.Traverse()
+                    if UsdShade.Shader(p) and UsdShade.Shader(p).GetIdAttr().Get() == "UsdUVTexture"]
+        assert len(transforms) <= len(textures), "a UV transform was added twice"
+    assert not [p for p in library.rglob("*") if ".tmp" in p.name]
+    assert all(r["exit_code"] in (0, 1) for r in reports)
+
+
+WRITER = """
+import sys
+from pathlib import Path
+from pxr import Sdf
+from seamless_usd.authoring.files import check_layer, write_atomically
+target, who, prims = Path(sys.argv[1]), sys.argv[2], int(sys.argv[3])
+for round in range(int(sys.argv[4])):
+    layer = Sdf.Layer.CreateAnonymous(".usda")
+    layer.customLayerData = {"writer": who, "round": round}
+    for i in range(prims):
+        Sdf.CreatePrimInLayer(layer, f"/P{i}").specifier = Sdf.SpecifierDef
+    write_atomically(target, lambda tmp: layer.Export(str(tmp)), check=check_layer)
+"""
+
+
+def test_concurrent_layer_writers_leave_one_complete_layer(tmp_path):
+    target = tmp_path / "scene.seamless.usda"
+    prims, rounds = 400, 25
+    writers = [subprocess.Popen([sys.executable, "-c", WRITER, str(target), str(k), str(prims), str(rounds)])
+               for k in range(3)]
+    seen = 0
+    while any(w.poll() is None for w in writers):
+        if target.exists():
+            layer = Sdf.Layer.OpenAsAnonymous(str(target))
+            assert layer and len(layer.rootPrims) == prims, "a reader saw a partial layer"
+            seen += 1
+        time.sleep(0.005)
+    assert all(w.returncode == 0 for w in writers)
+    layer = Sdf.Layer.OpenAsAnonymous(str(target))
+    assert len(layer.rootPrims) == prims and layer.customLayerData["round"] == rounds - 1
+    assert seen > 0
+    assert [p.name for p in tmp_path.iterdir()] == [target.name]

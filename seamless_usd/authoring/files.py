@@ -1,10 +1,16 @@
 """File helpers for authoring: atomic layer/document writes, backups, relative asset paths."""
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import os
 import shutil
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Callable
+
+from filelock import FileLock
 
 from pxr import Sdf, Tf
 
@@ -12,7 +18,7 @@ from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write
 from seamless_usd.findings import asset_ref
 
-__all__ = ["BACKUP_SUFFIX", "write_atomically", "check_layer", "backup_once", "relative_asset_path"]
+__all__ = ["BACKUP_SUFFIX", "write_atomically", "check_layer", "layer_lock", "backup_once", "relative_asset_path"]
 
 BACKUP_SUFFIX = ".bak"
 
@@ -63,6 +69,23 @@ def check_layer(tmp: Path) -> None:
         raise InputError(f"the written layer does not read back ({_first_line(exc)})") from None
     if not layer:
         raise InputError("the written layer does not read back")
+
+
+@contextlib.contextmanager
+def layer_lock(path: Path) -> Iterator[None]:
+    """Hold the lock of the layer or document at ``path`` while reading, backing up and writing it.
+
+    Every write is atomic on its own; the lock keeps two runs on one library from interleaving
+    the steps around it (a ``.bak`` copied from a layer the other run has just edited). The lock
+    file lives in the temporary folder, keyed by the resolved path, so scene folders stay clean;
+    it serialises the writers of one machine.
+    """
+    key = hashlib.sha256(str(Path(path).resolve()).encode("utf-8")).hexdigest()[:32]
+    uid = getattr(os, "getuid", lambda: 0)()
+    folder = Path(tempfile.gettempdir()) / f"seamless-usd-locks-{uid}"
+    folder.mkdir(mode=0o700, exist_ok=True)
+    with FileLock(str(folder / f"{key}.lock")):
+        yield
 
 
 def backup_once(path: Path) -> Path:

@@ -16,7 +16,7 @@ from typing import Sequence
 
 import MaterialX as mx
 
-from seamless_usd.authoring.files import backup_once, relative_asset_path, write_atomically
+from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, WriteMode
 from seamless_usd.discover.types import Origin
 from seamless_usd.errors import InputError
@@ -107,12 +107,13 @@ def author_mtlx(
         return result
     if result.dry_run:
         return result
-    if mode is WriteMode.IN_PLACE:
-        result.backups.append(backup_once(src))
     # Written through Python: MaterialX's own file writer ignores write errors (a full disk gives
     # an empty document), Python raises them.
     text = mx.writeToXmlString(doc)
-    write_atomically(out, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    with layer_lock(src):
+        if mode is WriteMode.IN_PLACE:
+            result.backups.append(backup_once(src))
+        write_atomically(out, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     result.layers_written.append(out)
     return result
 

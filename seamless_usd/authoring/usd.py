@@ -15,6 +15,7 @@ once; if the materials' results disagree the first is kept and a finding explain
 """
 from __future__ import annotations
 
+import contextlib
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -22,7 +23,7 @@ from typing import Iterable, Sequence
 
 from pxr import Ar, Gf, Sdf, Tf, Usd, UsdShade
 
-from seamless_usd.authoring.files import backup_once, check_layer, relative_asset_path, write_atomically
+from seamless_usd.authoring.files import backup_once, check_layer, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.authoring.schema import (
     PROPERTIES,
     Schema,
@@ -124,24 +125,26 @@ def author_usd(
     out = Path(output_layer).resolve() if output_layer else default_output_layer(stage_path)
     if out == stage_path and not in_place:
         raise UsageError(f"{asset_ref(out)}: the output layer must not be the input stage")
-    # MaterialX documents the stage references: written by author_mtlx in the same mode
-    from seamless_usd.authoring.mtlx import author_mtlx
+    # One writer of this stage's layers at a time (two runs on one library): see layer_lock
+    with layer_lock(stage_path) if mode is not WriteMode.DRY_RUN else contextlib.nullcontext():
+        # MaterialX documents the stage references: written by author_mtlx in the same mode
+        from seamless_usd.authoring.mtlx import author_mtlx
 
-    documents = list(dict.fromkeys(
-        m.map.document for r in results for m in r.maps if m.map.origin is Origin.MTLX and m.map.document))
-    doc_results = [author_mtlx(doc, results, mode=mode, plan_mode=plan_mode) for doc in documents]
-    if in_place:
-        result = _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
-    else:
-        retarget = {Path(doc).resolve(): r.output for doc, r in zip(documents, doc_results)
-                    if r.output and (r.layers_written or (r.dry_run and r.plan))}
-        result = _author_new_layer(stage_path, results, out, mode is WriteMode.DRY_RUN, retarget)
-    for doc_result in doc_results:
-        result.layers_written += doc_result.layers_written
-        result.backups += doc_result.backups
-        result.edited_prims += doc_result.edited_prims
-        result.findings += doc_result.findings
-        result.plan += doc_result.plan
+        documents = list(dict.fromkeys(
+            m.map.document for r in results for m in r.maps if m.map.origin is Origin.MTLX and m.map.document))
+        doc_results = [author_mtlx(doc, results, mode=mode, plan_mode=plan_mode) for doc in documents]
+        if in_place:
+            result = _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
+        else:
+            retarget = {Path(doc).resolve(): r.output for doc, r in zip(documents, doc_results)
+                        if r.output and (r.layers_written or (r.dry_run and r.plan))}
+            result = _author_new_layer(stage_path, results, out, mode is WriteMode.DRY_RUN, retarget)
+        for doc_result in doc_results:
+            result.layers_written += doc_result.layers_written
+            result.backups += doc_result.backups
+            result.edited_prims += doc_result.edited_prims
+            result.findings += doc_result.findings
+            result.plan += doc_result.plan
     return result
 
 
