@@ -257,11 +257,14 @@ def _synthesis():
 
 
 def run_seamlessgan(
-    stack: dict[str, tuple[np.ndarray, bool]], preset: str, seed: int, log: Callable[[str], None] = _log
+    stack: dict[str, tuple[np.ndarray, bool]], preset: str, seed: int, log: Callable[[str], None] = _log,
+    iterations: int | None = None,
 ) -> MethodResult:
-    """Train SeamlessGAN on the stack with ``preset`` and sample one tile per map."""
+    """Train SeamlessGAN on the stack with ``preset`` (``iterations`` overrides its count) and sample one tile per map."""
     syn = _synthesis()
     config = syn.get_preset(preset)
+    if iterations is not None:
+        config = config.replace(iterations=iterations)
     maps = [syn.MapInput(k, np.ascontiguousarray(px, dtype=np.float32), is_normal) for k, (px, is_normal) in stack.items()]
     step = max(1, config.iterations // 10)
 
@@ -277,6 +280,7 @@ def run_seamlessgan(
     tiles = {k: np.asarray(v, dtype=np.float32) for k, v in result.maps.items()}
     info = {
         "preset": preset,
+        "iterations": config.iterations,
         "crop_size": _jsonable(getattr(result, "crop_size", None)),
         "passed": _jsonable(getattr(result, "passed", None)),
         "train_seconds": round(t1 - t0, 2),
@@ -370,6 +374,7 @@ def run(
     *,
     preset: str = "default",
     seed: int = 0,
+    iterations: int | None = None,
     out: Path = DEFAULT_OUT,
     textures_dir: Path = SHARED_DIR,
     max_size: int | None = None,
@@ -409,14 +414,17 @@ def run(
         "complete": False,
     }
     if SEAMLESSGAN in methods:  # presets are tuned over time: keep what this run used
-        result["settings"]["preset_config"] = json.loads(_synthesis().get_preset(preset).to_json())
+        config = _synthesis().get_preset(preset)
+        if iterations is not None:
+            config = config.replace(iterations=iterations)
+        result["settings"]["preset_config"] = json.loads(config.to_json())
     for stack_name in stacks:
         stack = load_stack(stack_name, textures_dir, max_size)
         result["settings"]["stacks"][stack_name] = STACKS[stack_name].note
         for method in methods:
             log(f"{stack_name}: {method} ...")
             if method == SEAMLESSGAN:
-                res = run_seamlessgan(stack, preset, seed, log)
+                res = run_seamlessgan(stack, preset, seed, log, iterations=iterations)
             else:
                 res = run_baseline(method, stack)
             for map_name, (src, is_normal) in stack.items():
@@ -569,6 +577,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--stacks", default=None, help=f"comma-separated, from: {', '.join(STACKS)} (default: all available)")
     p.add_argument("--methods", default=",".join(METHODS), help=f"comma-separated, from: {', '.join(METHODS)} (default: all)")
     p.add_argument("--seed", type=int, default=0, help="training and sampling seed (default: %(default)s)")
+    p.add_argument("--iterations", type=int, default=None,
+                   help="override the preset's training iterations (quality-vs-time curves)")
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: benchmarks/results)")
     p.add_argument("--textures-dir", type=Path, default=SHARED_DIR, help="MaterialX images for the mx_* stacks (default: ../shared/textures from the repository root)")
     p.add_argument("--max-size", type=int, default=None, help="downscale inputs to at most this many px (quick runs)")
@@ -606,6 +616,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             methods,
             preset=a.preset,
             seed=a.seed,
+            iterations=a.iterations,
             out=a.out,
             textures_dir=a.textures_dir,
             max_size=a.max_size,
