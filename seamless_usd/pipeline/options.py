@@ -13,7 +13,7 @@ __all__ = ["Options", "ProgressEvent"]
 class ProgressEvent:
     """What a long run reports: a stack starting/finishing, or training/sampling progress."""
 
-    kind: str  # "stack-start", "train", "sample", "stack-done", "write"
+    kind: str  # "stack-start", "train", "sample", "stack-done"
     stack_id: str
     index: int  # 0-based index of the stack among the stacks to process
     total: int  # stacks to process in this run
