@@ -455,3 +455,19 @@ def test_full_disk_fault_injected_at_flush(tmp_path, capsys, shared_cache, monke
     assert leftovers(tmp_path / "lib") == []
     assert len(list(out.iterdir())) == 2
     assert Usd.Stage.Open(str(scene.with_name("scene.seamless.usda")))
+
+
+def test_pixel_limit_is_a_job_setting_refused_before_decoding(tmp_path, shared_cache):
+    from seamless_usd.discover import scan_paths
+    from seamless_usd.errors import InputError
+    from seamless_usd.pipeline.stackjob import JobSettings, StackJob, run_stack
+
+    write_image(tmp_path / "tex" / "a.png", texture(40))
+    [stack] = scan_paths([write_scene(tmp_path / "scene.usda", {"A": "./tex/a.png"})]).stacks
+    settings = JobSettings(preset="tiny", cache_dir=shared_cache, max_pixels=TEX * TEX - 1)
+    with pytest.raises(InputError, match=rf"@.*a\.png@: the header claims {TEX}x{TEX} .*limit of {TEX * TEX - 1}"):
+        run_stack(StackJob(stack=stack, settings=settings, output_dir=tmp_path / "out"))
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").iterdir())
+    done = run_stack(StackJob(stack=stack, settings=JobSettings(preset="tiny", cache_dir=shared_cache,
+                                                                  max_pixels=TEX * TEX), output_dir=tmp_path / "out"))
+    assert all(Path(m.output).is_file() for m in done.maps.values())
