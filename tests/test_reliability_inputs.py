@@ -273,8 +273,16 @@ def test_bad_input_corpus_each_item_one_line_rest_goes_on(tmp_path, capsys, shar
             "color3f inputs:diffuseColor.connect = </Root/Looks/Bad_cycle2/A.outputs:out>",
             "color3f inputs:diffuseColor.connect = </Root/Looks/Bad_cycle2/Mix.outputs:out>"),
     )
-    broken_stage = lib / "broken.usda"
-    broken_stage.write_text("#usda 1.0\ndef Xform (\n", encoding="utf-8")
+    unreadable = {  # top-level inputs that cannot be read
+        "broken.usda": b"#usda 1.0\ndef Xform (\n",
+        "empty.usda": b"",
+        "garbage.usdc": bytes(np.random.default_rng(1).integers(0, 256, 300, dtype=np.uint8)),
+        "garbage.usdz": bytes(np.random.default_rng(2).integers(0, 256, 300, dtype=np.uint8)),
+        "cut.mtlx": b'<?xml version="1.0"?>\n<materialx version="1.38">\n<nodegraph name="x"><image name=',
+    }
+    for name, data in unreadable.items():
+        (lib / name).write_bytes(data)
+    top_level = [lib / name for name in unreadable] + [lib / "not_there.usda"]
     before = hashes(lib)
 
     code, report, err = run_cli(capsys, str(scene), "--cache-dir", str(shared_cache))
@@ -331,16 +339,19 @@ def test_bad_input_corpus_each_item_one_line_rest_goes_on(tmp_path, capsys, shar
     assert hashes(lib) == {**before, **{k: v for k, v in hashes(lib).items() if k not in before}}
     assert (lib / "scene.seamless.usda").is_file() and Usd.Stage.Open(str(lib / "scene.seamless.usda"))
 
-    # an unreadable top-level stage among good ones: exit 2, the good one still processed
-    tried += 1
-    code2, report2, _ = run_cli(capsys, str(broken_stage), str(scene), "--cache-dir", str(shared_cache))
-    if code2 == 2 and report2["unreadable"] == [str(broken_stage)] and any(
-            s["status"] in ("passed", "not-passed", "reused") for s in report2["stacks"]):
-        handled.append("broken.usda")
-    else:
-        problems.append(("broken.usda", code2, report2["unreadable"]))
+    # unreadable top-level inputs among a good one: exit 2, one line each, the good one still processed
+    code2, report2, _ = run_cli(capsys, *map(str, top_level), str(scene), "--cache-dir", str(shared_cache))
+    good_done = any(s["status"] in ("passed", "not-passed", "reused") for s in report2["stacks"])
+    for path in top_level:
+        tried += 1
+        lines = [f for f in report2["findings"] if f["code"] == "unreadable-input" and path.name in f["where"]]
+        if code2 == 2 and str(path) in report2["unreadable"] and good_done and len(lines) == 1 \
+                and "\n" not in lines[0]["message"]:
+            handled.append(path.name)
+        else:
+            problems.append((path.name, code2, report2["unreadable"], lines))
     with capsys.disabled():
-        print(f"\nbad inputs (one process run): tried {tried}, handled cleanly {len(handled)}")
+        print(f"\nbad inputs (corpus, two process runs): tried {tried}, handled cleanly {len(handled)}")
     assert not problems, problems
     assert len(handled) == tried
 
