@@ -131,7 +131,7 @@ def _remove_stale_temps(target: Path, suffix: str) -> None:
 
 
 def _alive(pid: int) -> bool:
-    if pid == os.getpid():
+    if pid == os.getpid() or os.name != "posix":  # os.kill(pid, 0) probes only on POSIX
         return True
     try:
         os.kill(pid, 0)
