@@ -482,3 +482,15 @@ def test_pixel_limit_is_a_job_setting_refused_before_decoding(tmp_path, shared_c
     done = run_stack(StackJob(stack=stack, settings=JobSettings(preset="tiny", cache_dir=shared_cache,
                                                                   max_pixels=TEX * TEX), output_dir=tmp_path / "out"))
     assert all(Path(m.output).is_file() for m in done.maps.values())
+
+
+def test_a_layer_that_does_not_read_back_never_replaces_the_old_one(tmp_path):
+    from seamless_usd.authoring.files import check_layer, write_atomically
+    from seamless_usd.errors import InputError
+
+    target = tmp_path / "scene.seamless.usda"
+    target.write_text("#usda 1.0\n", encoding="utf-8")
+    with pytest.raises(InputError, match=r"@.*scene\.seamless\.usda@: the written layer does not read back"):
+        write_atomically(target, lambda tmp: tmp.write_text("#usda 1.0\ndef (", encoding="utf-8"), check=check_layer)
+    assert target.read_text(encoding="utf-8") == "#usda 1.0\n"
+    assert leftovers(tmp_path) == []

@@ -11,7 +11,6 @@ from pathlib import Path
 from typing import Callable
 
 from filelock import FileLock
-
 from pxr import Sdf, Tf
 
 from seamless_usd.errors import InputError
@@ -31,7 +30,8 @@ def write_atomically(dest: Path, write: Callable[[Path], object],
     sees the old file or the new one, never a half-written one. ``write`` returning ``False``
     (as ``Sdf.Layer.Export`` does on failure) or raising a USD error is an
     :class:`~seamless_usd.errors.InputError` naming ``dest``; ``check(tmp)``, when given, runs
-    on the complete temporary file and raises to refuse it (e.g. it does not read back).
+    on the complete temporary file and raises :class:`~seamless_usd.errors.InputError` with the
+    reason to refuse it (e.g. it does not read back); the message is prefixed with ``dest``.
     """
     dest = Path(dest)
     try:
@@ -49,7 +49,10 @@ def write_atomically(dest: Path, write: Callable[[Path], object],
         if ok is False:
             raise InputError(f"{asset_ref(dest)}: cannot write it; check free disk space and permissions")
         if check is not None:
-            check(tmp)
+            try:
+                check(tmp)
+            except InputError as exc:
+                raise InputError(f"{asset_ref(dest)}: {exc}; check free disk space and permissions") from None
 
     return atomic_write(dest, checked)
 
@@ -97,7 +100,7 @@ def backup_once(path: Path) -> Path:
 
         def same_size(tmp: Path) -> None:
             if tmp.stat().st_size != size:
-                raise InputError(f"{asset_ref(bak)}: the backup copy is incomplete; check free disk space")
+                raise InputError("the backup copy is incomplete")
 
         write_atomically(bak, lambda tmp: shutil.copyfile(path, tmp), check=same_size)
     return bak
