@@ -213,3 +213,16 @@ def test_a_run_killed_after_the_first_stack_resumes_to_the_same_outputs(tmp_path
     assert done.returncode in (0, 1), done.stderr.decode()[-2000:]
     assert _tiles(lib / "looks" / "tileable") == expected
     assert (lib / "looks" / "two.seamless.usda").is_file()
+
+
+def test_a_missing_texture_blocks_only_the_file_that_lacks_it(tmp_path, cache, capsys):
+    lib = _library(tmp_path, copies=2)
+    scene = lib / "brick1" / "scene.usda"
+    scene.write_text(scene.read_text().replace("brick_roughness.png", "gone_roughness.png"))
+    code, payload = _run(str(lib / "brick0"), str(lib / "brick1"), "--cache-dir", str(cache), capsys=capsys)
+    assert code == 1
+    status = {Path(s["source"]).parent.name: s for s in payload["stacks"]}
+    assert status["brick0"]["status"] in ("passed", "not-passed")
+    assert status["brick1"]["status"] == "failed"
+    assert "gone_roughness.png" in status["brick1"]["message"]
+    assert not (lib / "brick1" / "scene.seamless.usda").exists()

@@ -1,9 +1,9 @@
 """The main job: scan, train and sample each unique stack, write tiles, author the edits, report.
 
-``process_paths`` and ``process_stage`` share one core: a :class:`Run` keeps what was already
-done in this run (identical stacks are processed once and reused), stacks are processed one
-after another in this process, and stage/document edits happen after the stacks of a source
-are done. One failing stack is reported and the rest go on.
+``process_paths`` and ``process_stage`` share one core: every input is scanned first; a
+:class:`Run` then hands each unique stack (identical stacks are processed once and reused) to an
+executor (in this process, worker processes or Dask), and the stage/document edits happen in this
+process afterwards, one source at a time. One failing stack or source is reported and the rest go on.
 """
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ class Run:
     executor: Executor
     report: Report = field(default_factory=Report)
     outcomes: dict[str, StackOutcome | Exception] = field(default_factory=dict)  # content key -> result
-    blocked: dict[str, str] = field(default_factory=dict)  # stack id -> why it is left alone
+    blocked: dict[tuple[str, str], str] = field(default_factory=dict)  # (source, stack id) -> why it is left alone
     placed: dict[tuple[str, Path], StackOutcome | Exception] = field(default_factory=dict)  # (key, dir) -> tiles there
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
     total: int = 0
@@ -82,14 +82,14 @@ def _output_dir(options: Options, source: Path | None) -> Path:
     return source.resolve().parent / "tileable"
 
 
-def _run_jobs(run: Run, sources: Sequence[tuple[list[TextureStack], Path]]) -> None:
+def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]]) -> None:
     """Train and sample every unique stack once (identical stacks share the result)."""
     jobs: list[StackJob] = []
     seen: set[str] = set()
     settings = JobSettings.from_options(run.options)
-    for stacks, out_dir in sources:
+    for label, stacks, out_dir in sources:
         for stack in stacks:
-            if stack.id in run.blocked or stack.content_key in seen or stack.content_key in run.outcomes:
+            if (label, stack.id) in run.blocked or stack.content_key in seen or stack.content_key in run.outcomes:
                 continue
             seen.add(stack.content_key)
             jobs.append(StackJob(stack=stack, settings=settings, output_dir=out_dir))
@@ -113,8 +113,8 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
     for stack in stacks:
         report = StackReport(id=stack.id, material=stack.material, source=source_label, status=StackStatus.FAILED)
         where = prim_ref(stack.material.strip("<>"))
-        if stack.id in run.blocked:
-            report.message = run.blocked[stack.id]
+        if (source_label, stack.id) in run.blocked:
+            report.message = run.blocked[(source_label, stack.id)]
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
         elif dry:
             report.status = StackStatus.PLANNED
@@ -219,7 +219,7 @@ class _Source:
     stacks: list[TextureStack]
 
 
-def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack]) -> dict[str, str]:
+def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
     """Stacks left alone because a texture of their material was skipped (see BLOCKING_SKIPS)."""
     out = {}
     for stack in stacks:
@@ -229,7 +229,7 @@ def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack]) -> dict[str
             if f.severity is Severity.SKIPPED and f.code in BLOCKING_SKIPS and f.material == stack.material
         ]
         if reasons:
-            out[stack.id] = (
+            out[(source, stack.id)] = (
                 f"left alone: {', '.join(reasons)} of this material cannot be processed, and tiling the other "
                 "maps would misalign them; fix or remove that texture and run again"
             )
@@ -259,12 +259,19 @@ def _author_source(run: Run, src: _Source) -> None:
     if not results and run.options.mode != authoring.WriteMode.DRY_RUN:
         return
     plan = run.options.plan_mode or authoring.WriteMode.NEW_LAYER
-    if src.kind == "mtlx":
-        edit = authoring.author_mtlx(src.path, results, mode=run.options.mode, plan_mode=plan)
-    else:
-        edit = authoring.author_usd(
-            src.path, results, mode=run.options.mode, output_layer=run.options.output_layer, plan_mode=plan
+    try:
+        if src.kind == "mtlx":
+            edit = authoring.author_mtlx(src.path, results, mode=run.options.mode, plan_mode=plan)
+        else:
+            edit = authoring.author_usd(
+                src.path, results, mode=run.options.mode, output_layer=run.options.output_layer, plan_mode=plan
+            )
+    except (SeamlessUsdError, OSError) as exc:
+        # The tiles are written; the edits of this source are not. Say so; the other sources go on.
+        run.report.findings.append(
+            Finding(Severity.ERROR, "authoring-failed", asset_ref(src.path), f"the edits were not written: {exc}")
         )
+        return
     _record_authoring(run, edit)
 
 
@@ -322,13 +329,13 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
         run.report.sources.append(str(path))
         try:
             src = _scan_source(path, run.options.materials)
-            run.blocked.update(blocked_stacks(src.scan, src.stacks))
+            run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
             sources.append(src)
         except InputError as exc:
             run.report.unreadable.append(str(path))
             run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", asset_ref(path), str(exc)))
     if run.options.mode != _authoring().WriteMode.DRY_RUN:
-        _run_jobs(run, [(src.stacks, _output_dir(run.options, src.path)) for src in sources])
+        _run_jobs(run, [(str(src.path), src.stacks, _output_dir(run.options, src.path)) for src in sources])
     for src in sources:
         _author_source(run, src)
     return _finish(run, started)
@@ -350,10 +357,10 @@ def process_stage(stage, options: Options | None = None) -> Report:
     scan = scan_stage(stage)
     run.report.findings += scan.findings
     stacks = select_stacks(scan, run.options.materials)
-    run.blocked.update(blocked_stacks(scan, stacks))
+    run.blocked.update(blocked_stacks(scan, stacks, label))
     out_dir = _output_dir(run.options, source)
     if run.options.mode != authoring.WriteMode.DRY_RUN:
-        _run_jobs(run, [(stacks, out_dir)])
+        _run_jobs(run, [(label, stacks, out_dir)])
     results = _reports_for(run, stacks, label, out_dir)
     if results and run.options.mode != authoring.WriteMode.DRY_RUN:
         _record_authoring(run, authoring.author_usd_stage(stage, results))
