@@ -39,6 +39,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-size", type=int, help="working-resolution cap in pixels (longest side); default native")
     p.add_argument("--iterations", type=int, help="override the preset's training iterations")
+    p.add_argument("--max-pixels", type=int, default=1 << 28,
+                   help="refuse images whose header claims more pixels, before decoding (default: %(default)s)")
     p.add_argument("--cache-dir", type=Path, help="trained models and checkpoints (default: user cache dir)")
     p.add_argument("--jobs", "-j", type=int, help="stacks trained at once in local worker processes (default 1)")
     p.add_argument("--scheduler", metavar="ADDRESS",
@@ -61,6 +63,7 @@ def _options(args: argparse.Namespace, progress) -> Options:
         report=args.report,
         cache_dir=args.cache_dir,
         max_size=args.max_size,
+        max_pixels=args.max_pixels,
         iterations=args.iterations,
         jobs=args.jobs,
         scheduler=args.scheduler,

@@ -218,3 +218,12 @@ def test_dry_run_of_in_place_lists_source_layer_edits_and_writes_nothing(assets,
     assert _hashes(assets) == before
     assert payload["options"]["plan_mode"] == "in-place"
     assert any("scene.usda" in line and "seamless" not in line.split(" in ")[-1] for line in payload["plan"])
+
+
+def test_max_pixels_refuses_large_images_before_decoding(assets, model_cache, capsys):
+    code = _process(str(assets / "brick" / "scene.usda"), "--max-pixels", "10000", "--json", cache=model_cache)
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 1
+    [stack] = payload["stacks"]
+    assert stack["status"] == "failed"
+    assert "brick_" in stack["message"] and "10000" in stack["message"].replace(",", "")

@@ -40,6 +40,7 @@ class Options:
     report: Path | None = None  # HTML report path; the JSON report goes beside it (.json)
     cache_dir: Path | None = None  # trained models and checkpoints; None = the user's cache dir
     max_size: int | None = None  # working-resolution cap (longest side, px); None = native size
+    max_pixels: int | None = 1 << 28  # images whose header claims more pixels are refused before decoding
     iterations: int | None = None  # override the preset's training iterations
     scheduler: str | None = None  # None: in this process; "local:N": N local Dask workers; "tcp://host:port"
     jobs: int | None = None  # stacks trained at once (local workers); None: 1 in process, N for local:N
@@ -53,7 +54,7 @@ class Options:
         out = {}
         for name in (
             "preset", "materials", "mode", "plan_mode", "output_layer", "output_dir", "device", "seed",
-            "cache_dir", "max_size", "iterations", "scheduler", "jobs",
+            "cache_dir", "max_size", "max_pixels", "iterations", "scheduler", "jobs",
         ):
             value = getattr(self, name)
             if isinstance(value, Path):

@@ -44,7 +44,7 @@ class JobSettings:
         return cls(
             preset=options.preset, iterations=options.iterations, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
-            max_pixels=getattr(options, "max_pixels", DEFAULT_MAX_PIXELS),
+            max_pixels=options.max_pixels,
         )
 
 
