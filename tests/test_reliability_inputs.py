@@ -494,3 +494,30 @@ def test_a_layer_that_does_not_read_back_never_replaces_the_old_one(tmp_path):
         write_atomically(target, lambda tmp: tmp.write_text("#usda 1.0\ndef (", encoding="utf-8"), check=check_layer)
     assert target.read_text(encoding="utf-8") == "#usda 1.0\n"
     assert leftovers(tmp_path) == []
+
+
+def test_a_layer_that_cannot_be_written_is_one_line_and_the_other_scene_goes_on(tmp_path, capsys, shared_cache,
+                                                                                  monkeypatch):
+    """ENOSPC injected when the first override layer is flushed: that scene's edits are reported."""
+    scenes = []
+    for k in range(2):
+        write_image(tmp_path / f"s{k}" / "tex" / "a.png", texture(50 + k))
+        scenes.append(write_scene(tmp_path / f"s{k}" / "scene.usda", {"A": "./tex/a.png"}))
+    real_fsync = fileio._fsync_file
+    failed: list[Path] = []
+
+    def failing_fsync(path: Path) -> None:
+        if path.suffix == ".usda" and not failed:
+            failed.append(path)
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        real_fsync(path)
+
+    monkeypatch.setattr(fileio, "_fsync_file", failing_fsync)
+    code, report, _ = run_cli(capsys, *map(str, scenes), "--cache-dir", str(shared_cache))
+    assert code == 1
+    errors = [f for f in report["findings"] if f["severity"] == "error"]
+    assert len(errors) == 1 and "\n" not in errors[0]["message"], errors
+    assert "No space left on device" in errors[0]["message"] and "scene.seamless.usda@" in errors[0]["message"]
+    written = [s for s in scenes if s.with_name("scene.seamless.usda").is_file()]
+    assert len(written) == 1 and Usd.Stage.Open(str(written[0].with_name("scene.seamless.usda")))
+    assert leftovers(tmp_path) == []
