@@ -226,3 +226,21 @@ def test_a_missing_texture_blocks_only_the_file_that_lacks_it(tmp_path, cache, c
     assert status["brick1"]["status"] == "failed"
     assert "gone_roughness.png" in status["brick1"]["message"]
     assert not (lib / "brick1" / "scene.seamless.usda").exists()
+
+
+def test_one_output_layer_for_several_stages_is_a_usage_error(tmp_path, cache, capsys):
+    lib = _library(tmp_path, copies=2)
+    code = main(["process", "--preset", "tiny", str(lib), "-o", str(tmp_path / "one.usda"), "--cache-dir", str(cache)])
+    assert code == 2
+    assert "several USD inputs" in capsys.readouterr().err
+
+
+def test_an_unusable_cache_folder_fails_the_stack_with_a_clear_message(tmp_path, capsys):
+    lib = _library(tmp_path, copies=1)
+    not_a_folder = tmp_path / "cache-file"
+    not_a_folder.write_text("a file where the cache folder should be")
+    code, payload = _run(str(lib / "brick0"), "--cache-dir", str(not_a_folder), capsys=capsys)
+    assert code == 1
+    [stack] = payload["stacks"]
+    assert stack["status"] == "failed"
+    assert "cache folder" in stack["message"] and "--cache-dir" in stack["message"]

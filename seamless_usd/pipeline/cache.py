@@ -18,10 +18,13 @@ from typing import Any
 
 import numpy as np
 from filelock import FileLock
+from safetensors import SafetensorError
 from safetensors.numpy import load_file, save_file
 
 from seamless_usd import __version__
+from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write, atomic_write_text
+from seamless_usd.findings import asset_ref
 
 __all__ = ["StackCache", "CacheEntry", "stack_key", "default_cache_dir"]
 
@@ -72,7 +75,13 @@ class CacheEntry:
 
     def lock(self, timeout: float = -1) -> FileLock:
         """Exclusive lock on this entry (re-entrant within a process)."""
-        self.root.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self.root.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(
+                f"the cache folder {asset_ref(self.root.parent.parent)} cannot be used ({exc.strerror}); "
+                "choose another with --cache-dir"
+            ) from None
         return FileLock(str(self.root) + ".lock", timeout=timeout)
 
     def load(self) -> tuple[dict[str, np.ndarray], dict[str, Any]] | None:
@@ -94,11 +103,18 @@ class CacheEntry:
 
     def store(self, tiles: Mapping[str, np.ndarray], meta: Mapping[str, Any]) -> None:
         """Write tiles then the manifest (the manifest, written last and atomically, marks completion)."""
-        self.root.mkdir(parents=True, exist_ok=True)
         arrays = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in tiles.items()}
-        atomic_write(self.root / TILES, lambda tmp: save_file(arrays, str(tmp)))
-        manifest = {"format": CACHE_FORMAT, "key": self.key, "files": {TILES: _sha256(self.root / TILES)}, "meta": dict(meta)}
-        atomic_write_text(self.root / MANIFEST, json.dumps(manifest, indent=1, default=str))
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            atomic_write(self.root / TILES, lambda tmp: save_file(arrays, str(tmp)))
+            manifest = {"format": CACHE_FORMAT, "key": self.key, "files": {TILES: _sha256(self.root / TILES)},
+                        "meta": dict(meta)}
+            atomic_write_text(self.root / MANIFEST, json.dumps(manifest, indent=1, default=str))
+        except (OSError, SafetensorError) as exc:
+            raise InputError(
+                f"the cache folder {asset_ref(self.root.parent.parent)} cannot be written ({exc}); "
+                "free some space or choose another with --cache-dir"
+            ) from None
 
     def discard_result(self, reason: str = "") -> None:
         for name in (MANIFEST, TILES):

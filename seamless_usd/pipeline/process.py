@@ -138,6 +138,8 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
                 first = run.claimed.setdefault(stack.content_key, (source_label, stack.id))
                 reused = first != (source_label, stack.id)
                 outcome.fill_report(report, stack, reused=reused)
+                if not reused:
+                    run.report.findings += list(outcome.findings)
                 if reused:
                     report.duplicate_of = first[1] if first[0] == source_label else f"{first[1]} in {first[0]}"
                     report.message = f"identical to stack {report.duplicate_of}: its result is reused"
@@ -325,7 +327,11 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
     started = time.perf_counter()
     run = _new_run(options or Options())
     sources = []
-    for path in expand_inputs(paths):
+    inputs = expand_inputs(paths)
+    if run.options.output_layer is not None and sum(p.suffix.lower() in USD_SUFFIXES for p in inputs) > 1:
+        raise UsageError("-o/--output-layer names one layer, but several USD inputs were given; leave it out "
+                         "(each stage then gets its own <name>.seamless.usda)")
+    for path in inputs:
         run.report.sources.append(str(path))
         try:
             src = _scan_source(path, run.options.materials)
