@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import io
 import re
-import struct
 import tempfile
 from pathlib import Path
 
@@ -18,12 +17,12 @@ from pxr import Ar
 
 from seamless_usd.discover.tokens import UDIM_TOKEN
 from seamless_usd.discover.types import ImageInfo
+from seamless_usd.pngchunks import png_stated_color_space
 
 __all__ = ["read_image_info", "is_package_path", "udim_tiles", "ImageReadError"]
 
 # Formats whose reader fills "oiio:ColorSpace" with a default rather than from the file.
 _GUESSED_COLORSPACE_FORMATS = frozenset({"png", "jpeg", "bmp", "targa", "gif", "webp", "ico"})
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 class ImageReadError(Exception):
@@ -68,7 +67,7 @@ def _read_header(path: str, raw) -> ImageInfo:
         spec = inp.spec()
         fmt = inp.format_name()
         if fmt == "png":
-            stated = _png_color_space(raw)
+            stated = png_stated_color_space(raw)
         elif fmt in _GUESSED_COLORSPACE_FORMATS:
             stated = None
         else:
@@ -84,42 +83,6 @@ def _read_header(path: str, raw) -> ImageInfo:
         )
     finally:
         inp.close()
-
-
-def _png_color_space(fh) -> str | None:
-    """The colour space a PNG states in its ``sRGB``/``iCCP``/``cICP``/``gAMA`` chunks, if any."""
-    if fh.read(8) != _PNG_SIGNATURE:
-        return None
-    found: dict[str, bytes] = {}
-    while True:
-        head = fh.read(8)
-        if len(head) < 8:
-            break
-        length, kind = struct.unpack(">I4s", head)
-        kind = kind.decode("latin-1")
-        if kind in ("IDAT", "IEND"):
-            break
-        if kind in ("sRGB", "cICP", "gAMA"):
-            found[kind] = fh.read(length)
-            fh.seek(4, io.SEEK_CUR)
-        else:
-            found.setdefault(kind, b"")
-            fh.seek(length + 4, io.SEEK_CUR)
-    if "cICP" in found and len(found["cICP"]) >= 2:
-        transfer = found["cICP"][1]
-        if transfer == 13:
-            return "srgb_rec709_scene"
-        if transfer == 8:
-            return "lin_rec709_scene"
-    if "sRGB" in found or "iCCP" in found:
-        return "srgb_rec709_scene"
-    if "gAMA" in found and len(found["gAMA"]) == 4:
-        gamma = 100000.0 / max(struct.unpack(">I", found["gAMA"])[0], 1)
-        if abs(gamma - 1.0) < 0.05:
-            return "lin_rec709_scene"
-        if abs(gamma - 2.2) < 0.1:
-            return "g22_rec709_scene"
-    return None
 
 
 def udim_tiles(absolute_pattern: str) -> list[str]:

@@ -11,7 +11,6 @@ Every failure a user can cause (missing, corrupt, truncated, enormous or unwrita
 from __future__ import annotations
 
 import os
-import struct
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +20,7 @@ from seamless_usd.discover.types import ColorSpace, ImageInfo
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write
 from seamless_usd.findings import asset_ref
+from seamless_usd.pngchunks import png_stated_color_space
 
 __all__ = [
     "DEFAULT_MAX_PIXELS",
@@ -54,7 +54,6 @@ OUTPUT_FAMILIES: dict[str, tuple[str, str]] = {
 _OIIO_TYPES = {"uint8": oiio.UINT8, "uint16": oiio.UINT16, "half": oiio.HALF, "float": oiio.FLOAT}
 _NUMPY_TYPES = {"uint8": np.uint8, "uint16": np.uint16, "half": np.float16, "float": np.float32}
 _COLORSPACE_NAMES = {ColorSpace.SRGB: "srgb_rec709_scene", ColorSpace.RAW: "lin_rec709_scene"}
-_PNG_COLOUR_CHUNKS = {b"sRGB", b"gAMA", b"iCCP", b"cICP"}
 
 
 def _input_config() -> oiio.ImageSpec:
@@ -82,8 +81,12 @@ def _info_from(inp: oiio.ImageInput, path: Path) -> ImageInfo:
     spec = inp.spec()
     fmt = inp.format_name()
     color_space = spec.get_string_attribute("oiio:ColorSpace") or None
-    if fmt == "png" and not _png_declares_colour(path):
-        color_space = None  # OpenImageIO reports sRGB for every PNG; only a chunk says so
+    if fmt == "png":  # OpenImageIO reports sRGB for every PNG; only a chunk says so
+        try:
+            with open(path, "rb") as fh:
+                color_space = png_stated_color_space(fh)
+        except OSError:
+            color_space = None
     return ImageInfo(
         width=spec.width,
         height=spec.height,
@@ -93,26 +96,6 @@ def _info_from(inp: oiio.ImageInput, path: Path) -> ImageInfo:
         channel_names=tuple(spec.channelnames),
         color_space=color_space,
     )
-
-
-def _png_declares_colour(path: Path) -> bool:
-    """True when a PNG has an sRGB, gAMA, iCCP or cICP chunk before its image data."""
-    try:
-        with open(path, "rb") as f:
-            if f.read(8) != b"\x89PNG\r\n\x1a\n":
-                return False
-            while True:
-                head = f.read(8)
-                if len(head) < 8:
-                    return False
-                length, kind = struct.unpack(">I4s", head)
-                if kind in _PNG_COLOUR_CHUNKS:
-                    return True
-                if kind in (b"IDAT", b"IEND"):
-                    return False
-                f.seek(length + 4, os.SEEK_CUR)
-    except OSError:
-        return False
 
 
 def _check_size(info: ImageInfo, path: Path, max_pixels: int | None) -> None:

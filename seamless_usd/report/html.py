@@ -7,7 +7,7 @@ from pathlib import Path
 
 from seamless_usd.fileio import atomic_write_text
 from seamless_usd.metrics import METRIC_KEYS
-from seamless_usd.report.model import Report, StackReport, StackStatus
+from seamless_usd.report.model import Report, StackReport
 from seamless_usd.report.png import png_data_uri
 
 __all__ = ["render_html", "render_index", "write_html", "write_json", "write_library_html"]

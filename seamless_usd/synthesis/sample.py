@@ -13,7 +13,7 @@ from .precision import autocast
 from .quality import quality
 from .tiling import tile_generate
 from .train import TrainedModel
-from .types import Candidate, MapInput, QResult, TileResult, stack_shape
+from .types import Candidate, MapInput, TileResult, stack_shape
 
 __all__ = ["sample", "crop_plan", "SamplingProgress"]
 
