@@ -56,6 +56,7 @@ __all__ = [
     "as_hwc",
     "unit_normals",
     "seam_ratios",
+    "centre_seam_ratios",
     "periodic_smooth_decomposition",
     "ps_score",
     "seam_band_mask",
@@ -77,6 +78,8 @@ METRIC_KEYS: tuple[str, ...] = (
     "seam_ratio_y",
     "seam_ratio2_x",
     "seam_ratio2_y",
+    "centre_seam_x",
+    "centre_seam_y",
     "ps_score",
     "detail_ratio",
     "detail_ratio_centre",
@@ -529,6 +532,24 @@ def gram_distance(a: np.ndarray, b: np.ndarray, features: FeatureFn) -> float:
     return float(np.mean(dists))
 
 
+def centre_seam_ratios(tile: np.ndarray, is_normal: bool = False) -> dict[str, float]:
+    """Seam ratios across the tile's centre lines (row ``H/2``, column ``W/2``), per axis.
+
+    SeamlessGAN's latent copies meet there (the tile is one period of the tiled latent, centred
+    on the junction, as the paper crops it), so a junction artefact shows here while the border
+    stays continuous. Computed as :func:`seam_ratios` of the tile rolled by half its size, so the
+    figures compare with the border ratios; about 1 when the centre lines are not seams.
+
+    >>> ramp = np.tile(np.arange(10.0), (4, 1))  # a jump at the border, none at the centre
+    >>> round(centre_seam_ratios(ramp)["centre_seam_x"], 1)
+    1.0
+    """
+    u = _prepare(tile, is_normal)
+    rolled = np.roll(u, (u.shape[0] // 2, u.shape[1] // 2), axis=(0, 1))
+    r = seam_ratios(rolled, is_normal)
+    return {"centre_seam_x": r["seam_ratio_x"], "centre_seam_y": r["seam_ratio_y"]}
+
+
 # --------------------------------------------------------------------------------------------
 # Everything at once
 # --------------------------------------------------------------------------------------------
@@ -565,7 +586,8 @@ def map_metrics(
     Returns
     -------
     dict
-        ``seam_ratio_x``, ``seam_ratio_y``, ``seam_ratio2_x``, ``seam_ratio2_y``, ``ps_score``,
+        ``seam_ratio_x``, ``seam_ratio_y``, ``seam_ratio2_x``, ``seam_ratio2_y``,
+        ``centre_seam_x``, ``centre_seam_y`` (across the centre lines), ``ps_score``,
         ``detail_ratio`` (seam bands), ``detail_ratio_centre`` (centre bands), ``ssim``,
         ``gram_distance``.
 
@@ -584,6 +606,7 @@ def map_metrics(
     u = _prepare(tile, is_normal)
     out: dict[str, float | None] = dict.fromkeys(METRIC_KEYS)
     out.update(seam_ratios(u, is_normal))
+    out.update(centre_seam_ratios(u, is_normal))
     out["ps_score"] = ps_score(u)
     out["detail_ratio"] = detail_ratio(u, band=band, sigma=sigma, where="seams")
     out["detail_ratio_centre"] = detail_ratio(u, band=band, sigma=sigma, where="centre")

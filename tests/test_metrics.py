@@ -272,3 +272,18 @@ def test_preview_uint8():
     assert lin[0, 0, 0] == 137
     assert M.preview_uint8(np.array([[np.nan, np.inf]]))[0, :, 0].tolist() == [0, 255]
     assert M.preview_uint8(np.zeros((3, 3, 4))).shape == (3, 3, 3)
+
+
+def test_centre_seam_ratio_sees_a_junction_at_the_centre_that_the_border_ratio_misses():
+    rng = np.random.default_rng(3)
+    smooth = np.cumsum(rng.normal(size=(64, 128)), axis=1)
+    smooth = np.cumsum(smooth, axis=0)
+    period = np.concatenate([smooth, smooth[:, ::-1]], axis=1)  # mirrored: continuous border
+    period = np.concatenate([period, period[::-1]], axis=0)  # (128, 256), seamless both ways
+    junction = np.roll(period, (0, 64), axis=(0, 1)).copy()
+    junction[:, 128:] += 0.5 * np.abs(period).mean()  # a step at the centre column only
+    m = M.map_metrics(junction)
+    assert m["centre_seam_x"] > 2.0
+    assert m["centre_seam_y"] < 1.5
+    clean = M.map_metrics(period)
+    assert clean["centre_seam_x"] < 1.5 and clean["centre_seam_y"] < 1.5
