@@ -1,7 +1,7 @@
 """Make the textures of a stage or MaterialX document tileable and write them back.
 
 Trains a SeamlessGAN per texture stack, samples a tileable stack, writes the maps beside the
-stage (``tileable/``) and, by default, a new layer ``<scene>.seamless.usda`` that sublayers the
+stage (tileable/) and, by default, a new layer <scene>.seamless.usda that sublayers the
 original and holds the edits. Exit codes: 0 all stacks passed; 1 some stack failed or did not
 pass (the rest were written); 2 usage error or unreadable input.
 """

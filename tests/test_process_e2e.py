@@ -227,3 +227,11 @@ def test_max_pixels_refuses_large_images_before_decoding(assets, model_cache, ca
     [stack] = payload["stacks"]
     assert stack["status"] == "failed"
     assert "brick_" in stack["message"] and "10000" in stack["message"].replace(",", "")
+
+
+@pytest.mark.parametrize("device", ["gpu", "mps"] + ([] if __import__("torch").cuda.is_available() else ["cuda", "cuda:0"]))
+def test_an_unusable_device_is_a_usage_error_before_any_work(assets, model_cache, capsys, device):
+    code = _process(str(assets / "brick" / "scene.usda"), "--device", device, cache=model_cache)
+    err = capsys.readouterr().err
+    assert code == 2 and "--device" in err and "Traceback" not in err
+    assert not (assets / "brick" / "tileable").exists()

@@ -299,6 +299,23 @@ def _finish(run: Run, started: float) -> Report:
     return report
 
 
+def _check_device(name: str) -> None:
+    """A usage error, before any work, for a device that does not exist here."""
+    import torch
+
+    try:
+        device = torch.device(name)
+    except RuntimeError:
+        raise UsageError(f"--device {name!r} is not a device name; use cpu, cuda or cuda:N") from None
+    if device.type == "cuda":
+        if not torch.cuda.is_available():
+            raise UsageError(f"--device {name}: this machine has no usable CUDA device; use --device cpu or leave it out")
+        if device.index is not None and device.index >= torch.cuda.device_count():
+            raise UsageError(f"--device {name}: only {torch.cuda.device_count()} CUDA device(s) here")
+    elif device.type != "cpu":
+        raise UsageError(f"--device {name}: only cpu and cuda devices are supported")
+
+
 def _new_run(options: Options) -> Run:
     authoring = _authoring()
     from seamless_usd.synthesis import get_preset
@@ -313,6 +330,8 @@ def _new_run(options: Options) -> Run:
         raise UsageError(
             f"--max-size {options.max_size} is below the {MIN_IMAGE_SIZE} px minimum crop; use {MIN_IMAGE_SIZE} or more"
         )
+    if options.device is not None:
+        _check_device(options.device)
     if options.mode is None:
         options = options.with_(mode=authoring.WriteMode.NEW_LAYER)
     return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
