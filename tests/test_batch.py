@@ -244,3 +244,14 @@ def test_an_unusable_cache_folder_fails_the_stack_with_a_clear_message(tmp_path,
     [stack] = payload["stacks"]
     assert stack["status"] == "failed"
     assert "cache folder" in stack["message"] and "--cache-dir" in stack["message"]
+
+
+def test_materials_patterns_select_by_path_or_name(tmp_path, cache, capsys):
+    lib = _library(tmp_path, copies=0)
+    layer = str(lib / "looks" / "two.usda")
+    _, by_name = _run(layer, "--dry-run", "--materials", "Wood", capsys=capsys)
+    assert [s["material"] for s in by_name["stacks"]] == ["</World/Looks/Wood>"]
+    _, by_path = _run(layer, "--dry-run", "--materials", "/World/Looks/B*", capsys=capsys)
+    assert [s["material"] for s in by_path["stacks"]] == ["</World/Looks/Brick>"]
+    _, both = _run(layer, "--dry-run", "--materials", "Wood", "--materials", "Brick", capsys=capsys)
+    assert len(both["stacks"]) == 2
