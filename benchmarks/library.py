@@ -171,7 +171,10 @@ def main(argv: list[str] | None = None) -> int:
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "library.md").write_text(text)
-    (args.out / "library.json").write_text(json.dumps({"args": {k: str(v) for k, v in vars(args).items()}, "runs": rows}, indent=2))
+    recorded = {k: str(v) for k, v in vars(args).items()}
+    if args.out.resolve().is_relative_to(REPO):
+        recorded["out"] = str(args.out.resolve().relative_to(REPO))  # no machine paths in results
+    (args.out / "library.json").write_text(json.dumps({"args": recorded, "runs": rows}, indent=2))
     return 0
 
 
