@@ -7,33 +7,14 @@ import zlib
 from pathlib import Path
 
 import numpy as np
-import OpenImageIO as oiio
 import pytest
+from imagefiles import write_raw_image
 
 from seamless_usd.discover.types import ColorSpace, ImageInfo
 from seamless_usd.errors import InputError
 from seamless_usd.imaging import output_extension, read_image, read_info, write_pixels
 
 TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
-OIIO_TYPES = {np.uint8: oiio.UINT8, np.uint16: oiio.UINT16, np.float16: oiio.HALF, np.float32: oiio.FLOAT}
-
-
-def write_with_oiio(path: Path, data: np.ndarray, names: tuple[str, ...] | None = None) -> Path:
-    """Write ``data`` exactly as given (dtype decides the file's sample type)."""
-    if data.ndim == 2:
-        data = data[..., None]
-    h, w, c = data.shape
-    spec = oiio.ImageSpec(w, h, c, OIIO_TYPES[data.dtype.type])
-    if names:
-        spec.channelnames = names
-    spec.attribute("oiio:UnassociatedAlpha", 1)
-    out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), spec), out.geterror()
-    assert out.write_image(np.ascontiguousarray(data)), out.geterror()
-    out.close()
-    return path
-
-
 def codes(rng: np.random.Generator, shape: tuple[int, ...], dtype=np.uint8) -> np.ndarray:
     return rng.integers(0, np.iinfo(dtype).max + 1, size=shape, dtype=dtype)
 
@@ -45,7 +26,7 @@ def codes(rng: np.random.Generator, shape: tuple[int, ...], dtype=np.uint8) -> n
 def test_png_8bit_reads_exact_codes(tmp_path: Path, channels: int) -> None:
     data = codes(np.random.default_rng(channels), (5, 7, channels))
     data[0, 0, -1] = 0  # a fully transparent texel keeps its colour (straight alpha)
-    path = write_with_oiio(tmp_path / "a.png", data)
+    path = write_raw_image(tmp_path / "a.png", data)
     pixels, info = read_image(path)
     assert pixels.dtype == np.float32 and pixels.shape == (5, 7, channels)
     assert np.array_equal(np.rint(pixels * 255).astype(np.uint8), data)
@@ -54,7 +35,7 @@ def test_png_8bit_reads_exact_codes(tmp_path: Path, channels: int) -> None:
 
 def test_png_16bit_reads_exact_codes(tmp_path: Path) -> None:
     data = codes(np.random.default_rng(1), (4, 6, 3), np.uint16)
-    pixels, info = read_image(write_with_oiio(tmp_path / "a.png", data))
+    pixels, info = read_image(write_raw_image(tmp_path / "a.png", data))
     assert info.dtype == "uint16"
     assert np.array_equal(np.rint(pixels * 65535).astype(np.uint16), data)
 
@@ -62,7 +43,7 @@ def test_png_16bit_reads_exact_codes(tmp_path: Path) -> None:
 @pytest.mark.parametrize("dtype", [np.float16, np.float32])
 def test_exr_half_and_float_read_as_stored(tmp_path: Path, dtype) -> None:
     data = (np.random.default_rng(2).normal(size=(4, 5, 4)) * 10).astype(dtype)
-    pixels, info = read_image(write_with_oiio(tmp_path / "a.exr", data, ("R", "G", "B", "A")))
+    pixels, info = read_image(write_raw_image(tmp_path / "a.exr", data, ("R", "G", "B", "A")))
     assert info.dtype == {np.float16: "half", np.float32: "float"}[dtype]
     assert info.file_format == "openexr" and info.channel_names == ("R", "G", "B", "A")
     assert np.array_equal(pixels, data.astype(np.float32))
@@ -75,7 +56,7 @@ def test_exr_half_and_float_read_as_stored(tmp_path: Path, dtype) -> None:
 def test_tiff_tga_jpeg(tmp_path: Path, name: str, dtype, channels: int) -> None:
     rng = np.random.default_rng(3)
     data = rng.random((6, 6, channels)).astype(dtype) if dtype is np.float32 else codes(rng, (6, 6, channels), dtype)
-    pixels, info = read_image(write_with_oiio(tmp_path / name, data))
+    pixels, info = read_image(write_raw_image(tmp_path / name, data))
     assert pixels.shape == (6, 6, channels) and info.channels == channels
     if name.endswith(".jpg"):
         return  # lossy
@@ -85,7 +66,7 @@ def test_tiff_tga_jpeg(tmp_path: Path, name: str, dtype, channels: int) -> None:
 
 def test_radiance_hdr_reads_values_above_one(tmp_path: Path) -> None:
     data = np.full((4, 4, 3), 6.0, np.float32)
-    pixels, info = read_image(write_with_oiio(tmp_path / "sky.hdr", data))
+    pixels, info = read_image(write_raw_image(tmp_path / "sky.hdr", data))
     assert info.file_format == "hdr" and info.dtype == "float"
     assert np.allclose(pixels, 6.0, rtol=0.01)
 
@@ -115,7 +96,7 @@ def test_sample_assets_read() -> None:
 
 def test_png_colour_space_only_when_declared(tmp_path: Path) -> None:
     # OpenImageIO calls every PNG sRGB; read_info reports it only when a chunk says so.
-    tagged = write_with_oiio(tmp_path / "tagged.png", np.zeros((2, 2, 3), np.uint8))
+    tagged = write_raw_image(tmp_path / "tagged.png", np.zeros((2, 2, 3), np.uint8))
     assert read_info(tagged).color_space == "srgb_rec709_scene"
     data = bytearray(tagged.read_bytes())
     plain = tmp_path / "plain.png"
@@ -128,7 +109,7 @@ def test_png_colour_space_only_when_declared(tmp_path: Path) -> None:
 
 
 def test_read_info_does_not_decode(tmp_path: Path) -> None:
-    path = write_with_oiio(tmp_path / "big.png", np.zeros((300, 200, 1), np.uint8))
+    path = write_raw_image(tmp_path / "big.png", np.zeros((300, 200, 1), np.uint8))
     info = read_info(path)
     assert (info.width, info.height, info.channels, info.channel_names) == (200, 300, 1, ("Y",))
 
@@ -138,7 +119,7 @@ def test_read_info_does_not_decode(tmp_path: Path) -> None:
 
 def test_nonfinite_float_values_are_read_as_stored(tmp_path: Path) -> None:
     data = np.array([[[np.nan, np.inf, -np.inf, 1.0]]], np.float16)
-    pixels, _ = read_image(write_with_oiio(tmp_path / "bad.exr", data, ("R", "G", "B", "A")))
+    pixels, _ = read_image(write_raw_image(tmp_path / "bad.exr", data, ("R", "G", "B", "A")))
     assert np.isnan(pixels[0, 0, 0]) and np.isposinf(pixels[0, 0, 1]) and np.isneginf(pixels[0, 0, 2])
 
 
@@ -169,7 +150,7 @@ def test_truncated_files_are_input_errors(tmp_path: Path, name: str) -> None:
 
 def test_huge_png_header_refused_before_decoding(tmp_path: Path) -> None:
     path = tmp_path / "huge.png"
-    path.write_bytes(_png_with_size(write_with_oiio(tmp_path / "s.png", np.zeros((8, 8, 3), np.uint8)), 60_000, 40_000))
+    path.write_bytes(_png_with_size(write_raw_image(tmp_path / "s.png", np.zeros((8, 8, 3), np.uint8)), 60_000, 40_000))
     start = time.perf_counter()
     for read in (read_info, read_image):
         with pytest.raises(InputError, match=r"@.*huge\.png@.*(60000x40000|claims a \d+ MB image)"):
@@ -178,7 +159,7 @@ def test_huge_png_header_refused_before_decoding(tmp_path: Path) -> None:
 
 
 def test_huge_exr_data_window_refused_before_decoding(tmp_path: Path) -> None:
-    small = write_with_oiio(tmp_path / "s.exr", np.zeros((8, 8, 3), np.float16))
+    small = write_raw_image(tmp_path / "s.exr", np.zeros((8, 8, 3), np.float16))
     path = tmp_path / "huge.exr"
     path.write_bytes(_exr_with_data_window(small.read_bytes(), 29_999, 29_999))
     with pytest.raises(InputError, match=r"@.*huge\.exr@.*(30000x30000|claims a \d+ MB image)"):
@@ -188,7 +169,7 @@ def test_huge_exr_data_window_refused_before_decoding(tmp_path: Path) -> None:
 def test_pixel_limit_is_checked_on_the_header_before_decoding(tmp_path: Path) -> None:
     # A valid 300x200 header over image data that cannot be decoded: with a limit below 60000
     # pixels the limit error comes first, so no decoding was attempted.
-    good = write_with_oiio(tmp_path / "g.png", codes(np.random.default_rng(5), (200, 300, 3)))
+    good = write_raw_image(tmp_path / "g.png", codes(np.random.default_rng(5), (200, 300, 3)))
     data = good.read_bytes()
     path = tmp_path / "limited.png"
     path.write_bytes(b"".join([data[:8]] + [raw[:8] + bytes(len(raw) - 12) + raw[-4:] if kind == b"IDAT" else raw for kind, raw in _png_chunks(data)]))

@@ -6,8 +6,8 @@ import shutil
 from pathlib import Path
 
 import numpy as np
-import OpenImageIO as oiio
 import pytest
+from imagefiles import write_raw_image
 
 from seamless_usd.discover.types import AuthoredAt, ColorSpace, ImageInfo, Origin, RoleUse, TextureMap
 from seamless_usd.errors import InputError, UsageError
@@ -24,7 +24,6 @@ from seamless_usd.imaging import (
     write_map,
 )
 
-OIIO_TYPES = {np.uint8: oiio.UINT8, np.uint16: oiio.UINT16, np.float16: oiio.HALF, np.float32: oiio.FLOAT}
 
 SAMPLE_ROLES = {
     "brick_albedo.png": ((("diffuseColor", "rgb"),), ColorSpace.SRGB),
@@ -60,20 +59,6 @@ def texture_map(path: Path, roles=(("diffuseColor", "rgb"),), color_space=ColorS
 def sample_map(samples_dir: Path, name: str) -> TextureMap:
     roles, cs = SAMPLE_ROLES[name]
     return texture_map(samples_dir / "textures" / name, roles, cs, normal=name == "brick_normal.png")
-
-
-def write_image(path: Path, data: np.ndarray, names: tuple[str, ...] | None = None) -> Path:
-    if data.ndim == 2:
-        data = data[..., None]
-    h, w, c = data.shape
-    spec = oiio.ImageSpec(w, h, c, OIIO_TYPES[data.dtype.type])
-    if names:
-        spec.channelnames = names
-    spec.attribute("oiio:UnassociatedAlpha", 1)
-    out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), spec) and out.write_image(np.ascontiguousarray(data)), out.geterror()
-    out.close()
-    return path
 
 
 # the policy --------------------------------------------------------------------------------------
@@ -168,7 +153,7 @@ def test_stack_nonfinite_pixels_are_replaced_and_reported(tmp_path: Path) -> Non
     data = np.full((8, 8, 3), 0.5, np.float32)
     data[0, 0, 0], data[1, 1, 1], data[2, 2, 2] = np.nan, np.inf, -np.inf
     data[3, 3] = 4.0
-    path = write_image(tmp_path / "emit.exr", data)
+    path = write_raw_image(tmp_path / "emit.exr", data)
     stack = load_stack_pixels([texture_map(path, (("emissiveColor", "rgb"),), ColorSpace.RAW)])
     assert np.isfinite(stack.values[0]).all()
     [finding] = stack.findings
@@ -177,7 +162,7 @@ def test_stack_nonfinite_pixels_are_replaced_and_reported(tmp_path: Path) -> Non
 
 
 def test_stack_channel_warnings_become_findings(tmp_path: Path) -> None:
-    path = write_image(tmp_path / "rgb.png", np.zeros((4, 4, 3), np.uint8))
+    path = write_raw_image(tmp_path / "rgb.png", np.zeros((4, 4, 3), np.uint8))
     stack = load_stack_pixels([texture_map(path, (("diffuseColor", "rgb"), ("opacity", "a")))])
     [finding] = stack.findings
     assert (finding.code, finding.where) == ("map-channels", "</M/rgb> @textures/rgb.png@")
@@ -186,7 +171,7 @@ def test_stack_channel_warnings_become_findings(tmp_path: Path) -> None:
 @pytest.mark.parametrize("name", ["a.tga", "a.tif", "a.jpg"])
 def test_8bit_sources_of_other_formats_are_written_as_png(tmp_path: Path, name: str) -> None:
     data = np.random.default_rng(7).integers(0, 256, (6, 6, 3), dtype=np.uint8)
-    stack = load_stack_pixels([texture_map(write_image(tmp_path / name, data))])
+    stack = load_stack_pixels([texture_map(write_raw_image(tmp_path / name, data))])
     out = write_map(tmp_path / "tile", stack.values[0], stack.encodings[0], like=stack.infos[0])
     assert out.name == "tile.png"
     assert np.array_equal(np.rint(read_image(out)[0] * 255), np.rint(read_image(tmp_path / name)[0] * 255))
@@ -210,7 +195,7 @@ def test_stack_errors_are_input_errors(tmp_path: Path) -> None:
     unresolved = TextureMap(**{**missing.__dict__, "resolved": ""})
     with pytest.raises(InputError, match=r"unresolved texture of </M/gone>"):
         load_stack_pixels([unresolved])
-    path = write_image(tmp_path / "n.png", np.zeros((4, 4, 3), np.uint8))
+    path = write_raw_image(tmp_path / "n.png", np.zeros((4, 4, 3), np.uint8))
     bad = TextureMap(**{**texture_map(path, (("normal", "rgb"),), ColorSpace.RAW).__dict__, "scale": (2.0, 0.0, 2.0, 1.0), "bias": (-1.0, 0.0, -1.0, 0.0)})
     with pytest.raises(InputError, match=r"</M/n>.*zero component"):
         load_stack_pixels([bad])
@@ -258,7 +243,7 @@ def test_write_map_keeps_depth_channels_and_alpha(tmp_path: Path, channels: int,
         data = (rng.random((6, 9, channels)) * 3).astype(dtype)  # values above 1
     if channels in (2, 4):
         data[0, :, -1] = 0  # transparent texels keep their colour
-    src = write_image(tmp_path / f"src.{'png' if np.issubdtype(dtype, np.integer) else 'exr'}", data)
+    src = write_raw_image(tmp_path / f"src.{'png' if np.issubdtype(dtype, np.integer) else 'exr'}", data)
     stack = load_stack_pixels([texture_map(src, (("diffuseColor", "rgb"),), ColorSpace.SRGB)])
     info, enc = stack.infos[0], stack.encodings[0]
     assert enc.network_channels == channels
@@ -280,7 +265,7 @@ def test_write_map_keeps_depth_channels_and_alpha(tmp_path: Path, channels: int,
 
 def test_write_map_16bit_tiff_stays_tiff(tmp_path: Path) -> None:
     data = np.random.default_rng(2).integers(0, 65536, (5, 5, 1), dtype=np.uint16)
-    src = write_image(tmp_path / "height.tif", data)
+    src = write_raw_image(tmp_path / "height.tif", data)
     stack = load_stack_pixels([texture_map(src, (("displacement", "r"),), ColorSpace.RAW)])
     out = write_map(tmp_path / "tile.tif", stack.values[0], stack.encodings[0], like=stack.infos[0])
     back, info = read_image(out)
