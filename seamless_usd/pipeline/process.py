@@ -16,7 +16,7 @@ from pathlib import Path
 
 from seamless_usd import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
-from seamless_usd.discover.types import ScanResult, TextureMap, TextureStack
+from seamless_usd.discover.types import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 from seamless_usd.pipeline.executors import Executor, make_executor
@@ -119,7 +119,7 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
         elif dry:
             report.status = StackStatus.PLANNED
             planned = _planned_result(stack, out_dir, run.options)
-            report.maps = [_map_report(mr.map, mr.output_path) for mr in planned.maps]
+            report.maps = [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps]
             report.uv_scale = planned.uv_scale
             report.duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
             if report.duplicate_of is None:
@@ -197,13 +197,6 @@ def _error_message(exc: Exception | None) -> str:
         return str(exc)
     last = traceback.format_exception_only(type(exc), exc)[-1].strip()
     return f"internal error: {last} (please report it)"
-
-
-def _map_report(m: TextureMap, output: Path | None) -> MapReport:
-    return MapReport(
-        node=m.node, asset=m.asset, output=str(output) if output else None,
-        roles=[r.role for r in m.roles], channels=m.channels_used, color_space=m.color_space.value,
-    )
 
 
 def _record_authoring(run: Run, result) -> None:

@@ -111,16 +111,10 @@ class StackOutcome:
                      "timings", "model_hash", "device", "precision"):
             setattr(report, name, getattr(self, name))
         report.previews = self.previews
-        report.maps = []
-        for m in stack.maps:
-            out = self.maps[map_identity(m)]
-            report.maps.append(
-                MapReport(
-                    node=m.node, asset=m.asset, output=str(out.output), roles=[r.role for r in m.roles],
-                    channels=m.channels_used, color_space=m.color_space.value,
-                    metrics=out.metrics, source_metrics=out.source_metrics,
-                )
-            )
+        report.maps = [
+            MapReport.for_map(m, out.output, out.metrics, out.source_metrics)
+            for m, out in ((m, self.maps[map_identity(m)]) for m in stack.maps)
+        ]
 
     def stack_result(self, stack: TextureStack):
         """The authoring input for ``stack`` (possibly an identical stack of another material)."""

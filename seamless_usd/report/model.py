@@ -31,6 +31,15 @@ class MapReport:
     metrics: dict[str, float] = field(default_factory=dict)  # seam/detail metrics of the new tile
     source_metrics: dict[str, float] = field(default_factory=dict)  # the same for the source tiled as is
 
+    @classmethod
+    def for_map(cls, m, output=None, metrics=None, source_metrics=None) -> "MapReport":
+        """The report row of a discovered ``TextureMap`` and the tile written for it (if any)."""
+        return cls(
+            node=m.node, asset=m.asset, output=str(output) if output else None,
+            roles=[r.role for r in m.roles], channels=m.channels_used, color_space=m.color_space.value,
+            metrics=dict(metrics or {}), source_metrics=dict(source_metrics or {}),
+        )
+
 
 @dataclass
 class Previews:
