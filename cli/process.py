@@ -45,6 +45,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", "-j", type=int, help="stacks trained at once in local worker processes (default 1)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run stacks on Dask: local:N (a local cluster of N workers) or tcp://host:8786")
+    p.add_argument("--refine", choices=("on", "off"), default="on",
+                   help="exemplar refinement to the source's resolution with real source texels; "
+                        "off gives the pure SeamlessGAN tile (default: %(default)s)")
+    p.add_argument("--tile-size", choices=("source", "paper"), default="source",
+                   help="source: the tile has the source's pixel size (same texture memory); "
+                        "paper: the paper's 2c x 2c tile (default: %(default)s)")
+    p.add_argument("--force", action="store_true",
+                   help="process every stack, also those classed uv-atlas, already-tileable or other")
+    p.add_argument("--force-materials", action="append", default=[], metavar="GLOB",
+                   help="process these materials whatever their tiling intent (repeatable)")
     p.add_argument("--report", type=Path, help="HTML report path (the JSON report is written beside it)")
     p.add_argument("--json", action="store_true", help="print the JSON report on stdout")
 
@@ -67,6 +77,10 @@ def _options(args: argparse.Namespace, progress) -> Options:
         iterations=args.iterations,
         jobs=args.jobs,
         scheduler=args.scheduler,
+        refine=args.refine,
+        tile_size=args.tile_size,
+        force=args.force,
+        force_materials=tuple(args.force_materials),
         progress=progress,
     )
 

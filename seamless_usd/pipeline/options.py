@@ -44,6 +44,10 @@ class Options:
     iterations: int | None = None  # override the preset's training iterations
     scheduler: str | None = None  # None: in this process; "local:N": N local Dask workers; "tcp://host:port"
     jobs: int | None = None  # stacks trained at once (local workers); None: 1 in process, N for local:N
+    refine: str = "on"  # "on": exemplar refinement to the source's resolution; "off": the pure SeamlessGAN tile
+    tile_size: str = "source"  # "source": tile has the source's pixel size; "paper": the paper's 2c x 2c tile
+    force: bool = False  # process every stack whatever its tiling intent (uv-atlas, already-tileable, other)
+    force_materials: tuple[str, ...] = ()  # fnmatch patterns of materials processed whatever their intent
     progress: Callable[[ProgressEvent], None] | None = field(default=None, compare=False)
 
     def with_(self, **changes: Any) -> "Options":
@@ -54,7 +58,8 @@ class Options:
         out = {}
         for name in (
             "preset", "materials", "mode", "plan_mode", "output_layer", "output_dir", "device", "seed",
-            "cache_dir", "max_size", "max_pixels", "iterations", "scheduler", "jobs",
+            "cache_dir", "max_size", "max_pixels", "iterations", "scheduler", "jobs", "refine", "tile_size",
+            "force", "force_materials",
         ):
             value = getattr(self, name)
             if isinstance(value, Path):

@@ -21,11 +21,9 @@ from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.pipeline.naming import tile_filename
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
+from seamless_usd.report.previews import stack_previews
 
 __all__ = ["JobSettings", "StackJob", "StackOutcome", "MapOutcome", "run_stack", "map_identity"]
-
-PREVIEW_MAX = 384  # longest side of a 2x2 preview in the HTML report, px
-
 
 @dataclass(frozen=True)
 class JobSettings:
@@ -38,13 +36,15 @@ class JobSettings:
     max_size: int | None = None
     cache_dir: Path | None = None
     max_pixels: int | None = DEFAULT_MAX_PIXELS  # header limit per image file (width * height)
+    refine: str = "on"  # exemplar refinement to the source's resolution ("off": pure SeamlessGAN tile)
+    tile_size: str = "source"  # "source" (same pixel size as the source) or "paper" (2c x 2c)
 
     @classmethod
     def from_options(cls, options) -> "JobSettings":
         return cls(
             preset=options.preset, iterations=options.iterations, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
-            max_pixels=options.max_pixels,
+            max_pixels=options.max_pixels, refine=options.refine, tile_size=options.tile_size,
         )
 
 
@@ -135,11 +135,6 @@ class StackOutcome:
         return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
 
 
-def _preview(img: np.ndarray) -> np.ndarray:
-    step = max(1, int(np.ceil(max(img.shape[:2]) / PREVIEW_MAX)))
-    return np.ascontiguousarray(img[::step, ::step])
-
-
 def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None) -> StackOutcome:
     """Run one stack job end to end (see module docstring)."""
     from seamless_usd import imaging, metrics, synthesis
@@ -204,7 +199,6 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     t3 = time.perf_counter()
     out_dir = Path(job.output_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    previews = Previews(discriminator=None if discriminator is None else discriminator.astype(np.uint8))
     outcomes: dict[tuple[str, str], MapOutcome] = {}
     for name, m, source, encoding, info in zip(names, stack.maps, pixels.values, pixels.encodings, pixels.infos):
         values = tiles[name]
@@ -216,16 +210,14 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             metrics=metrics.map_metrics(values, source, is_normal=m.is_normal),
             source_metrics=metrics.map_metrics(source, None, is_normal=m.is_normal),
         )
-        previews.source_2x2[m.node] = _preview(
-            metrics.preview_uint8(metrics.tile_2x2(source), is_normal=m.is_normal)
-        )
-        previews.tile_2x2[m.node] = _preview(metrics.preview_uint8(metrics.tile_2x2(values), is_normal=m.is_normal))
     timings = dict(meta.get("timings", {}))
     timings["write"] = time.perf_counter() - t3
 
     crop = tuple(int(v) for v in meta["crop_size"])
     tile_hw = tuple(int(v) for v in next(iter(tiles.values())).shape[:2])
     working = tuple(int(v) for v in pixels.working_size)
+    uv_scale = tuple(float(v) for v in uv_scale_for(working, (crop[1], crop[0])))
+    previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator)
     return StackOutcome(
         stack_id=stack.id,
         maps=outcomes,
@@ -233,7 +225,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         tile_size=tile_hw,
         working_size=working,
         resampled=dict(pixels.policy_record),
-        uv_scale=tuple(float(v) for v in uv_scale_for(working, (crop[1], crop[0]))),
+        uv_scale=uv_scale,
         q=dict(meta["q"]),
         candidates=int(meta["candidates"]),
         timings=timings,

@@ -17,6 +17,7 @@ class StackStatus(str, Enum):
     NOT_PASSED = "not-passed"  # maps written from the best candidate, but Q did not pass
     FAILED = "failed"  # an error stopped this stack; nothing of it was written
     REUSED = "reused"  # identical to a stack processed earlier in the run (or cached)
+    LEFT_ALONE = "left-alone"  # not meant to tile (uv-atlas, already-tileable, other): untouched, with the reason
     PLANNED = "planned"  # dry run: would be processed
 
 
@@ -72,6 +73,9 @@ class StackReport:
     model_hash: str = ""
     device: str = ""
     precision: str = ""
+    intent: str = ""  # tiling intent class: "tiling", "uv-atlas", "already-tileable", "other"
+    intent_reason: str = ""  # the measured reason for the class, e.g. "UVs 0.11-0.89, 37 islands"
+    failing: list[str] = field(default_factory=list)  # fidelity/seam figures outside their targets ("map: figure")
     previews: Previews = field(default_factory=Previews, repr=False)
 
     def to_dict(self) -> dict:
@@ -95,6 +99,9 @@ class StackReport:
             "model_hash": self.model_hash,
             "device": self.device,
             "precision": self.precision,
+            "intent": self.intent,
+            "intent_reason": self.intent_reason,
+            "failing": list(self.failing),
             "maps": [dict(vars(m)) for m in self.maps],
         }
 
