@@ -1,0 +1,87 @@
+"""Spec-level edits planned by authoring and applied with the Sdf API in one change block."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pxr import Sdf, Usd
+
+from seamless_usd.authoring.usdnodes import Names
+from seamless_usd.findings import asset_ref, prim_ref
+
+__all__ = []
+
+
+class _EditKind:
+    VALUE = "value"  # set an attribute's default value (None: declare the attribute only)
+    CONNECT = "connect"  # replace an input's connections with one source
+    DEFINE = "define"  # define a Shader prim
+    SCHEMA = "schema"  # prepend an applied API schema
+    RETARGET = "retarget"  # delete a reference and prepend one to another file (value: (old, new))
+
+
+@dataclass
+class _Edit:
+    """One spec-level edit: a value, a connection, a new node or an applied schema."""
+
+    target: Usd.EditTarget
+    kind: str  # an _EditKind
+    path: Sdf.Path  # stage namespace: property path, or prim path for define / schema
+    type_name: Sdf.ValueTypeName | None = None
+    value: object = None
+    variability: object = Sdf.VariabilityVarying
+
+    def describe(self, layer_name: str) -> str:
+        where = f"in {asset_ref(layer_name)}"
+        if self.kind == _EditKind.VALUE and self.value is None:
+            return f"declare {prim_ref(self.path)} {where}"
+        if self.kind == _EditKind.VALUE:
+            shown = asset_ref(self.value.path) if isinstance(self.value, Sdf.AssetPath) else self.value
+            return f"set {prim_ref(self.path)} = {shown} {where}"
+        if self.kind == _EditKind.CONNECT:
+            return f"connect {prim_ref(self.path)} -> {prim_ref(self.value)} {where}"
+        if self.kind == _EditKind.DEFINE:
+            return f"define {self.value} {prim_ref(self.path)} {where}"
+        if self.kind == _EditKind.RETARGET:
+            old, new = self.value
+            return (f"reference {prim_ref(self.path)}: {asset_ref(old.assetPath)} -> "
+                    f"{asset_ref(new.assetPath)} {where}")
+        return f"apply {self.value} to {prim_ref(self.path)} {where}"
+
+    def apply(self) -> None:
+        layer = self.target.GetLayer()
+        spec_path = self.target.MapToSpecPath(self.path)
+        if self.kind == _EditKind.RETARGET:
+            old, new = self.value
+            references = Sdf.CreatePrimInLayer(layer, spec_path).referenceList
+            references.deletedItems.append(old)
+            references.prependedItems.append(new)
+            return
+        if self.kind in (_EditKind.DEFINE, _EditKind.SCHEMA):
+            prim_spec = Sdf.CreatePrimInLayer(layer, spec_path)
+            if self.kind == _EditKind.DEFINE:
+                prim_spec.specifier = Sdf.SpecifierDef
+                prim_spec.typeName = Names.SHADER_TYPE
+            else:
+                _prepend_api_schema(prim_spec, self.value)
+            return
+        prim_spec = Sdf.CreatePrimInLayer(layer, spec_path.GetPrimPath())
+        attr_spec = layer.GetAttributeAtPath(spec_path)
+        if not attr_spec:
+            attr_spec = Sdf.AttributeSpec(prim_spec, spec_path.name, self.type_name, self.variability)
+        if self.kind == _EditKind.VALUE:
+            if self.value is not None:
+                attr_spec.default = self.value
+        else:
+            attr_spec.connectionPathList.explicitItems = [self.target.MapToSpecPath(self.value)]
+
+
+def _prepend_api_schema(prim_spec: Sdf.PrimSpec, name: str) -> None:
+    ops = prim_spec.GetInfo("apiSchemas") if prim_spec.HasInfo("apiSchemas") else Sdf.TokenListOp()
+    if ops.isExplicit:
+        if name not in ops.explicitItems:
+            ops.explicitItems = list(ops.explicitItems) + [name]
+    elif name not in ops.prependedItems and name not in ops.appendedItems:
+        ops.prependedItems = list(ops.prependedItems) + [name]
+    prim_spec.SetInfo("apiSchemas", ops)
+
+

@@ -1,0 +1,124 @@
+"""In-place authoring: edits land in the layers holding the opinions, after ``.bak`` copies."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Sequence
+
+from pxr import Ar, Sdf, Tf, Usd
+
+from seamless_usd.authoring.files import backup_once, check_layer, write_atomically
+from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult
+from seamless_usd.authoring.usdplan import _Author
+from seamless_usd.errors import InputError
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
+
+__all__ = []
+
+
+
+
+def _is_packaged(layer: Sdf.Layer) -> bool:
+    return Ar.IsPackageRelativePath(layer.identifier) or layer.GetFileFormat().IsPackage()
+
+
+def _editable(layer: Sdf.Layer) -> Finding | None:
+    where = asset_ref(layer.identifier)
+    if _is_packaged(layer):
+        return Finding(Severity.SKIPPED, Codes.IN_PACKAGE, where,
+                       "opinion is inside a package; in-place edits skipped (use the default "
+                       "new-layer mode)")
+    if layer.anonymous or not layer.realPath or not os.access(layer.realPath, os.W_OK):
+        return Finding(Severity.SKIPPED, Codes.READ_ONLY, where,
+                       "layer is not a writable file; in-place edits skipped")
+    return None
+
+
+def _prim_nodes(prim: Usd.Prim):
+    stack = [prim.GetPrimIndex().rootNode]
+    while stack:
+        node = stack.pop(0)
+        yield node
+        stack.extend(node.children)
+
+
+def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None):
+    """Where an in-place edit goes: the strongest layer holding the opinion, mapped."""
+    if attr:
+        specs = attr.GetPropertyStack(Usd.TimeCode.Default())
+        layers = [s.layer for s in specs]
+    else:
+        layers = []
+    layers += [s.layer for s in prim.GetPrimStack()]
+    if not layers:
+        return Finding(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(prim.GetPath()), "no layer holds it")
+    layer = layers[0]
+    problem = _editable(layer)
+    if problem is not None:
+        return problem
+    for node in _prim_nodes(prim):
+        if layer in node.layerStack.layers and layer.GetPrimAtPath(node.path):
+            return Usd.EditTarget(layer, node)
+    return Usd.EditTarget(layer)
+
+
+def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: bool = False) -> AuthoringResult:
+    result = AuthoringResult(dry_run=dry_run)
+    if _is_packaged_path(stage_path):
+        result.findings.append(Finding(
+            Severity.SKIPPED, Codes.IN_PACKAGE, asset_ref(stage_path),
+            "a .usdz cannot be edited in place; use the default new-layer mode"))
+        return result
+    _open_layer(stage_path)
+    stage = Usd.Stage.Open(str(stage_path), Usd.Stage.LoadNone)
+    layers = {layer: layer.dirty for layer in stage.GetUsedLayers()}
+    author = _Author(stage, result, anchor_dir=None)
+    author.plan_all(results, _in_place_target)
+    if not author.edits:
+        if author.planned_maps and not result.findings:
+            result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
+                                           "every texture already has these edits; nothing saved"))
+        return result
+    if dry_run:
+        author.apply()  # records the plan only
+        return result
+    changed = {edit.target.GetLayer() for edit in author.edits}
+    for layer in changed:
+        if layers.get(layer):
+            raise InputError(f"{asset_ref(layer.identifier)} has unsaved changes in this process; "
+                             "save or reload it first")
+    try:
+        author.apply()
+        for layer in sorted(changed, key=lambda lay: lay.realPath):
+            path = Path(layer.realPath)
+            result.backups.append(backup_once(path))
+            args = _format_args(layer)
+            write_atomically(path, lambda tmp, layer=layer: layer.Export(str(tmp), args=args), check=check_layer)
+            result.layers_written.append(path)
+    finally:
+        for layer in changed:
+            layer.Reload(force=True)  # drop in-memory edits; saved ones come back from disk
+    return result
+
+
+def _open_layer(path: Path) -> Sdf.Layer:
+    try:
+        layer = Sdf.Layer.FindOrOpen(str(path))
+    except Tf.ErrorException as exc:
+        raise InputError(f"{asset_ref(path)}: cannot be read as a USD layer ({exc})") from None
+    if not layer:
+        raise InputError(f"{asset_ref(path)}: cannot be read as a USD layer")
+    return layer
+
+
+def _format_args(layer: Sdf.Layer) -> dict:
+    fmt = layer.GetFileFormat()
+    if fmt.formatId == "usd":
+        underlying = Sdf.UsdFileFormat.GetUnderlyingFormatForLayer(layer)
+        return {"format": underlying} if underlying else {}
+    return {}
+
+
+def _is_packaged_path(path: Path) -> bool:
+    fmt = Sdf.FileFormat.FindByExtension(path.suffix.lstrip("."))
+    return bool(fmt and fmt.IsPackage())

@@ -1,0 +1,321 @@
+"""Planning the USD edits of a list of stack results on one stage (see ``usd.py``)."""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from typing import Iterable
+
+from pxr import Gf, Sdf, Usd, UsdShade
+
+from seamless_usd.authoring.files import relative_asset_path
+from seamless_usd.authoring.schema import PROPERTIES, Schema, has_applied, is_seamless_uv_transform, read_provenance, schemas_known
+from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult
+from seamless_usd.authoring.usdedits import _Edit, _EditKind
+from seamless_usd.authoring.usdnodes import (
+    Names,
+    _close,
+    _connected,
+    _connection_source_attr,
+    _gltf_transform_is_identity,
+    _kind,
+    _Kind,
+    _producing_attr,
+    _same_file,
+    _uv_input_name,
+    _value,
+)
+from seamless_usd.discover.types import Origin
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
+
+__all__ = []
+
+
+class _Author:
+    """Plans the edits for a list of stack results on one stage, then applies them."""
+
+    def __init__(self, stage: Usd.Stage, result: AuthoringResult, anchor_dir: Path | None,
+                 layer_names: dict | None = None):
+        self.stage = stage
+        self.result = result
+        self.anchor_dir = anchor_dir
+        self.layer_names = layer_names or {}
+        self.edits: list[_Edit] = []
+        self._done: dict[str, tuple[str, tuple[float, float], str]] = {}  # node -> (out, scale, material)
+        self._uv_nodes: dict[tuple, Sdf.Path] = {}  # (parent, source, scale) -> inserted node
+        self._reserved: set[Sdf.Path] = set()
+        self._uv_updates: dict[Sdf.Path, tuple[float, float]] = {}  # marked node -> total scale
+        self.target_for = None
+        self.planned_maps = 0
+
+    # -- planning ------------------------------------------------------------------------
+
+    def plan_all(self, results: Iterable[StackResult], target_for) -> None:
+        """``target_for(prim, attr_or_None) -> Usd.EditTarget | Finding`` picks where edits go."""
+        self.target_for = target_for
+        if not schemas_known():
+            self._find(Severity.WARNING, Codes.SCHEMA_NOT_REGISTERED, asset_ref(Schema.TILE_API),
+                       "USD's schema registry was built before seamless_usd.authoring was "
+                       "imported: provenance is written, but this process does not know the schema")
+        for stack_result in results:
+            for map_result in stack_result.maps:
+                if map_result.map.origin is Origin.USD:  # MaterialX documents: author_mtlx
+                    self.planned_maps += 1
+                    self._plan_map(map_result, stack_result.uv_scale, stack_result.provenance)
+
+    def plan_retarget(self, document: Path, new_document: Path, target: Usd.EditTarget) -> None:
+        """Point references to ``document`` at ``new_document`` (delete + prepend, so other
+        references of the prim stay as they are; Pcp anchors both before matching)."""
+        anchor = self.anchor_dir or document.parent
+        seen = set()
+        for prim in self.stage.TraverseAll():
+            for spec in prim.GetPrimStack():
+                for ref in spec.referenceList.GetAddedOrExplicitItems():
+                    if not ref.assetPath or (prim.GetPath(), ref.primPath) in seen:
+                        continue
+                    if not _same_file(spec.layer.ComputeAbsolutePath(ref.assetPath), str(document)):
+                        continue
+                    seen.add((prim.GetPath(), ref.primPath))
+                    old = Sdf.Reference(relative_asset_path(document, anchor), ref.primPath, ref.layerOffset)
+                    new = Sdf.Reference(relative_asset_path(new_document, anchor), ref.primPath,
+                                        ref.layerOffset)
+                    self.edits.append(_Edit(target, _EditKind.RETARGET, prim.GetPath(), value=(old, new)))
+
+    def _find(self, severity: Severity, code: str, where: str, message: str) -> None:
+        self.result.findings.append(Finding(severity, code, where, message))
+
+    def _target(self, prim: Usd.Prim, attr: Usd.Attribute | None = None) -> Usd.EditTarget | None:
+        target = self.target_for(prim, attr)
+        if isinstance(target, Finding):
+            self.result.findings.append(target)
+            return None
+        return target
+
+    def _plan_map(self, map_result, uv_scale, provenance: Provenance) -> None:
+        tex_map = map_result.map
+        node_path = tex_map.node.strip("<>")
+        prim = self.stage.GetPrimAtPath(node_path)
+        if not prim:
+            self._find(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(node_path),
+                       "texture node not found on the stage; nothing written for it")
+            return
+        if prim.IsInstanceProxy():
+            self._find(Severity.SKIPPED, Codes.INSTANCE_PROXY, prim_ref(node_path),
+                       "texture inside an instance: edit its prototype's source or make it "
+                       "non-instanceable")
+            return
+        out = str(Path(map_result.output_path).resolve())
+        if not Path(out).is_file() and not self.result.dry_run:  # a dry run plans unwritten tiles
+            self._find(Severity.ERROR, Codes.MISSING_OUTPUT, asset_ref(out),
+                       f"tileable file for {prim_ref(node_path)} not found; nothing written for it")
+            return
+        scale = (float(uv_scale[0]), float(uv_scale[1]))
+        done = self._done.get(node_path)
+        if done is not None:
+            if done[0] != out or not _close(done[1], scale):
+                self._find(
+                    Severity.WARNING, Codes.SHARED_CONFLICT, prim_ref(node_path),
+                    f"texture node shared by {done[2]} and {tex_map.material} with different "
+                    f"results; kept {done[2]}'s. Give each material its own texture node to "
+                    "process them separately",
+                )
+            return
+        self._done[node_path] = (out, scale, tex_map.material)
+        first_edit = len(self.edits)
+        shader = UsdShade.Shader(prim)
+        kind = _kind(shader)
+        recorded = read_provenance(prim)
+        from_source = recorded is None or _same_file(
+            prim.GetAttribute(Schema.SOURCE_ASSET).Get(), tex_map.resolved)
+        if not self._plan_file(prim, shader, tex_map, out):
+            return
+        self._plan_wrap(prim, shader, kind)
+        applied = self._plan_uv(prim, shader, kind, scale, recorded, from_source)
+        if applied is None:  # the UV edit cannot be made: leave this map untouched
+            del self.edits[first_edit:]
+            return
+        if recorded and not from_source:  # made from an earlier tile: keep the origin
+            origin = prim.GetAttribute(Schema.SOURCE_ASSET).Get()
+            source = origin.resolvedPath or origin.path
+        else:
+            source = tex_map.resolved
+        self._plan_provenance(prim, provenance, applied, source)
+        if len(self.edits) > first_edit and prim_ref(node_path) not in self.result.edited_prims:
+            self.result.edited_prims.append(prim_ref(node_path))
+
+    def _plan_file(self, prim, shader, tex_map, out: str) -> bool:
+        """Plan the new asset path where it is authored; False when it cannot be edited."""
+        at = tex_map.file_at
+        owner = self.stage.GetPrimAtPath(at.prim.strip("<>")) if at.prim else None
+        attr = owner.GetAttribute(at.attribute) if owner else None
+        if not attr:
+            attr = _producing_attr(shader.GetInput(Names.FILE))
+        if not attr:
+            self._find(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(prim.GetPath()),
+                       "no file input found to edit")
+            return False
+        current = attr.Get()
+        if isinstance(current, Sdf.AssetPath) and _same_file(current, out):
+            return True
+        target = self._target(attr.GetPrim(), attr)
+        if target is None:
+            return False
+        self.edits.append(_Edit(target, _EditKind.VALUE, attr.GetPath(), attr.GetTypeName(),
+                                Sdf.AssetPath(self._asset_path(out, target)), attr.GetVariability()))
+        return True
+
+    def _asset_path(self, out: str, target: Usd.EditTarget) -> str:
+        layer = target.GetLayer()
+        anchor = self.anchor_dir
+        if anchor is None and not layer.anonymous and layer.realPath:
+            anchor = Path(layer.realPath).parent
+        if anchor is None:
+            self._find(Severity.WARNING, Codes.ANONYMOUS_ANCHOR, asset_ref(out),
+                       "the edit layer has no folder yet; wrote an absolute asset path "
+                       "(pass anchor_dir to get relative ones)")
+            return Path(out).as_posix()
+        return relative_asset_path(Path(out), anchor)
+
+    def _plan_input_value(self, prim, shader, name: str, type_name, value) -> None:
+        """Set input ``name`` where its value is authored (interface input) or on the node."""
+        shade_input = shader.GetInput(name)
+        attr = _producing_attr(shade_input) if shade_input else None
+        if attr is None:
+            attr = prim.GetAttribute(f"inputs:{name}")
+        current = attr.Get() if attr else None
+        if current == value or (isinstance(value, tuple) and _close(current, value, 1e-9)):
+            return
+        path = attr.GetPath() if attr else prim.GetPath().AppendProperty(f"inputs:{name}")
+        if attr:
+            type_name = attr.GetTypeName()
+        target = self._target(attr.GetPrim() if attr else prim, attr)
+        if target is None:
+            return
+        if isinstance(value, tuple):
+            value = Gf.Vec2f(*value)
+        self.edits.append(_Edit(target, _EditKind.VALUE, path, type_name, value))
+
+    def _plan_wrap(self, prim, shader, kind: str) -> None:
+        if kind == _Kind.USD_UV_TEXTURE:
+            for name in (Names.WRAP_S, Names.WRAP_T):
+                self._plan_input_value(prim, shader, name, Sdf.ValueTypeNames.Token, Names.REPEAT)
+        elif kind in (_Kind.MX_IMAGE, _Kind.MX_GLTF):
+            for name in (Names.U_ADDRESS, Names.V_ADDRESS):
+                self._plan_input_value(prim, shader, name, Sdf.ValueTypeNames.String, Names.PERIODIC)
+
+    def _plan_uv(self, prim, shader, kind, scale, recorded, from_source) -> tuple[float, float] | None:
+        """Plan the UV scale; return the total scale now applied after the original chain."""
+        prior = recorded.uv_scale if recorded else None
+        if kind == _Kind.MX_TILED:
+            total = scale if from_source or prior is None else (prior[0] * scale[0], prior[1] * scale[1])
+            undo = prior or (1.0, 1.0)
+            tiling = _value(shader.GetInput(Names.UV_TILING), (1.0, 1.0))
+            offset = _value(shader.GetInput(Names.UV_OFFSET), (0.0, 0.0))
+            base_t = (tiling[0] / undo[0], tiling[1] / undo[1])
+            base_o = (offset[0] / undo[0], offset[1] / undo[1])
+            f32 = Sdf.ValueTypeNames.Float2
+            self._plan_input_value(prim, shader, Names.UV_TILING, f32,
+                                   (base_t[0] * total[0], base_t[1] * total[1]))
+            self._plan_input_value(prim, shader, Names.UV_OFFSET, f32,
+                                   (base_o[0] * total[0], base_o[1] * total[1]))
+            return total
+        if kind == _Kind.OTHER:
+            self._find(Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(prim.GetPath()),
+                       f"unknown texture node {shader.GetShaderId()!r}; file replaced, UVs not scaled")
+            return (1.0, 1.0)
+        if kind == _Kind.MX_GLTF and not _gltf_transform_is_identity(shader):
+            self._find(Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(prim.GetPath()),
+                       "gltf image node with its own UV transform: scale it by hand")
+            return (1.0, 1.0)
+        uv_input = shader.GetInput(_uv_input_name(kind))
+        source = _connected(uv_input)
+        if source is None:
+            self._find(Severity.WARNING, Codes.NO_UV, prim_ref(prim.GetPath()),
+                       "texture coordinates are not connected; UVs not scaled")
+            return (1.0, 1.0)
+        use_place2d = kind != _Kind.USD_UV_TEXTURE
+        if is_seamless_uv_transform(source.GetPrim()):
+            node = UsdShade.Shader(source.GetPrim())
+            if node.GetPath() in self._uv_updates:  # shared by maps of this run: updated once
+                return self._uv_updates[node.GetPath()]
+            current = _value(node.GetInput(Names.SCALE), (1.0, 1.0))
+            prior_node = (1.0 / current[0], 1.0 / current[1]) if use_place2d else current
+            total = scale if from_source else (prior_node[0] * scale[0], prior_node[1] * scale[1])
+            value = (1.0 / total[0], 1.0 / total[1]) if use_place2d else total
+            self._plan_input_value(node.GetPrim(), node, Names.SCALE, Sdf.ValueTypeNames.Float2, value)
+            self._uv_updates[node.GetPath()] = total
+            return total
+        source_attr = _connection_source_attr(uv_input)
+        key = (str(prim.GetPath().GetParentPath()), str(source_attr), scale, use_place2d)
+        node_path = self._uv_nodes.get(key)
+        target = self._target(prim, uv_input.GetAttr())
+        if target is None:
+            return None
+        if node_path is None:
+            node_path = self._new_uv_node(prim, target, source_attr, scale, use_place2d)
+            self._uv_nodes[key] = node_path
+        out_name = Names.OUT if use_place2d else Names.RESULT
+        self.edits.append(_Edit(target, _EditKind.CONNECT, uv_input.GetAttr().GetPath(),
+                                Sdf.ValueTypeNames.Float2,
+                                node_path.AppendProperty(f"outputs:{out_name}")))
+        return scale
+
+    def _new_uv_node(self, prim, target, source_attr: Sdf.Path, scale, use_place2d: bool) -> Sdf.Path:
+        parent = prim.GetPath().GetParentPath()
+        name, n = Names.UV_NODE, 0
+        while self.stage.GetPrimAtPath(parent.AppendChild(name)) or parent.AppendChild(name) in self._reserved:
+            n += 1
+            name = f"{Names.UV_NODE}_{n}"
+        path = parent.AppendChild(name)
+        self._reserved.add(path)
+        f2 = Sdf.ValueTypeNames.Float2
+        if use_place2d:
+            node_id, in_name, out_name = Names.MX_PLACE_2D, Names.TEXCOORD, Names.OUT
+            value = Gf.Vec2f(1.0 / scale[0], 1.0 / scale[1])
+        else:
+            node_id, in_name, out_name = Names.USD_TRANSFORM_2D, Names.IN, Names.RESULT
+            value = Gf.Vec2f(*scale)
+        self.edits += [
+            _Edit(target, _EditKind.DEFINE, path, value=f"{node_id} node"),
+            _Edit(target, _EditKind.VALUE, path.AppendProperty(Names.INFO_ID), Sdf.ValueTypeNames.Token,
+                  node_id, Sdf.VariabilityUniform),
+            _Edit(target, _EditKind.CONNECT, path.AppendProperty(f"inputs:{in_name}"), f2, source_attr),
+            _Edit(target, _EditKind.VALUE, path.AppendProperty(f"inputs:{Names.SCALE}"), f2, value),
+            _Edit(target, _EditKind.VALUE, path.AppendProperty(f"outputs:{out_name}"), f2, None),
+            _Edit(target, _EditKind.SCHEMA, path, value=Schema.UV_TRANSFORM_API),
+        ]
+        return path
+
+    def _plan_provenance(self, prim, provenance: Provenance, applied, source_file: str) -> None:
+        """Record provenance; the source is this map's own file, relative to the edit layer."""
+        target = self._target(prim, None)
+        if target is None:
+            return
+        source = self._asset_path(source_file, target) if source_file else provenance.source_asset
+        p = replace(provenance, uv_scale=tuple(applied), source_asset=source)
+        if read_provenance(prim) == p:
+            return
+        if not has_applied(prim, Schema.TILE_API):
+            self.edits.append(_Edit(target, _EditKind.SCHEMA, prim.GetPath(), value=Schema.TILE_API))
+        for name, (type_name, convert) in PROPERTIES.items():
+            self.edits.append(_Edit(target, _EditKind.VALUE, prim.GetPath().AppendProperty(name), type_name,
+                                    convert(p)))
+
+    # -- applying ------------------------------------------------------------------------
+
+    def apply(self) -> None:
+        """Record the plan and, unless dry-running, apply it in one change block."""
+        for edit in self.edits:
+            layer = edit.target.GetLayer()
+            name = self.layer_names.get(layer) or _layer_name(layer)
+            self.result.plan.append(edit.describe(name))
+        if self.result.dry_run:
+            return
+        with Sdf.ChangeBlock():
+            for edit in self.edits:
+                edit.apply()
+
+
+
+def _layer_name(layer: Sdf.Layer) -> str:
+    return layer.realPath or layer.identifier
+
