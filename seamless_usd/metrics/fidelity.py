@@ -1,0 +1,281 @@
+"""Figures that compare a tile with its source: SSIM of the repeated tile, Gram distance, feature
+scale and patch-distribution distance."""
+from __future__ import annotations
+
+from typing import Callable, Iterable
+
+import numpy as np
+
+from .common import _prepare, _ratio, as_hwc
+
+__all__ = ["tile_to", "ssim_tiled", "FeatureFn", "gram_matrix", "gram_distance", "mean_log_frequency", "scale_ratio",
+           "patch_sw", "patch_distance", "source_halves", "SCALE_MAX_FREQUENCY"]
+
+# --------------------------------------------------------------------------------------------
+# Fidelity
+# --------------------------------------------------------------------------------------------
+
+
+def tile_to(tile: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """Repeat ``tile`` from its top-left corner and crop it to ``shape[:2]`` (Table 2 protocol)."""
+    a = np.asarray(tile)
+    h, w = shape[:2]
+    reps = (-(-h // a.shape[0]), -(-w // a.shape[1])) + (1,) * (a.ndim - 2)
+    return np.tile(a, reps)[:h, :w]
+
+
+def ssim_tiled(
+    tile: np.ndarray, source: np.ndarray, is_normal: bool = False, *, data_range: float = 2.0
+) -> float:
+    """SSIM between ``source`` and ``tile`` repeated to the source's size.
+
+    Uses :func:`skimage.metrics.structural_similarity` (7x7 uniform window, per channel, then
+    averaged). Normal maps are compared as unit vectors (``data_range`` 2).
+
+    Parameters
+    ----------
+    tile, source : array_like
+        ``(H, W)`` or ``(H, W, C)`` with the same channel count.
+    data_range : float
+        Value range: 2.0 for the network domain ``[-1, 1]``, 1.0 for file values.
+    """
+    from skimage.metrics import structural_similarity
+
+    t = _prepare(tile, is_normal)
+    s = _prepare(source, is_normal, "source")
+    if t.shape[-1] != s.shape[-1]:
+        raise ValueError(f"tile has {t.shape[-1]} channels, source {s.shape[-1]}")
+    if min(s.shape[:2]) < 7:
+        raise ValueError(f"SSIM needs a source of at least 7x7 px, got {s.shape[:2]}")
+    t = tile_to(t, s.shape)
+    rng = 2.0 if is_normal else data_range
+    return float(structural_similarity(s, t, data_range=rng, channel_axis=-1))
+
+
+FeatureFn = Callable[[np.ndarray], Iterable[np.ndarray]]
+
+
+def gram_matrix(features: np.ndarray) -> np.ndarray:
+    """Gram matrix ``F F^T / (h w)`` of one feature map.
+
+    Parameters
+    ----------
+    features : array_like
+        ``(K, h, w)`` (leading axes of length 1, e.g. a batch of one, are dropped).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(K, K)`` float64.
+    """
+    f = np.asarray(features, dtype=np.float64)
+    while f.ndim > 3 and f.shape[0] == 1:
+        f = f[0]
+    if f.ndim != 3:
+        raise ValueError(f"a feature map must be (K, h, w), got {f.shape}")
+    k = f.shape[0]
+    flat = f.reshape(k, -1)
+    return flat @ flat.T / flat.shape[1]
+
+
+def gram_distance(a: np.ndarray, b: np.ndarray, features: FeatureFn) -> float:
+    """Relative Gram-statistics distance of ``a`` to the reference ``b``.
+
+    ``mean over layers l of ||G_l(a) - G_l(b)||_F / ||G_l(b)||_F``, where ``G_l`` is the Gram
+    matrix of the ``l``-th feature map returned by ``features``. 0 for identical statistics.
+
+    Parameters
+    ----------
+    a, b : array_like
+        ``(H, W, C)`` images (sizes may differ; Gram matrices do not depend on size).
+    features : callable
+        ``features(img) -> iterable of (K, h, w) arrays`` for an ``(H, W, C)`` float32 image,
+        e.g. an adapter around the synthesis engine's default random multi-scale extractor.
+
+    Returns
+    -------
+    float
+        Mean relative Frobenius distance over layers.
+    """
+    fa = list(features(np.asarray(as_hwc(a, "image"), dtype=np.float32)))
+    fb = list(features(np.asarray(as_hwc(b, "reference"), dtype=np.float32)))
+    if not fa or len(fa) != len(fb):
+        raise ValueError(f"features gave {len(fa)} and {len(fb)} layers; expected the same, > 0")
+    dists = []
+    for la, lb in zip(fa, fb):
+        ga, gb = gram_matrix(la), gram_matrix(lb)
+        dists.append(_ratio(float(np.linalg.norm(ga - gb)), float(np.linalg.norm(gb))))
+    return float(np.mean(dists))
+
+
+
+
+# --------------------------------------------------------------------------------------------
+# Feature scale (spectral) and patch-distribution distance
+# --------------------------------------------------------------------------------------------
+
+#: Highest radial frequency (cycles per pixel) the feature-scale figure looks at (Nyquist).
+SCALE_MAX_FREQUENCY = 0.5
+
+
+#: Patch side and pyramid scales of :func:`patch_distance`.
+PATCH_SIZE = 7
+PATCH_SCALES = (1, 2, 4)
+
+
+def _signal(img: np.ndarray, is_normal: bool) -> np.ndarray:
+    """(H, W, C') float64 channels whose spectra describe the map: unit-normal x, y for normals."""
+    u = _prepare(img, is_normal).astype(np.float64)
+    return u[..., :2] if is_normal else u
+
+
+def mean_log_frequency(img: np.ndarray, is_normal: bool = False,
+                       max_frequency: float = SCALE_MAX_FREQUENCY) -> float:
+    """Mean log radial frequency (cycles/px) of the image's gradient-weighted power spectrum.
+
+    Each channel is mean-removed and Hann-windowed (so the border of a non-periodic source adds no
+    spurious power); the power ``P(f)`` of all channels is summed and weighted by ``f`` (half-way
+    to gradient energy, so neither the overall shading nor pixel noise dominates), over
+    ``0 < f <= max_frequency``. Magnifying an image by ``m`` lowers the figure by about ``log m``;
+    blurring lowers it too. Measured on real textures (brick, wood, cloth; 200-512 px): the two
+    halves of one photo agree within 16 %, a 2x bilinear magnification scores 0.37-0.49.
+    """
+    u = _signal(img, is_normal)
+    h, w = u.shape[:2]
+    if min(h, w) < 8:
+        raise ValueError(f"image {h}x{w} is too small for a spectrum (need at least 8x8)")
+    window = np.outer(np.hanning(h), np.hanning(w))[..., None]
+    u = (u - u.mean(axis=(0, 1), keepdims=True)) * window
+    power = (np.abs(np.fft.rfft2(u, axes=(0, 1))) ** 2).sum(axis=-1)  # (H, W//2+1)
+    fy = np.fft.fftfreq(h)[:, None]
+    fx = np.fft.rfftfreq(w)[None, :]
+    f = np.sqrt(fy ** 2 + fx ** 2)
+    band = (f > 0) & (f <= max_frequency)
+    weight = power[band] * f[band]
+    total = weight.sum()
+    if total <= 0:  # a constant image: no features at all
+        return float(np.log(max_frequency))
+    return float((weight * np.log(f[band])).sum() / total)
+
+
+def scale_ratio(tile: np.ndarray, source: np.ndarray, is_normal: bool = False) -> float:
+    """Feature-scale / sharpness ratio of ``tile`` against ``source``.
+
+    ``exp(mean_log_frequency(tile) - mean_log_frequency(source))``: about 1 when the tile keeps the
+    source's feature size and crispness, about 0.5 when its features are magnified 2x or blurred
+    away, above 1 when they shrink or noise is invented.
+
+    >>> rng = np.random.default_rng(0)
+    >>> img = rng.normal(size=(128, 128))
+    >>> round(scale_ratio(img, img), 3)
+    1.0
+    """
+    return float(np.exp(mean_log_frequency(tile, is_normal) - mean_log_frequency(source, is_normal)))
+
+
+def _downsample(u: np.ndarray, factor: int) -> np.ndarray:
+    if factor == 1:
+        return u
+    h, w = (u.shape[0] // factor) * factor, (u.shape[1] // factor) * factor
+    return u[:h, :w].reshape(h // factor, factor, w // factor, factor, -1).mean(axis=(1, 3))
+
+
+def _patches(u: np.ndarray, count: int, rng: np.random.Generator, size: int = PATCH_SIZE) -> np.ndarray:
+    """Up to ``count`` random ``size`` x ``size`` patches of ``u`` (H, W, C), flattened: (N, size*size*C)."""
+    h, w = u.shape[:2]
+    ny, nx = h - size + 1, w - size + 1
+    n = min(count, ny * nx)
+    idx = rng.choice(ny * nx, size=n, replace=False)
+    ys, xs = np.divmod(idx, nx)
+    offs = np.arange(size)
+    rows = (ys[:, None] + offs[None, :])[:, :, None]  # (N, size, 1)
+    cols = (xs[:, None] + offs[None, :])[:, None, :]  # (N, 1, size)
+    return u[rows, cols].reshape(n, -1)
+
+
+def _quantiles(sorted_proj: np.ndarray, count: int) -> np.ndarray:
+    """(count, K) quantiles of sorted projections (N, K) at evenly spaced levels."""
+    n = len(sorted_proj)
+    if n == count:
+        return sorted_proj
+    pos = np.linspace(0.0, n - 1, count)
+    lo = np.floor(pos).astype(int)
+    hi = np.minimum(lo + 1, n - 1)
+    t = (pos - lo)[:, None]
+    return sorted_proj[lo] * (1 - t) + sorted_proj[hi] * t
+
+
+def _sliced_wasserstein(a: np.ndarray, b: np.ndarray, directions: np.ndarray) -> float:
+    """Sliced 2-Wasserstein distance between point sets ``a`` (N, D) and ``b`` (M, D)."""
+    pa = np.sort(a @ directions, axis=0)
+    pb = np.sort(b @ directions, axis=0)
+    count = max(len(pa), len(pb))
+    return float(np.sqrt(np.mean((_quantiles(pa, count) - _quantiles(pb, count)) ** 2)))
+
+
+def _band_levels(u: np.ndarray, scales: tuple[int, ...]) -> list[np.ndarray]:
+    """Laplacian-pyramid style levels of ``u``: for each scale ``s`` but the last, the detail of the
+    ``s``-downsampled image (minus its 2x2 box average brought back up); the last is the low-pass image.
+    Detail levels carry fine structure (what blur removes and checkerboards add) without being
+    drowned by the colour variation the low-pass level measures."""
+    out = []
+    for i, s in enumerate(scales):
+        d = _downsample(u, s)
+        if i < len(scales) - 1:
+            coarse = _downsample(d, 2)
+            up = np.repeat(np.repeat(coarse, 2, 0), 2, 1)
+            d = d[: up.shape[0], : up.shape[1]] - up
+        out.append(d)
+    return out
+
+
+def _level_distances(a: np.ndarray, b: np.ndarray, is_normal: bool, samples: int, directions: int,
+                     scales: tuple[int, ...], seed: int) -> list[float | None]:
+    ua, ub = _signal(a, is_normal), _signal(b, is_normal)
+    if ua.shape[-1] != ub.shape[-1]:
+        raise ValueError(f"channel counts differ: {ua.shape[-1]} vs {ub.shape[-1]}")
+    out: list[float | None] = []
+    for level, (la, lb) in enumerate(zip(_band_levels(ua, scales), _band_levels(ub, scales))):
+        if min(la.shape[:2] + lb.shape[:2]) < 2 * PATCH_SIZE:
+            out.append(None)
+            continue
+        rng = np.random.default_rng([seed, level])  # same directions for every pair at this level
+        dirs = rng.normal(size=(PATCH_SIZE * PATCH_SIZE * la.shape[-1], directions))
+        dirs /= np.linalg.norm(dirs, axis=0, keepdims=True)
+        pa, pb = _patches(la, samples, rng), _patches(lb, samples, rng)
+        out.append(_sliced_wasserstein(pa, pb, dirs))
+    return out
+
+
+def patch_sw(a: np.ndarray, b: np.ndarray, is_normal: bool = False, *, samples: int = 4096,
+             directions: int = 64, scales: tuple[int, ...] = PATCH_SCALES, seed: int = 0) -> list[float | None]:
+    """Sliced Wasserstein distances between the 7x7 patch distributions of ``a`` and ``b``, one per
+    pyramid level (:func:`_band_levels`; None where a level is too small for patches)."""
+    return _level_distances(a, b, is_normal, samples, directions, scales, seed)
+
+
+def source_halves(source: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two halves of ``source`` across its longer side."""
+    s = np.asarray(source)
+    if s.shape[1] >= s.shape[0]:
+        half = s.shape[1] // 2
+        return s[:, :half], s[:, half: 2 * half]
+    half = s.shape[0] // 2
+    return s[:half], s[half: 2 * half]
+
+
+def patch_distance(tile: np.ndarray, source: np.ndarray, is_normal: bool = False, *, seed: int = 0) -> float:
+    """Patch-distribution distance of ``tile`` to ``source``, in units of the source's own variation.
+
+    Per pyramid level, :func:`patch_sw` (tile, source) divided by the same between the two halves
+    of the source; the mean over levels. About 1 or below for a tile made of the source's own patches in their variety; blur,
+    checkerboards, invented detail and lost variety all raise it.
+    """
+    a, b = source_halves(source)
+    own = patch_sw(a, b, is_normal, seed=seed)
+    d = patch_sw(tile, source, is_normal, seed=seed)
+    ratios = [_ratio(x, o) for x, o in zip(d, own) if x is not None and o is not None]
+    if not ratios:
+        raise ValueError(f"tile {np.shape(tile)[:2]} and source {np.shape(source)[:2]} are too small for "
+                         f"{PATCH_SIZE}x{PATCH_SIZE} patches")
+    return float(np.mean(ratios))
