@@ -98,7 +98,7 @@ def author_mtlx(
             tex_map = map_result.map
             if tex_map.origin is not Origin.MTLX or not _same_path(tex_map.document or tex_map.file_at.layer, src):
                 continue
-            author.edit_map(map_result, stack_result.uv_scale, stack_result.provenance)
+            author.edit_map(map_result, stack_result.uv_scale, stack_result.provenance, stack_result.wrap_only)
             checked += 1
     if not author.changed:
         if checked and not result.findings:
@@ -250,19 +250,35 @@ class _MtlxAuthor:
                 return iface
         return inp if inp is not None else _UnauthoredInput(node, name, type_name)
 
-    def edit_map(self, map_result, uv_scale, provenance: Provenance) -> None:
+    def _periodic(self, node: mx.Node) -> None:
+        """Address modes to periodic (``tiledimage`` always repeats)."""
+        if node.getCategory() == MtlxNames.TILED_IMAGE:
+            return
+        for name in (MtlxNames.U_ADDRESS, MtlxNames.V_ADDRESS):
+            inp = self._authored(node, name, MtlxNames.STRING)
+            if inp.getValueString() != MtlxNames.PERIODIC:
+                inp.setValueString(MtlxNames.PERIODIC)
+                self._plan(f"set {prim_ref(inp.getNamePath())} = {MtlxNames.PERIODIC}")
+
+    def edit_map(self, map_result, uv_scale, provenance: Provenance, wrap_only: bool = False) -> None:
+        """Edit one map's node; ``wrap_only`` (an already-tileable source): address modes only."""
         tex_map = map_result.map
         node_path = tex_map.node.strip("<>")
         node = self.doc.getDescendant(node_path)
         if node is None or not isinstance(node, mx.Node):
             self.result.findings.append(Finding(Severity.ERROR, Codes.MISSING_PRIM,
                                                 prim_ref(node_path), "MaterialX node not found"))
+            self.result.not_written.append((prim_ref(node_path), "MaterialX node not found in the document"))
+            return
+        if wrap_only:
+            self._periodic(node)
             return
         out_file = Path(map_result.output_path).resolve()
         if not out_file.is_file() and not self.result.dry_run:  # a dry run plans unwritten tiles
             self.result.findings.append(Finding(
                 Severity.ERROR, Codes.MISSING_OUTPUT, asset_ref(out_file),
                 f"tileable file for {prim_ref(node_path)} not found; nothing written for it"))
+            self.result.not_written.append((prim_ref(node_path), f"tileable file {asset_ref(out_file)} not found"))
             return
         scale = (float(uv_scale[0]), float(uv_scale[1]))
         if node_path in self._done:
@@ -286,13 +302,7 @@ class _MtlxAuthor:
             file_input = self._authored(node, MtlxNames.FILE, MtlxNames.FILENAME)
         self._set_file(file_input, relative_asset_path(out_file, self.out.parent))
         category = node.getCategory()
-        # address modes
-        if category != MtlxNames.TILED_IMAGE:
-            for name in (MtlxNames.U_ADDRESS, MtlxNames.V_ADDRESS):
-                inp = self._authored(node, name, MtlxNames.STRING)
-                if inp.getValueString() != MtlxNames.PERIODIC:
-                    inp.setValueString(MtlxNames.PERIODIC)
-                    self._plan(f"set {prim_ref(inp.getNamePath())} = {MtlxNames.PERIODIC}")
+        self._periodic(node)
         # UV scale
         prior = recorded.uv_scale if recorded else None
         total = scale if from_source or prior is None else (prior[0] * scale[0], prior[1] * scale[1])

@@ -34,6 +34,7 @@ class Codes:
     UNSUPPORTED_UV = "uv-not-composed"
     MTLX_INCLUDES_MOVED = "mtlx-includes-moved"
     SCHEMA_NOT_REGISTERED = "schema-not-registered"
+    VARIANT_NOT_EDITABLE = "variant-not-editable"
 
 
 class WriteMode(str, Enum):
@@ -74,6 +75,7 @@ class StackResult:
     maps: list[MapResult]
     uv_scale: tuple[float, float]
     provenance: Provenance
+    wrap_only: bool = False  # an already-tileable stack: only set wrap = repeat (maps are the sources)
 
 
 @dataclass
@@ -87,6 +89,11 @@ class AuthoringResult:
     plan: list[str] = field(default_factory=list)  # one human-readable line per edit
     dry_run: bool = False
     output: Path | None = None  # the new layer / document (NEW_LAYER mode), if written or planned
+    not_written: list[tuple[str, str]] = field(default_factory=list)  # ("<texture node>", why) left unedited
+
+    def unwritten_nodes(self) -> dict[str, str]:
+        """``"<node>"`` -> why, for every texture node whose edits were not made."""
+        return dict(self.not_written)
 
     def to_dict(self) -> dict:
         return {
@@ -97,6 +104,7 @@ class AuthoringResult:
             "plan": list(self.plan),
             "dry_run": self.dry_run,
             "output": str(self.output) if self.output else None,
+            "not_written": [list(item) for item in self.not_written],
         }
 
 

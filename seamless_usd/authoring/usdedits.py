@@ -1,14 +1,17 @@
-"""Spec-level edits planned by authoring and applied with the Sdf API in one change block."""
+"""Spec-level edits planned by authoring and applied with the Sdf API in one change block, and
+where a new layer's edits go when the opinion they override is authored inside a variant."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from pxr import Sdf, Usd
 
-from seamless_usd.authoring.usdnodes import Names
-from seamless_usd.findings import asset_ref, prim_ref
+from seamless_usd.authoring.types import Codes
 
-__all__ = []
+from seamless_usd.authoring.usdnodes import Names
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
+
+__all__ = ["variant_edit_target"]
 
 
 class _EditKind:
@@ -85,3 +88,55 @@ def _prepend_api_schema(prim_spec: Sdf.PrimSpec, name: str) -> None:
     prim_spec.SetInfo("apiSchemas", ops)
 
 
+
+
+def _opinion_node(prim: Usd.Prim, attr: Usd.Attribute | None):
+    """The prim-index node of the strongest opinion: ``attr``'s value, else ``prim``'s spec."""
+    if attr and attr.HasAuthoredValue():
+        node = attr.GetResolveInfo().GetNode()
+        if node:
+            return node
+    specs = prim.GetPrimStack()
+    if not specs:
+        return None
+    strongest = specs[0]
+    stack = [prim.GetPrimIndex().rootNode]
+    while stack:
+        node = stack.pop(0)
+        if node.path == strongest.path and strongest.layer in node.layerStack.layers:
+            return node
+        stack.extend(node.children)
+    return None
+
+
+def variant_edit_target(layer: Sdf.Layer, prim: Usd.Prim, attr: Usd.Attribute | None):
+    """Edit target in ``layer`` (a layer over the stage) for overriding ``attr`` / ``prim``.
+
+    When the strongest opinion is authored inside variants (``/Asset{finish=wood}Looks/...``,
+    possibly in a payload or reference), the edits go inside the same variant selections at
+    the corresponding stage paths (``/Asset{finish=wood}``): an override outside the variant
+    would also replace the other variants' textures. A :class:`Finding` when a variant's site
+    cannot be mapped to the stage's namespace (the edit cannot be made from this layer).
+    """
+    node = _opinion_node(prim, attr)
+    if node is None:
+        return Usd.EditTarget(layer)
+    selections = []
+    for prefix in node.path.GetPrefixes():
+        if prefix.IsPrimVariantSelectionPath():
+            vset, vsel = prefix.GetVariantSelection()
+            site = node.mapToRoot.MapSourceToTarget(prefix.GetParentPath().StripAllVariantSelections())
+            if site.isEmpty:
+                return Finding(
+                    Severity.ERROR, Codes.VARIANT_NOT_EDITABLE, prim_ref(prim.GetPath()),
+                    f"its value is authored inside variant {{{vset}={vsel}}} of {prim_ref(prefix.GetParentPath())}, "
+                    "which cannot be reached from the stage's namespace; nothing written for it "
+                    "(edit that variant's layer with --in-place)")
+            selections.append((site, vset, vsel))
+    if not selections:
+        return Usd.EditTarget(layer)
+    path, previous = Sdf.Path.absoluteRootPath, Sdf.Path.absoluteRootPath
+    for site, vset, vsel in selections:
+        path = path.AppendPath(site.MakeRelativePath(previous)).AppendVariantSelection(vset, vsel)
+        previous = site
+    return Usd.EditTarget.ForLocalDirectVariant(layer, path)

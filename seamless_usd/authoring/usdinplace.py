@@ -70,7 +70,7 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
             "a .usdz cannot be edited in place; use the default new-layer mode"))
         return result
     _open_layer(stage_path)
-    stage = Usd.Stage.Open(str(stage_path), Usd.Stage.LoadNone)
+    stage = Usd.Stage.Open(str(stage_path), Usd.Stage.LoadAll)  # materials inside payloads too
     layers = {layer: layer.dirty for layer in stage.GetUsedLayers()}
     author = _Author(stage, result, anchor_dir=None)
     author.plan_all(results, _in_place_target)

@@ -10,7 +10,7 @@ from pxr import Gf, Sdf, Usd, UsdShade
 from seamless_usd.authoring.files import relative_asset_path
 from seamless_usd.authoring.schema import PROPERTIES, Schema, has_applied, is_seamless_uv_transform, read_provenance, schemas_known
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult
-from seamless_usd.authoring.usdedits import _Edit, _EditKind
+from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target
 from seamless_usd.authoring.usdnodes import (
     Names,
     _close,
@@ -46,12 +46,21 @@ class _Author:
         self._uv_updates: dict[Sdf.Path, tuple[float, float]] = {}  # marked node -> total scale
         self.target_for = None
         self.planned_maps = 0
+        self.variant_layer: Sdf.Layer | None = None  # new-layer mode: edits follow the opinion's variant
+        self._context: Usd.EditTarget | None = None  # the current map's edit target (variant_layer set)
+        self._refused: str | None = None  # why an edit target of the current map was refused
 
     # -- planning ------------------------------------------------------------------------
 
-    def plan_all(self, results: Iterable[StackResult], target_for) -> None:
-        """``target_for(prim, attr_or_None) -> Usd.EditTarget | Finding`` picks where edits go."""
+    def plan_all(self, results: Iterable[StackResult], target_for, variant_layer: Sdf.Layer | None = None) -> None:
+        """``target_for(prim, attr_or_None) -> Usd.EditTarget | Finding`` picks where edits go.
+
+        With ``variant_layer`` (a new layer over the stage) a map whose file value is authored
+        inside a variant gets its edits inside the same variant of that layer, so the other
+        variants keep their own textures; ``target_for`` is then not used.
+        """
         self.target_for = target_for
+        self.variant_layer = variant_layer
         if not schemas_known():
             self._find(Severity.WARNING, Codes.SCHEMA_NOT_REGISTERED, asset_ref(Schema.TILE_API),
                        "USD's schema registry was built before seamless_usd.authoring was "
@@ -60,8 +69,9 @@ class _Author:
             for map_result in stack_result.maps:
                 if map_result.map.origin is Origin.USD:  # MaterialX documents: author_mtlx
                     self.planned_maps += 1
-                    self._plan_map(map_result, stack_result.uv_scale, stack_result.provenance)
-
+                    why = self._plan_map(map_result, stack_result)
+                    if why:
+                        self.result.not_written.append((prim_ref(map_result.map.node.strip("<>")), why))
     def plan_retarget(self, document: Path, new_document: Path, target: Usd.EditTarget) -> None:
         """Point references to ``document`` at ``new_document`` (delete + prepend, so other
         references of the prim stay as they are; Pcp anchors both before matching)."""
@@ -84,31 +94,34 @@ class _Author:
         self.result.findings.append(Finding(severity, code, where, message))
 
     def _target(self, prim: Usd.Prim, attr: Usd.Attribute | None = None) -> Usd.EditTarget | None:
-        target = self.target_for(prim, attr)
+        target = self._context if self._context is not None else self.target_for(prim, attr)
         if isinstance(target, Finding):
             self.result.findings.append(target)
+            self._refused = self._refused or target.message
             return None
         return target
 
-    def _plan_map(self, map_result, uv_scale, provenance: Provenance) -> None:
+    def _plan_map(self, map_result, stack_result: StackResult) -> str | None:
+        """Plan one map's edits; the reason when nothing can be written for it (else None)."""
         tex_map = map_result.map
         node_path = tex_map.node.strip("<>")
         prim = self.stage.GetPrimAtPath(node_path)
         if not prim:
-            self._find(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(node_path),
-                       "texture node not found on the stage; nothing written for it")
-            return
+            why = "texture node not found on the stage; nothing written for it"
+            self._find(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(node_path), why)
+            return why
         if prim.IsInstanceProxy():
-            self._find(Severity.SKIPPED, Codes.INSTANCE_PROXY, prim_ref(node_path),
-                       "texture inside an instance: edit its prototype's source or make it "
-                       "non-instanceable")
-            return
+            why = ("texture inside an instance: edit its prototype's source or make it "
+                   "non-instanceable")
+            self._find(Severity.SKIPPED, Codes.INSTANCE_PROXY, prim_ref(node_path), why)
+            return why
         out = str(Path(map_result.output_path).resolve())
         if not Path(out).is_file() and not self.result.dry_run:  # a dry run plans unwritten tiles
+            why = f"tileable file {asset_ref(out)} not found; nothing written for it"
             self._find(Severity.ERROR, Codes.MISSING_OUTPUT, asset_ref(out),
                        f"tileable file for {prim_ref(node_path)} not found; nothing written for it")
-            return
-        scale = (float(uv_scale[0]), float(uv_scale[1]))
+            return why
+        scale = (float(stack_result.uv_scale[0]), float(stack_result.uv_scale[1]))
         done = self._done.get(node_path)
         if done is not None:
             if done[0] != out or not _close(done[1], scale):
@@ -118,29 +131,58 @@ class _Author:
                     f"results; kept {done[2]}'s. Give each material its own texture node to "
                     "process them separately",
                 )
-            return
+            return None
         self._done[node_path] = (out, scale, tex_map.material)
         first_edit = len(self.edits)
+        self._refused = None
+        self._context = None
+        try:
+            why = self._plan_texture(prim, tex_map, out, scale, stack_result)
+        finally:
+            self._context = None
+        why = why or self._refused
+        if why:
+            del self.edits[first_edit:]  # all of a map's edits or none
+            return why
+        if len(self.edits) > first_edit and prim_ref(node_path) not in self.result.edited_prims:
+            self.result.edited_prims.append(prim_ref(node_path))
+        return None
+
+    def _plan_texture(self, prim, tex_map, out: str, scale, stack_result: StackResult) -> str | None:
         shader = UsdShade.Shader(prim)
         kind = _kind(shader)
+        if self.variant_layer is not None:
+            file_attr = self._file_attr(prim, shader, tex_map)
+            context = variant_edit_target(self.variant_layer, prim, file_attr)
+            if isinstance(context, Finding):
+                self.result.findings.append(context)
+                return context.message
+            self._context = context
+        if stack_result.wrap_only:  # already tileable: the source stays, it only has to repeat
+            self._plan_wrap(prim, shader, kind)
+            return None
         recorded = read_provenance(prim)
         from_source = recorded is None or _same_file(
             prim.GetAttribute(Schema.SOURCE_ASSET).Get(), tex_map.resolved)
         if not self._plan_file(prim, shader, tex_map, out):
-            return
+            return self._refused or "its file input cannot be edited"
         self._plan_wrap(prim, shader, kind)
         applied = self._plan_uv(prim, shader, kind, scale, recorded, from_source)
         if applied is None:  # the UV edit cannot be made: leave this map untouched
-            del self.edits[first_edit:]
-            return
+            return self._refused or "its UV input cannot be edited"
         if recorded and not from_source:  # made from an earlier tile: keep the origin
             origin = prim.GetAttribute(Schema.SOURCE_ASSET).Get()
             source = origin.resolvedPath or origin.path
         else:
             source = tex_map.resolved
-        self._plan_provenance(prim, provenance, applied, source)
-        if len(self.edits) > first_edit and prim_ref(node_path) not in self.result.edited_prims:
-            self.result.edited_prims.append(prim_ref(node_path))
+        self._plan_provenance(prim, stack_result.provenance, applied, source)
+        return None
+
+    def _file_attr(self, prim, shader, tex_map) -> Usd.Attribute | None:
+        at = tex_map.file_at
+        owner = self.stage.GetPrimAtPath(at.prim.strip("<>")) if at and at.prim else None
+        attr = owner.GetAttribute(at.attribute) if owner else None
+        return attr or _producing_attr(shader.GetInput(Names.FILE))
 
     def _plan_file(self, prim, shader, tex_map, out: str) -> bool:
         """Plan the new asset path where it is authored; False when it cannot be edited."""
