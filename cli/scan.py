@@ -58,7 +58,10 @@ def _stack_table(stack: TextureStack) -> Table:
     title = escape(f"{stack.material}  stack {stack.id}")
     if stack.duplicate_of:
         title += f"  (same as {stack.duplicate_of})"
-    table = Table(title=title, title_justify="left", caption=escape(f"UV: {_uv_text(stack.uv)}"), caption_justify="left")
+    if stack.intent:
+        title += escape(f"  intent: {stack.intent}")
+    caption = f"UV: {_uv_text(stack.uv)}" + (f"\nintent {stack.intent}: {stack.intent_reason}" if stack.intent else "")
+    table = Table(title=title, title_justify="left", caption=escape(caption), caption_justify="left")
     table.add_column("map", no_wrap=True)
     table.add_column("roles (channels)")
     for col in ("colour space", "size", "wrap", "notes"):
@@ -104,7 +107,12 @@ def render(result: ScanResult, console: Console) -> None:
             table.add_row(*(escape(c) for c in (f.severity.value, f.code, f.where, f.message)))
         console.print(table)
     n_dup = sum(1 for s in result.stacks if s.duplicate_of)
+    intents: dict[str, int] = {}
+    for s in result.stacks:
+        intents[s.intent or "unclassified"] = intents.get(s.intent or "unclassified", 0) + 1
+    by_intent = ", ".join(f"{n} {name}" for name, n in intents.items())
     console.print(
-        f"{len(result.materials)} material(s), {len(result.stacks)} stack(s) ({n_dup} duplicate), "
+        f"{len(result.materials)} material(s), {len(result.stacks)} stack(s) ({n_dup} duplicate"
+        + (f"; {by_intent}" if by_intent else "") + "), "
         f"{sum(len(s.maps) for s in result.stacks)} map(s), {len(result.findings)} finding(s)"
     )

@@ -48,13 +48,15 @@ def read_document(path: str | Path) -> mx.Document:
 
 
 def walk_document(
-    doc: mx.Document, path: str | Path, *, under: str = "", only: str = ""
+    doc: mx.Document, path: str | Path, *, under: str = "", only: str = "", flat: bool = False
 ) -> tuple[list[str], list[TextureUse], list[Finding]]:
     """Materials and texture uses of a document.
 
     ``under`` is the USD prim a referenced document is attached to: its materials are named
-    ``<under/Materials/name>`` (where usdMtlx would compose them), or ``<under>`` itself when the
-    reference targets one material (``only``). Materials of a document read directly are ``<name>``.
+    where usdMtlx composes them: ``<under/Materials/name>`` for a reference to the document (its
+    default prim ``/MaterialX``), ``<under/name>`` (``flat``) for one to ``</MaterialX/Materials>``,
+    or ``<under>`` itself when the reference targets one material (``only``). Materials of a
+    document read directly are ``<name>``.
     """
     document = str(Path(path).resolve())
     materials: list[str] = []
@@ -64,7 +66,8 @@ def walk_document(
         if only and material.getName() != only:
             continue
         if under:
-            name = f"<{under}>" if only else f"<{under}/Materials/{material.getName()}>"
+            name = f"<{under}>" if only else (
+                f"<{under}/{material.getName()}>" if flat else f"<{under}/Materials/{material.getName()}>")
         else:
             name = f"<{material.getNamePath()}>"
         materials.append(name)

@@ -7,7 +7,8 @@ from pathlib import Path
 
 from pxr import Sdf, Tf, Usd
 
-from seamless_usd.discover import mtlx, usd
+from seamless_usd.discover import mtlx, usd, uvgeom
+from seamless_usd.discover.intent import classify_stacks
 from seamless_usd.discover.maps import HeaderCache, TextureUse, build_maps
 from seamless_usd.discover.stacks import build_stacks
 from seamless_usd.discover.tokens import MTLX_SUFFIX, Codes
@@ -44,6 +45,21 @@ def _tf_message(text: str) -> str:
     return re.sub(r"^\S+?\.usd[acz]?:(?=\d)", "line ", message)
 
 
+_MTLX_ROOT = Sdf.Path("/MaterialX")  # where usdMtlx puts a document's prims
+_MTLX_MATERIALS = _MTLX_ROOT.AppendChild("Materials")
+
+
+def _mtlx_target(target: str) -> tuple[str, bool]:
+    """(one material's name or "", materials directly under the referencing prim) for a
+    reference's target path inside a ``.mtlx`` document, as usdMtlx lays documents out."""
+    path = Sdf.Path(target) if target else _MTLX_ROOT
+    if path == _MTLX_ROOT:
+        return "", False
+    if path == _MTLX_MATERIALS:
+        return "", True
+    return path.name, False
+
+
 class _Scan:
     """Accumulates one scan over any number of stages and documents."""
 
@@ -51,9 +67,11 @@ class _Scan:
         self.result = ScanResult()
         self.uses: list[TextureUse] = []
         self.cache = HeaderCache()
+        self.stages: list[Usd.Stage] = []  # for the bound geometry of each material (intent)
 
     def add_stage(self, stage: Usd.Stage, source: str) -> None:
         self.result.sources.append(source)
+        self.stages.append(stage)
         materials, uses, refs, errors = usd.walk_stage(stage)
         self.result.materials.extend(materials)
         self.uses.extend(uses)
@@ -79,8 +97,8 @@ class _Scan:
                     Finding(Severity.SKIPPED, Codes.MTLX_UNREADABLE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}", str(exc))
                 )
                 continue
-            only = Sdf.Path(ref.target).name if ref.target else ""
-            materials, uses, errors = mtlx.walk_document(doc, ref.document, under=ref.prim, only=only)
+            only, flat = _mtlx_target(ref.target)
+            materials, uses, errors = mtlx.walk_document(doc, ref.document, under=ref.prim, only=only, flat=flat)
             if ref.document not in self.result.sources:
                 self.result.sources.append(ref.document)
             self.result.materials.extend(materials)
@@ -99,8 +117,31 @@ class _Scan:
     def finish(self) -> ScanResult:
         maps, findings = build_maps(self.uses, self.cache)
         self.result.findings.extend(findings)
-        self.result.stacks = build_stacks(maps)
+        self.result.stacks = classify_stacks(build_stacks(maps), _Geometry(self.stages))
         return self.result
+
+
+class _Geometry:
+    """Bound mesh uses and their UV stats per stack, over the scanned stages (read once)."""
+
+    def __init__(self, stages: list[Usd.Stage]):
+        self.bindings = [(stage, uvgeom.material_bindings(stage)) for stage in stages]
+        self.stats: dict = {}
+
+    def __call__(self, stack):
+        bound, stats = 0, []
+        for stage, bindings in self.bindings:
+            for use in bindings.get(stack.material, []):
+                bound += 1
+                key = (id(stage), use, stack.uv.primvar)
+                if key not in self.stats:
+                    try:
+                        self.stats[key] = uvgeom.uv_stats(stage, use, stack.uv.primvar)
+                    except Exception:  # noqa: BLE001 - malformed geometry: no UVs to measure
+                        self.stats[key] = None
+                if self.stats[key] is not None:
+                    stats.append(self.stats[key])
+        return bound, stats
 
 
 def scan_stage(stage: Usd.Stage) -> ScanResult:

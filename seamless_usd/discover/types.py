@@ -171,6 +171,8 @@ class TextureStack:
     uv: UVChain
     maps: tuple[TextureMap, ...]
     duplicate_of: str | None = None  # id of an identical stack found earlier (processed once)
+    intent: str = ""  # tiling intent (discover.intent.Intent): tiling, uv-atlas, already-tileable, other
+    intent_reason: str = ""  # the measured reason ("UVs 0.11-0.89 x 0.11-0.89, 37 islands on <...>")
 
     @property
     def id(self) -> str:
