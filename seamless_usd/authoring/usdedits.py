@@ -75,7 +75,9 @@ class _Edit:
             if self.value is not None:
                 attr_spec.default = self.value
         else:
-            attr_spec.connectionPathList.explicitItems = [self.target.MapToSpecPath(self.value)]
+            # connection paths never hold variant selections, even when authored inside a variant
+            attr_spec.connectionPathList.explicitItems = [
+                self.target.MapToSpecPath(self.value).StripAllVariantSelections()]
 
 
 def _prepend_api_schema(prim_spec: Sdf.PrimSpec, name: str) -> None:

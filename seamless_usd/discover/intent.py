@@ -53,7 +53,7 @@ class Thresholds:
     repeat_span: float = 1.02  # UVs (after existing transforms) spanning more than this many periods repeat
     repeat_factor: float = 1.01  # an existing transform scaling UVs by more than this repeats the texture
     ps_max: float = 0.075  # periodic-plus-smooth score at most this: seamless (tiling 0.019-0.049, not 0.105+)
-    seam_max: float = 1.5  # and wrap-around seam ratio at most this (tiling 0.48-1.18, windows 1.1-74)
+    seam_max: float = 2.0  # and worst wrap-around seam ratio at most this (tiling 0.48-1.45, windows 1.36-74)
     measure_size: int = 512  # longest side the pixels are reduced to before measuring
     measure_max_pixels: int = 1 << 26  # larger files are not decoded for the measure (left "tiling")
 

@@ -29,6 +29,7 @@ from seamless_usd.report.model import MapReport, Report, StackReport, StackStatu
 __all__ = ["process_paths", "process_stage", "select_stacks"]
 
 USD_SUFFIXES = {".usd", ".usda", ".usdc", ".usdz"}
+TILING, ALREADY_TILEABLE = "tiling", "already-tileable"  # discover.intent.Intent values
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
 # the other maps tileable (and rescaling their UVs) would misalign them with the skipped one.
 BLOCKING_SKIPS = frozenset({"missing-file", "unreadable-file", "udim", "too-small"})
@@ -42,17 +43,28 @@ def _authoring():
     return authoring
 
 
+def _matches(stack: TextureStack, patterns: Sequence[str]) -> bool:
+    path = stack.material.strip("<>")
+    name = path.rsplit("/", 1)[-1]
+    return any(fnmatch.fnmatchcase(path, p) or fnmatch.fnmatchcase(name, p) for p in patterns)
+
+
 def select_stacks(scan: ScanResult, patterns: Sequence[str]) -> list[TextureStack]:
     """Stacks whose material path or name matches one of ``patterns`` (all when empty)."""
     if not patterns:
         return list(scan.stacks)
-    out = []
-    for stack in scan.stacks:
-        path = stack.material.strip("<>")
-        name = path.rsplit("/", 1)[-1]
-        if any(fnmatch.fnmatchcase(path, p) or fnmatch.fnmatchcase(name, p) for p in patterns):
-            out.append(stack)
-    return out
+    return [stack for stack in scan.stacks if _matches(stack, patterns)]
+
+
+def left_alone_stacks(stacks: Sequence[TextureStack], options: Options, source: str) -> set[tuple[str, str]]:
+    """Stacks not meant to tile (uv-atlas, already-tileable, other) that are not forced: they are
+    reported with their intent and not trained (already-tileable ones only get wrap = repeat)."""
+    if options.force:
+        return set()
+    return {
+        (source, s.id) for s in stacks
+        if s.intent and s.intent != TILING and not _matches(s, options.force_materials)
+    }
 
 
 @dataclass
@@ -64,6 +76,7 @@ class Run:
     report: Report = field(default_factory=Report)
     outcomes: dict[str, StackOutcome | Exception] = field(default_factory=dict)  # content key -> result
     blocked: dict[tuple[str, str], str] = field(default_factory=dict)  # (source, stack id) -> why it is left alone
+    left_alone: set[tuple[str, str]] = field(default_factory=set)  # (source, stack id) not meant to tile, not forced
     placed: dict[tuple[str, Path], StackOutcome | Exception] = field(default_factory=dict)  # (key, dir) -> tiles there
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
     total: int = 0
@@ -89,7 +102,8 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
     settings = JobSettings.from_options(run.options)
     for label, stacks, out_dir in sources:
         for stack in stacks:
-            if (label, stack.id) in run.blocked or stack.content_key in seen or stack.content_key in run.outcomes:
+            if ((label, stack.id) in run.blocked or (label, stack.id) in run.left_alone
+                    or stack.content_key in seen or stack.content_key in run.outcomes):
                 continue
             seen.add(stack.content_key)
             jobs.append(StackJob(stack=stack, settings=settings, output_dir=out_dir))
@@ -104,16 +118,29 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
         run.index += 1
 
 
-def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_dir: Path) -> list:
-    """Turn the outcomes of ``stacks`` into stack reports; return authoring inputs for the done ones."""
+def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_dir: Path):
+    """Turn the outcomes of ``stacks`` into stack reports; return authoring inputs for the done
+    ones, and ``(report, stack)`` for each stack whose result is handed to authoring."""
     authoring = _authoring()
     results = []
+    handed: list[tuple[StackReport, TextureStack]] = []
     dry = run.options.mode == authoring.WriteMode.DRY_RUN
     first_of: dict[str, str] = {}
     for stack in stacks:
-        report = StackReport(id=stack.id, material=stack.material, source=source_label, status=StackStatus.FAILED)
+        report = StackReport(id=stack.id, material=stack.material, source=source_label, status=StackStatus.FAILED,
+                             intent=stack.intent, intent_reason=stack.intent_reason)
         where = prim_ref(stack.material.strip("<>"))
-        if (source_label, stack.id) in run.blocked:
+        before = len(results)
+        if (source_label, stack.id) in run.left_alone:
+            report.status = StackStatus.LEFT_ALONE
+            report.maps = [MapReport.for_map(m) for m in stack.maps]
+            report.message = (f"left alone ({stack.intent}): {stack.intent_reason}; "
+                              "--force or --force-materials to process it anyway")
+            if stack.intent == ALREADY_TILEABLE:
+                report.message = f"already tileable, kept as is (wrap set to repeat): {stack.intent_reason}"
+                results.append(_wrap_only_result(stack))
+            run.report.findings.append(Finding(Severity.SKIPPED, stack.intent, where, report.message, stack.material))
+        elif (source_label, stack.id) in run.blocked:
             report.message = run.blocked[(source_label, stack.id)]
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
         elif dry:
@@ -148,9 +175,39 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
                 message = _error_message(outcome)
                 report.message = message
                 run.report.findings.append(Finding(Severity.ERROR, "stack-failed", where, message, stack.material))
+        if len(results) > before:
+            handed.append((report, stack))
+        if stack.intent and stack.intent != TILING and report.status is not StackStatus.LEFT_ALONE:
+            report.message = (report.message + "; " if report.message else "") + f"processed although {stack.intent} (forced)"
         first_of.setdefault(stack.content_key, stack.id)
         run.report.stacks.append(report)
-    return results
+    return results, handed
+
+
+def _wrap_only_result(stack: TextureStack):
+    """Authoring input for an already-tileable stack: its own maps, wrap = repeat, no UV change."""
+    from seamless_usd.authoring import MapResult, Provenance, StackResult
+
+    prov = Provenance(source_asset="", crop_size=(0, 0), uv_scale=(1.0, 1.0), q_passed=True, q_tau=0.0,
+                      q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__)
+    maps = [MapResult(map=m, output_path=Path(m.resolved)) for m in stack.maps if m.resolved]
+    return StackResult(stack=stack, maps=maps, uv_scale=(1.0, 1.0), provenance=prov, wrap_only=True)
+
+
+def _check_written(run: Run, handed, edit, failure: str | None = None) -> None:
+    """The report agrees with the disk: a stack whose edits were not written is failed."""
+    unwritten = edit.unwritten_nodes() if edit is not None else {}
+    for report, stack in handed:
+        if failure is not None:
+            why = failure
+        else:
+            missing = [(prim_ref(m.node.strip("<>")), unwritten[prim_ref(m.node.strip("<>"))])
+                       for m in stack.maps if prim_ref(m.node.strip("<>")) in unwritten]
+            if not missing:
+                continue
+            why = "; ".join(f"{node}: {reason}" for node, reason in missing)
+        report.status = StackStatus.FAILED
+        report.message = f"tiles written but the stage edits were not: {why}"
 
 
 def _planned_result(stack: TextureStack, out_dir: Path, options: Options):
@@ -250,7 +307,7 @@ def _scan_source(path: Path, patterns: Sequence[str]) -> _Source:
 def _author_source(run: Run, src: _Source) -> None:
     authoring = _authoring()
     run.report.findings += src.scan.findings
-    results = _reports_for(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
+    results, handed = _reports_for(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
     if not results and run.options.mode != authoring.WriteMode.DRY_RUN:
         return
     plan = run.options.plan_mode or authoring.WriteMode.NEW_LAYER
@@ -261,13 +318,19 @@ def _author_source(run: Run, src: _Source) -> None:
             edit = authoring.author_usd(
                 src.path, results, mode=run.options.mode, output_layer=run.options.output_layer, plan_mode=plan
             )
-    except (SeamlessUsdError, OSError) as exc:
+    except Exception as exc:  # noqa: BLE001 - one source's edits failing must not stop the others
         # The tiles are written; the edits of this source are not. Say so; the other sources go on.
+        if not isinstance(exc, (SeamlessUsdError, OSError)):
+            exc = _error_message(exc)
         run.report.findings.append(
             Finding(Severity.ERROR, "authoring-failed", asset_ref(src.path), f"the edits were not written: {exc}")
         )
+        if run.options.mode != authoring.WriteMode.DRY_RUN:
+            _check_written(run, handed, None, failure=str(exc))
         return
     _record_authoring(run, edit)
+    if run.options.mode != authoring.WriteMode.DRY_RUN:
+        _check_written(run, handed, edit)
 
 
 def _finish(run: Run, started: float) -> Report:
@@ -348,6 +411,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
         try:
             src = _scan_source(path, run.options.materials)
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
+            run.left_alone.update(left_alone_stacks(src.stacks, run.options, str(src.path)))
             sources.append(src)
         except InputError as exc:
             run.report.unreadable.append(str(path))
@@ -376,10 +440,13 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.report.findings += scan.findings
     stacks = select_stacks(scan, run.options.materials)
     run.blocked.update(blocked_stacks(scan, stacks, label))
+    run.left_alone.update(left_alone_stacks(stacks, run.options, label))
     out_dir = _output_dir(run.options, source)
     if run.options.mode != authoring.WriteMode.DRY_RUN:
         _run_jobs(run, [(label, stacks, out_dir)])
-    results = _reports_for(run, stacks, label, out_dir)
+    results, handed = _reports_for(run, stacks, label, out_dir)
     if results and run.options.mode != authoring.WriteMode.DRY_RUN:
-        _record_authoring(run, authoring.author_usd_stage(stage, results))
+        edit = authoring.author_usd_stage(stage, results)
+        _record_authoring(run, edit)
+        _check_written(run, handed, edit)
     return _finish(run, started)
