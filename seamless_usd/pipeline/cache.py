@@ -26,7 +26,7 @@ from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write, atomic_write_text
 from seamless_usd.findings import asset_ref
 
-__all__ = ["StackCache", "CacheEntry", "stack_key", "default_cache_dir"]
+__all__ = ["StackCache", "CacheEntry", "JobIndex", "stack_key", "job_fingerprint", "default_cache_dir"]
 
 MANIFEST = "manifest.json"
 TILES = "tiles.safetensors"
@@ -132,3 +132,73 @@ class StackCache:
 
     def entry(self, key: str) -> CacheEntry:
         return CacheEntry(key, self.root / key[:2] / key)
+
+
+JOBS = "jobs"  # the client's index of finished jobs, beside the entries
+
+
+def job_fingerprint(stack, settings) -> str:
+    """Identity of a stack job the client can compute without decoding pixels.
+
+    SHA-256 over the code version, the job settings (not the cache folder), and per map its use
+    (channels, colour space, scale/bias, roles) and the SHA-256 of the file's bytes. Same
+    fingerprint, same inputs to the cache key computed by the worker from the decoded pixels.
+    """
+    import dataclasses
+
+    h = hashlib.sha256()
+    h.update(f"seamless-usd {__version__} job {CACHE_FORMAT}\n".encode())
+    fields = {k: v for k, v in dataclasses.asdict(settings).items() if k != "cache_dir"}
+    h.update(json.dumps(fields, sort_keys=True, default=str).encode())
+    for m in sorted(stack.maps, key=lambda m: (m.resolved, m.channels_used)):
+        roles = sorted(r.role for r in m.roles)
+        h.update(json.dumps([m.channels_used, m.color_space.value, list(m.scale), list(m.bias), roles,
+                             m.is_normal, m.normal_y_flip]).encode())
+        h.update(_sha256(Path(m.resolved)).encode())
+    return h.hexdigest()
+
+
+class JobIndex:
+    """Which jobs finished, so a warm run finds them before starting any executor.
+
+    One small JSON file per job fingerprint (``<cache>/jobs/ab/<fingerprint>.json``) naming the
+    model hash of its cache entry; written atomically by the client after a job returns. A hit
+    counts only while an entry with that model hash is still in the cache (verified once per run).
+    """
+
+    def __init__(self, root: Path | None = None):
+        self.cache_root = Path(root) if root is not None else default_cache_dir()
+        self.root = self.cache_root / JOBS
+        self._live: set[str] | None = None
+
+    def _path(self, fingerprint: str) -> Path:
+        return self.root / fingerprint[:2] / f"{fingerprint}.json"
+
+    def _live_models(self) -> set[str]:
+        if self._live is None:
+            self._live = set()
+            for manifest in self.cache_root.glob(f"??/*/{MANIFEST}"):
+                try:
+                    self._live.add(str(json.loads(manifest.read_text(encoding="utf-8"))["meta"]["model_hash"]))
+                except (OSError, ValueError, KeyError, TypeError):
+                    continue
+        return self._live
+
+    def finished(self, fingerprint: str) -> bool:
+        """True when this job finished before and its cache entry is still there."""
+        try:
+            record = json.loads(self._path(fingerprint).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return False
+        return isinstance(record, dict) and str(record.get("model_hash", "")) in self._live_models()
+
+    def record(self, fingerprint: str, model_hash: str) -> None:
+        """Note a finished job; a cache that cannot be written only costs the shortcut."""
+        path = self._path(fingerprint)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write_text(path, json.dumps({"model_hash": model_hash}))
+        except OSError:
+            return
+        if self._live is not None:
+            self._live.add(model_hash)

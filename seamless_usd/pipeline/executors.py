@@ -72,6 +72,8 @@ class ProcessPoolExecutor:
         import multiprocessing
         from concurrent import futures
 
+        if not jobs:  # nothing to do: no worker processes
+            return
         threads = _threads_per_worker(self.workers)
         ctx = multiprocessing.get_context("spawn")
         with futures.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx) as pool:
@@ -99,6 +101,8 @@ class DaskExecutor:
         self.threads_per_worker = threads_per_worker or _threads_per_worker(workers or 1)
 
     def run(self, jobs, progress):
+        if not jobs:  # nothing to do: no cluster started, no scheduler contacted
+            return
         try:
             from distributed import Client, LocalCluster, as_completed
         except ImportError:  # pragma: no cover - depends on the install

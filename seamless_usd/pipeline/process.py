@@ -8,6 +8,7 @@ process afterwards, one source at a time. One failing stack or source is reporte
 from __future__ import annotations
 
 import fnmatch
+import itertools
 import time
 import traceback
 from collections.abc import Sequence
@@ -19,7 +20,8 @@ from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
 from seamless_usd.discover.types import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
-from seamless_usd.pipeline.executors import Executor, make_executor
+from seamless_usd.pipeline.cache import JobIndex, job_fingerprint
+from seamless_usd.pipeline.executors import Executor, InProcessExecutor, make_executor
 from seamless_usd.pipeline.options import Options, ProgressEvent
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.pipeline.naming import tile_filename
@@ -112,8 +114,24 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
     def progress(job: StackJob, kind: str, detail) -> None:
         run.emit(kind, job.stack.id, detail)
 
-    for job, result in run.executor.run(jobs, progress):
+    # Warm jobs first, in this process, from the cache: an executor (a Dask cluster, worker
+    # processes) is started only for the jobs that need work.
+    index = JobIndex(run.options.cache_dir)
+    fingerprints: dict[int, str | None] = {}
+    warm, cold = [], []
+    for job in jobs:
+        try:
+            fingerprints[id(job)] = job_fingerprint(job.stack, job.settings)
+        except OSError:  # unreadable file: the job reports it
+            fingerprints[id(job)] = None
+        (warm if fingerprints[id(job)] and index.finished(fingerprints[id(job)]) else cold).append(job)
+    runs = [InProcessExecutor().run(warm, progress)]
+    if cold:
+        runs.append(run.executor.run(cold, progress))
+    for job, result in itertools.chain(*runs):
         run.outcomes[job.stack.content_key] = result
+        if isinstance(result, StackOutcome) and fingerprints[id(job)]:
+            index.record(fingerprints[id(job)], result.model_hash)
         run.emit("stack-done", job.stack.id, result)
         run.index += 1
 
