@@ -1,56 +1,38 @@
-"""Self-contained HTML report: one page per run, pictures embedded as data URIs."""
+"""Self-contained HTML report: one page per run, pictures embedded as data URIs.
+
+Per stack, the page shows what a lookdev TD needs to accept or reject a tile: its status and
+tiling intent, the figures outside their targets, the material lit from a grazing angle (source
+vs result), and per map the source and the tile repeated over the same UV area (same texel
+scale), with the figures and their verdicts in words. A page-wide switch lays the repeat borders
+and the tile's centre lines over every picture. Library runs get an index page
+(:mod:`seamless_usd.report.index`).
+"""
 from __future__ import annotations
 
-import html
 import json
 from pathlib import Path
 
 from seamless_usd.fileio import atomic_write_text
-from seamless_usd.metrics import METRIC_KEYS
-from seamless_usd.report.model import Report, StackReport
-from seamless_usd.report.png import png_data_uri
+from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page
+from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
+from seamless_usd.report.repeat import ViewGeometry
+from seamless_usd.report.verdicts import LABELS, target_text, targets, verdict
 
-__all__ = ["render_html", "render_index", "write_html", "write_json", "write_library_html"]
-
-_CSS = """
-body{font:14px/1.45 system-ui,-apple-system,Segoe UI,sans-serif;margin:24px;color:#1d1f23;background:#fafafa}
-h1{font-size:22px;margin:0 0 4px} h2{font-size:17px;margin:0} .muted{color:#667}
-.summary span{display:inline-block;margin-right:14px}
-.stack{background:#fff;border:1px solid #dde;border-radius:8px;padding:14px 16px;margin:18px 0}
-.badge{display:inline-block;border-radius:10px;padding:1px 9px;font-size:12px;font-weight:600;margin-left:8px}
-.passed{background:#d8f3dc;color:#1b5e20}.not-passed{background:#fff3cd;color:#7a5a00}
-.failed{background:#fde2e1;color:#9b1c1c}.reused,.planned{background:#e3e8f4;color:#283b6a}
-table.facts{border-collapse:collapse;margin:8px 0}
-table.facts td{padding:2px 12px 2px 0;vertical-align:top}
-.maps{display:flex;flex-wrap:wrap;gap:16px;margin-top:10px}
-.map{border-top:1px solid #eef;padding-top:8px}
-.pair{display:flex;gap:10px} figure{margin:0} figcaption{font-size:12px;color:#556}
-img{image-rendering:pixelated;border:1px solid #ccd;width:256px;height:auto}
-table.metrics{font-size:12px;border-collapse:collapse} table.metrics td,table.metrics th{padding:1px 8px;text-align:right}
-.findings li{margin:2px 0} code{font-size:12px}
-"""
-
-_METRIC_ORDER = METRIC_KEYS
+__all__ = ["render_html", "render_index", "write_html", "write_json", "write_library_html",
+           "stack_html", "map_verdicts", "failing_figures", "source_report"]
 
 
-def _esc(value: object) -> str:
-    return html.escape(str(value))
+_LIT_HINT = (" Seams in the normal and roughness maps show here, where pictures of the maps hide them: "
+             "compare the repeats at their borders and, for the tile, its centre lines.")
 
 
-def _img(pixels, caption: str) -> str:
-    if pixels is None:
-        return ""
-    return f'<figure><img src="{png_data_uri(pixels)}" alt="{_esc(caption)}"><figcaption>{_esc(caption)}</figcaption></figure>'
-
-
-def _fmt(value: object) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, float):
-        return f"{value:.3g}"
-    if isinstance(value, (list, tuple)):
-        return " x ".join(_fmt(v) for v in value)
-    return str(value)
+def _metric_order() -> tuple[str, ...]:
+    try:
+        from seamless_usd.metrics import METRIC_KEYS
+    except ImportError:  # pragma: no cover - the metrics package is part of the project
+        METRIC_KEYS = ()
+    first = ("scale_ratio", "patch_distance", "seam_ratio_x", "seam_ratio_y", "centre_seam_x", "centre_seam_y")
+    return first + tuple(k for k in METRIC_KEYS if k not in first)
 
 
 def _policy_text(record: dict) -> str | None:
@@ -71,75 +53,194 @@ def _policy_text(record: dict) -> str | None:
     return text
 
 
-def _metrics_table(new: dict, source: dict) -> str:
-    present = {k for k, v in [*new.items(), *source.items()] if v is not None}
-    keys = [k for k in _METRIC_ORDER if k in present] + sorted(present - set(_METRIC_ORDER))
-    if not keys:
+def _map_name(m: MapReport) -> str:
+    return ", ".join(m.roles) or Path(m.asset).name
+
+
+def map_verdicts(m: MapReport) -> list[tuple[str, object, object, str, object]]:
+    """Rows ``(key, source value, tile value, target text, Verdict)`` of a map's figures, in order."""
+    bounds = targets()
+    present = {k for k, v in [*m.metrics.items(), *m.source_metrics.items()] if v is not None}
+    order = _metric_order()
+    keys = [k for k in order if k in present] + sorted(present - set(order))
+    return [(k, m.source_metrics.get(k), m.metrics.get(k), target_text(bounds.get(k)),
+             verdict(k, m.metrics.get(k), bounds.get(k))) for k in keys]
+
+
+def failing_figures(stack: StackReport) -> list[str]:
+    """``"map: figure"`` for the figures outside their targets: the stack's own list when it has one."""
+    if stack.failing:
+        return [_readable_failing(f) for f in stack.failing]
+    out = []
+    for m in stack.maps:
+        out += [f"{_map_name(m)}: {LABELS.get(k, k)} — {v.text}" for k, _, _, _, v in map_verdicts(m) if v.ok is False]
+    return out
+
+
+def _readable_failing(item: str) -> str:
+    """``"albedo: scale_ratio 0.62"`` as ``"albedo: feature scale vs source — magnified or blurred (0.62)"``."""
+    where, sep, figure_text = item.rpartition(": ")
+    parts = figure_text.split()
+    if len(parts) != 2 or parts[0] not in LABELS:
+        return item
+    try:
+        value = float(parts[1])
+    except ValueError:
+        return item
+    return f"{where}{sep}{LABELS[parts[0]]} — {verdict(parts[0], value).text}"
+
+
+def _metrics_table(m: MapReport) -> str:
+    main, minor = [], []
+    for key, source, new, target, v in map_verdicts(m):
+        cls = "" if v.ok is None else ("ok" if v.ok else "bad")
+        row = (f'<th title="{esc(key)}">{esc(LABELS.get(key, key))}</th><td>{esc(fmt(source))}</td>'
+               f'<td>{esc(fmt(new))}</td><td>{esc(target)}</td><td class="v {cls}">{esc(v.text)}</td>')
+        (main if v.target else minor).append(row)
+    if not main and not minor:
         return ""
-    rows = "".join(
-        f"<tr><th>{_esc(k)}</th><td>{_fmt(source.get(k, '-'))}</td><td>{_fmt(new.get(k, '-'))}</td></tr>"
-        for k in keys
+    rows = "".join(f"<tr>{r}</tr>" for r in main)
+    if minor:
+        rows += '<tr class="sep"><td colspan="5">other figures (no target)</td></tr>'
+        rows += "".join(f'<tr class="minor">{r}</tr>' for r in minor)
+    return ('<div class="figs"><table class="metrics"><tr><th>figure</th><th>source as is</th><th>new tile</th>'
+            f'<th>target</th><th>verdict</th></tr>{rows}</table></div>')
+
+
+def _geometry(stack: StackReport) -> ViewGeometry | None:
+    view = stack.previews.view
+    if not view:
+        return None
+    return ViewGeometry(window=tuple(view["window"]), tile_extent=tuple(view["tile_extent"]), size=tuple(view["size"]))
+
+
+def _repeats(r: tuple[float, float]) -> str:
+    return " x ".join(f"{v:g}" if float(v).is_integer() else f"{v:.2f}" for v in r)
+
+
+def _pair(stack: StackReport, g: ViewGeometry, source, tile, what: str) -> str:
+    source_lines = overlay_svg(g.size, g.lines((1.0, 1.0)))
+    tile_lines = overlay_svg(g.size, g.lines(g.tile_extent), g.lines(g.tile_extent, 0.5))
+    uv = stack.uv_scale or (1.0, 1.0)
+    what = f" {what}" if what else ""
+    return (
+        figure(source, f"source{what}, {_repeats(g.source_repeats)} repeats (as authored)", source_lines)
+        + figure(tile, f"new tile{what}, {_repeats(g.tile_repeats)} repeats (UV scale {fmt(tuple(uv))})", tile_lines)
     )
-    return f'<table class="metrics"><tr><th></th><th>source as is</th><th>new tile</th></tr>{rows}</table>'
 
 
-def _stack_html(stack: StackReport) -> str:
-    facts = {
+def _why(stack: StackReport) -> str:
+    if stack.status is StackStatus.LEFT_ALONE:
+        reason = ": ".join(x for x in (stack.intent, stack.intent_reason) if x) or stack.message or "not meant to tile"
+        return f'<div class="why info"><b>Left alone</b>: {esc(reason)}</div>'
+    if stack.status in (StackStatus.FAILED, StackStatus.PLANNED):
+        return ""
+    failing = failing_figures(stack)
+    q = stack.q.get("passed") if stack.q else None
+    q_text = ("" if q is None else
+              " The discriminator finds no seam in the centre bands (Q passed)." if q else
+              " The discriminator still sees a seam in the centre bands (Q not passed).")
+    q_text = q_text.strip()
+    if failing:
+        items = "".join(f"<li>{esc(f)}</li>" for f in failing)
+        return f'<div class="why bad"><b>Outside their targets</b><ul>{items}</ul>{esc(q_text)}</div>'
+    if any(m.metrics for m in stack.maps):
+        return f'<div class="why ok"><b>All figures within their targets.</b> {esc(q_text)}</div>'
+    return f'<div class="why info">{esc(q_text)}</div>' if q_text else ""
+
+
+def _q_text(q: dict) -> str | None:
+    """``{"passed": True, "tau": 0.41, ...}`` as ``"passed (tau 0.41, ...)"``."""
+    if not q:
+        return None
+    rest = ", ".join(f"{k} {fmt(v)}" for k, v in q.items() if k != "passed")
+    state = {True: "passed", False: "not passed"}.get(q.get("passed"), "")
+    return f"{state} ({rest})" if state and rest else (state or rest)
+
+
+def _facts(stack: StackReport) -> tuple[str, str]:
+    uv = stack.uv_scale
+    cover = f" (one tile covers {fmt(tuple(1.0 / v for v in uv))} of the source's UV square)" if uv else ""
+    main = {
         "source": stack.source,
-        "crop size (h x w)": stack.crop_size,
-        "tile size (h x w)": stack.tile_size,
-        "working size (w x h)": stack.working_size,
+        "tile size (h x w)": fmt(stack.tile_size) if stack.tile_size else None,
+        "UV scale": f"{fmt(tuple(uv))}{cover}" if uv else None,
+        "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size else None,
+        "Q": _q_text(stack.q),
+        "same as": stack.duplicate_of,
+        "result from": stack.origin or None,
+    }
+    more = {
+        "working size (w x h)": fmt(stack.working_size) if stack.working_size else None,
         "working resolution": _policy_text(stack.resampled),
-        "UV scale": stack.uv_scale,
-        "Q": ", ".join(f"{k} {_fmt(v)}" for k, v in stack.q.items()) or None,
         "candidates tried": stack.candidates or None,
         "timings (s)": ", ".join(f"{k} {v:.1f}" for k, v in stack.timings.items()) or None,
         "device / precision": f"{stack.device} / {stack.precision}" if stack.device else None,
         "model hash": stack.model_hash or None,
-        "same as": stack.duplicate_of,
-        "result from": stack.origin or None,
-        "peak memory (MB)": stack.peak_rss_mb or None,
+        "peak memory (MB)": f"{stack.peak_rss_mb:.0f}" if stack.peak_rss_mb else None,
     }
-    rows = "".join(
-        f"<tr><td class=muted>{_esc(k)}</td><td>{_esc(_fmt(v))}</td></tr>" for k, v in facts.items() if v
-    )
-    maps = []
+
+    def rows(d: dict) -> str:
+        return "".join(f"<tr><td class=muted>{esc(k)}</td><td>{esc(v)}</td></tr>" for k, v in d.items() if v)
+
+    return rows(main), rows(more)
+
+
+def stack_html(stack: StackReport) -> str:
+    """One stack's section of the page."""
+    intent = ""
+    if stack.intent and stack.status is not StackStatus.LEFT_ALONE:
+        intent = f'<p class="intent muted">tiling intent: <b>{esc(stack.intent)}</b>' + (
+            f" — {esc(stack.intent_reason)}" if stack.intent_reason else "") + "</p>"
+    message = f"<p>{esc(stack.message)}</p>" if stack.message and stack.status is not StackStatus.LEFT_ALONE else ""
+    main, more = _facts(stack)
+    details = f"<details><summary>run details</summary><table class=facts>{more}</table></details>" if more else ""
+    blocks = []
+    g = _geometry(stack)
+    p = stack.previews
+    if g is not None and (p.lit_tile is not None or p.lit_note):
+        lit = _pair(stack, g, p.lit_source, p.lit_tile, "lit") if p.lit_tile is not None else ""
+        blocks.append(f'<div class="block"><h3>Material, lit from a grazing angle</h3>'
+                      f'<div class="row">{lit}<p class="note muted">{esc(p.lit_note)}.{_LIT_HINT if lit else ""}</p></div></div>')
     for m in stack.maps:
-        pair = _img(stack.previews.source_2x2.get(m.node), "source, tiled 2x2") + _img(
-            stack.previews.tile_2x2.get(m.node), "new tile, tiled 2x2"
+        pictures = ""
+        if g is not None and m.node in p.tile_view:
+            pictures = _pair(stack, g, p.source_view.get(m.node), p.tile_view.get(m.node), "")
+        out = f' → {esc(Path(m.output).name)}' if m.output else ""
+        blocks.append(
+            f'<div class="block"><h3>{esc(_map_name(m))} <span class="muted">({esc(m.channels)}, '
+            f"{esc(m.color_space)}) @{esc(m.asset)}@{out}</span></h3>"
+            f'<div class="row">{pictures}{_metrics_table(m)}</div></div>'
         )
-        maps.append(
-            f'<div class="map"><div><b>{_esc(", ".join(m.roles))}</b> <span class=muted>'
-            f"({_esc(m.channels)}, {_esc(m.color_space)}) @{_esc(m.asset)}@"
-            f'{" → " + _esc(Path(m.output).name) if m.output else ""}</span></div>'
-            f'<div class="pair">{pair}</div>{_metrics_table(m.metrics, m.source_metrics)}</div>'
-        )
-    disc = _img(stack.previews.discriminator, "discriminator map; seam bands outlined")
-    message = f"<p>{_esc(stack.message)}</p>" if stack.message else ""
+    if p.discriminator is not None:
+        blocks.append('<div class="block">' + figure(p.discriminator, "discriminator map; seam bands tinted", lossless=True) + "</div>")
     return (
-        f'<section class="stack" id="{_esc(stack.id)}"><h2>&lt;{_esc(stack.material.strip("<>"))}&gt;'
-        f'<span class="badge {stack.status.value}">{stack.status.value}</span></h2>{message}'
-        f'<table class="facts">{rows}</table><div class="maps">{"".join(maps)}'
-        f'{"<div class=map>" + disc + "</div>" if disc else ""}</div></section>'
+        f'<section class="stack" id="{esc(stack.id)}"><h2>&lt;{esc(stack.material.strip("<>"))}&gt;</h2>'
+        f'<span class="badge {esc(stack.status.value)}">{esc(stack.status.value)}</span>{intent}{message}'
+        f'{_why(stack)}<table class="facts">{main}</table>{details}{"".join(blocks)}</section>'
     )
+
+
+def _findings(report: Report) -> str:
+    items = "".join(f"<li><code>{esc(f.severity.value)}</code> {esc(f.where)}: {esc(f.message)}</li>" for f in report.findings)
+    return f"<h2>Findings</h2><ul class=findings>{items}</ul>" if items else ""
 
 
 def render_html(report: Report, title: str = "seamless-usd report") -> str:
+    """The whole page of one run (or one source of a library run)."""
     counts = report.counts()
-    summary = "".join(f"<span><b>{v}</b> {k}</span>" for k, v in counts.items() if v)
-    findings = "".join(f"<li><code>{_esc(f.severity.value)}</code> {_esc(f.where)}: {_esc(f.message)}</li>" for f in report.findings)
-    layers = "".join(f"<li>{_esc(p)}</li>" for p in report.layers_written)
-    stacks = "".join(_stack_html(s) for s in report.stacks)
+    summary = "".join(f"<span><b>{v}</b> {esc(k)}</span>" for k, v in counts.items() if v)
+    layers = "".join(f"<li>{esc(p)}</li>" for p in report.layers_written)
     status = "all stacks passed" if report.ok else "some stacks failed or did not pass"
-    return f"""<!doctype html><html lang="en"><head><meta charset="utf-8">
-<title>{_esc(title)}</title><style>{_CSS}</style></head><body>
-<h1>{_esc(title)}</h1><p class="muted">{_esc(", ".join(report.sources))} · seamless-usd {_esc(report.tool_version)} · {_esc(status)} (exit code {report.exit_code})</p>
-<p class="summary">{summary}</p>
-{"<h2>Layers and documents written</h2><ul>" + layers + "</ul>" if layers else ""}
-{"<h2>Findings</h2><ul class=findings>" + findings + "</ul>" if findings else ""}
-{stacks}
-</body></html>
-"""
+    body = (
+        f'<h1>{esc(title)}</h1><p class="muted">{esc(", ".join(report.sources))} · seamless-usd '
+        f"{esc(report.tool_version)} · {esc(status)} (exit code {report.exit_code})</p>"
+        f'<p class="summary">{summary}</p>'
+        + (f"<h2>Layers and documents written</h2><ul>{layers}</ul>" if layers else "")
+        + _findings(report)
+        + "".join(stack_html(s) for s in report.stacks)
+    )
+    return page(title, body)
 
 
 def write_html(report: Report, path: Path) -> Path:
@@ -154,7 +255,7 @@ def write_json(report: Report, path: Path) -> Path:
     return path
 
 
-def _source_report(report: Report, source: str) -> Report:
+def source_report(report: Report, source: str) -> Report:
     """The part of a library report that belongs to one source file."""
     stacks = [s for s in report.stacks if s.source == source]
     materials = {s.material for s in stacks}
@@ -168,45 +269,14 @@ def _source_report(report: Report, source: str) -> Report:
 
 
 def render_index(report: Report, pages: dict[str, str], title: str = "seamless-usd library report") -> str:
-    """The library page: one row per source with its counts and a link to its own report."""
-    rows = []
-    for source in report.sources:
-        part = _source_report(report, source)
-        counts = part.counts()
-        cells = "".join(f"<td>{counts[k] or ''}</td>" for k in ("passed", "not-passed", "failed", "reused", "trained", "from_cache"))
-        state = "unreadable" if part.unreadable else ("ok" if part.ok else "needs a look")
-        link = pages.get(source)
-        name = f'<a href="{_esc(link)}">{_esc(source)}</a>' if link else _esc(source)
-        rows.append(f"<tr><td>{name}</td>{cells}<td>{_esc(state)}</td></tr>")
-    problems = "".join(
-        f"<li><code>{_esc(f.severity.value)}</code> {_esc(f.where)}: {_esc(f.message)}</li>"
-        for f in report.findings if f.severity.value == "error"
-    )
-    counts = report.counts()
-    summary = "".join(f"<span><b>{v}</b> {k}</span>" for k, v in counts.items() if v)
-    total = report.timings.get("total")
-    return f"""<!doctype html><html lang="en"><head><meta charset="utf-8">
-<title>{_esc(title)}</title><style>{_CSS}
-table.lib{{border-collapse:collapse;background:#fff}} table.lib td,table.lib th{{border:1px solid #dde;padding:3px 8px;text-align:left}}</style></head><body>
-<h1>{_esc(title)}</h1><p class="muted">{len(report.sources)} files · seamless-usd {_esc(report.tool_version)} · exit code {report.exit_code}{f" · {total:.0f} s" if total else ""}</p>
-<p class="summary">{summary}</p>
-<table class="lib"><tr><th>file</th><th>passed</th><th>not passed</th><th>failed</th><th>reused</th><th>trained</th><th>from cache</th><th>state</th></tr>{"".join(rows)}</table>
-{"<h2>Failures</h2><ul class=findings>" + problems + "</ul>" if problems else ""}
-</body></html>
-"""
+    """The library index page (see :func:`seamless_usd.report.index.render_index`)."""
+    from seamless_usd.report import index
+
+    return index.render_index(report, pages, title)
 
 
 def write_library_html(report: Report, path: Path) -> Path:
     """The index page at ``path`` and one report per source beside it (``<stem>.files/``)."""
-    from seamless_usd.pipeline.naming import slug
+    from seamless_usd.report import index
 
-    path = Path(path)
-    folder = path.with_name(f"{path.stem}.files")
-    folder.mkdir(parents=True, exist_ok=True)
-    pages: dict[str, str] = {}
-    for n, source in enumerate(report.sources, 1):
-        page = folder / f"{n:04d}-{slug(Path(source).stem, 40)}.html"
-        atomic_write_text(page, render_html(_source_report(report, source), title=f"seamless-usd: {Path(source).name}"))
-        pages[source] = f"{folder.name}/{page.name}"
-    atomic_write_text(path, render_index(report, pages))
-    return path
+    return index.write_library_html(report, path)

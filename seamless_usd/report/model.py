@@ -44,10 +44,19 @@ class MapReport:
 
 @dataclass
 class Previews:
-    """Display images for the HTML report (uint8 arrays); never in the JSON."""
+    """Display images for the HTML report (uint8 arrays); never in the JSON.
 
-    source_2x2: dict[str, np.ndarray] = field(default_factory=dict)  # map node -> source tiled 2x2
-    tile_2x2: dict[str, np.ndarray] = field(default_factory=dict)  # map node -> new tile tiled 2x2
+    Built by :func:`seamless_usd.report.previews.stack_previews`. The ``*_view`` pictures and the
+    lit pictures all show one UV window (``view``), so source and tile are at the same texel scale.
+    """
+
+    source_view: dict[str, np.ndarray] = field(default_factory=dict)  # map node -> source repeated over the window
+    tile_view: dict[str, np.ndarray] = field(default_factory=dict)  # map node -> new tile repeated over the window
+    lit_source: np.ndarray | None = None  # the material lit from a grazing angle, source repeated
+    lit_tile: np.ndarray | None = None  # the same with the new tiles
+    lit_note: str = ""  # what the lit pictures are made of, or why there are none
+    view: dict[str, Any] = field(default_factory=dict)  # ViewGeometry.to_dict(): window, tile_extent, size
+    thumbnail: np.ndarray | None = None  # small picture of the result for the library index
     discriminator: np.ndarray | None = None  # D map with the seam bands drawn
 
 

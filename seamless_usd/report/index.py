@@ -1,0 +1,153 @@
+"""The library index page: a thumbnail card per stack, filterable by status, and a row per file.
+
+Each card shows the result's thumbnail (the lit tile, or the first map's tile), the material, the
+file, the status and why: the figures outside their targets, the tiling intent and its reason for
+a stack left alone, the error of a failed one. A card links to the stack on its file's own page
+(in ``<index stem>.files/``). Filtering is pure CSS (radio buttons), so the page needs no script.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from seamless_usd.fileio import atomic_write_text
+from seamless_usd.report.html import failing_figures, render_html, source_report
+from seamless_usd.report.htmlparts import esc, page
+from seamless_usd.report.model import Report, StackReport, StackStatus
+from seamless_usd.report.webimage import image_data_uri
+
+__all__ = ["FILTER_ORDER", "render_index", "write_library_html", "stack_reason"]
+
+#: Statuses offered as filters, in this order (only those present are shown).
+FILTER_ORDER = (StackStatus.PASSED, StackStatus.NOT_PASSED, StackStatus.FAILED, StackStatus.LEFT_ALONE,
+                StackStatus.REUSED, StackStatus.PLANNED)
+
+_INDEX_CSS = """
+.filters{margin:12px 0 10px;display:flex;gap:8px;flex-wrap:wrap}
+.filters label{cursor:pointer;border:1px solid #b9bfcc;border-radius:14px;padding:2px 12px;background:#fff;user-select:none}
+.cards{display:grid;grid-template-columns:repeat(auto-fill,minmax(220px,1fr));gap:14px}
+.card{background:#fff;border:1px solid #d9dce3;border-radius:8px;padding:10px;display:flex;flex-direction:column;gap:4px}
+.card a.thumb{display:block;line-height:0}
+.card img,.card .ph{width:100%;aspect-ratio:1/1;object-fit:cover;border:1px solid #c9ccd6;border-radius:4px}
+.card .ph{display:flex;align-items:center;justify-content:center;background:repeating-linear-gradient(45deg,#f0f1f4,#f0f1f4 8px,#e7e9ee 8px,#e7e9ee 16px);color:#5d6470;font-size:13px;line-height:1.3;text-align:center;padding:8px}
+.card .mat{font-weight:600;word-break:break-all} .card .file{font-size:12px;color:#5d6470;word-break:break-all}
+.card .reason{font-size:12.5px}
+table.lib{border-collapse:collapse;background:#fff;margin-top:8px} table.lib td,table.lib th{border:1px solid #dde;padding:3px 8px;text-align:left}
+"""
+
+
+def stack_reason(stack: StackReport) -> str:
+    """One line saying why a stack has its status."""
+    if stack.status is StackStatus.LEFT_ALONE:
+        return ": ".join(x for x in (stack.intent, stack.intent_reason) if x) or stack.message or "not meant to tile"
+    if stack.status is StackStatus.FAILED:
+        return stack.message or "failed"
+    if stack.status is StackStatus.REUSED:
+        return f"same as {stack.duplicate_of}" if stack.duplicate_of else "identical to a stack processed before"
+    if stack.status is StackStatus.PLANNED:
+        return "would be processed (dry run)"
+    failing = failing_figures(stack)
+    if failing:
+        more = f" (+{len(failing) - 2} more)" if len(failing) > 2 else ""
+        return "; ".join(failing[:2]) + more
+    if stack.status is StackStatus.NOT_PASSED:
+        return stack.message or "Q not passed"
+    return "all figures within their targets" if any(m.metrics for m in stack.maps) else (stack.message or "")
+
+
+def _filter_id(status: StackStatus) -> str:
+    return f"f-{status.value}"
+
+
+def _card(stack: StackReport, link: str | None) -> str:
+    thumb = stack.previews.thumbnail
+    name = stack.material.strip("<>")
+    if thumb is not None:
+        picture = f'<img src="{image_data_uri(thumb)}" width="{thumb.shape[1]}" height="{thumb.shape[0]}" alt="{esc(name)}">'
+    else:
+        picture = f'<div class="ph">{esc(stack.status.value.replace("-", " "))}: no picture</div>'
+    if link:
+        picture = f'<a class="thumb" href="{esc(link)}#{esc(stack.id)}">{picture}</a>'
+        title = f'<a class="mat" href="{esc(link)}#{esc(stack.id)}">&lt;{esc(name)}&gt;</a>'
+    else:
+        title = f'<span class="mat">&lt;{esc(name)}&gt;</span>'
+    return (
+        f'<div class="card s-{esc(stack.status.value)}" data-status="{esc(stack.status.value)}">{picture}'
+        f'<div>{title}<span class="badge {esc(stack.status.value)}">{esc(stack.status.value)}</span></div>'
+        f'<div class="file">{esc(Path(stack.source).name)}</div>'
+        f'<div class="reason">{esc(stack_reason(stack))}</div></div>'
+    )
+
+
+def _filters(report: Report) -> tuple[str, str, str]:
+    """(radio inputs, their labels, the CSS rules that hide the other cards)."""
+    counts = report.counts()
+    present = [s for s in FILTER_ORDER if counts.get(s.value)]
+    inputs = '<input type="radio" name="status-filter" id="f-all" class="toggle" checked>' + "".join(
+        f'<input type="radio" name="status-filter" id="{_filter_id(s)}" class="toggle">' for s in present
+    )
+    labels = f'<label for="f-all">all ({len(report.stacks)})</label>' + "".join(
+        f'<label for="{_filter_id(s)}">{esc(s.value.replace("-", " "))} ({counts[s.value]})</label>' for s in present
+    )
+    rules = "#f-all:checked ~ .filters label[for=f-all]{background:#1d2330;color:#fff;border-color:#1d2330}" + "".join(
+        f"#{_filter_id(s)}:checked ~ .cards .card:not(.s-{s.value}){{display:none}}"
+        f"#{_filter_id(s)}:checked ~ .filters label[for={_filter_id(s)}]{{background:#1d2330;color:#fff;border-color:#1d2330}}"
+        for s in FILTER_ORDER
+    )
+    return inputs, labels, rules
+
+
+def _files_table(report: Report, pages: dict[str, str]) -> str:
+    rows = []
+    for source in report.sources:
+        part = source_report(report, source)
+        counts = part.counts()
+        cells = "".join(f"<td>{counts[k] or ''}</td>" for k in
+                        ("passed", "not-passed", "failed", "left-alone", "reused", "trained", "from_cache"))
+        state = "unreadable" if part.unreadable else ("ok" if part.ok else "needs a look")
+        link = pages.get(source)
+        name = f'<a href="{esc(link)}">{esc(source)}</a>' if link else esc(source)
+        rows.append(f"<tr><td>{name}</td>{cells}<td>{esc(state)}</td></tr>")
+    head = "".join(f"<th>{h}</th>" for h in
+                   ("file", "passed", "not passed", "failed", "left alone", "reused", "trained", "from cache", "state"))
+    return f'<h2>Files</h2><table class="lib"><tr>{head}</tr>{"".join(rows)}</table>'
+
+
+def render_index(report: Report, pages: dict[str, str], title: str = "seamless-usd library report") -> str:
+    """The library page: a card per stack (filterable by status) and a row per source file.
+
+    ``pages`` maps a source to the relative link of its own report page.
+    """
+    inputs, labels, rules = _filters(report)
+    cards = "".join(_card(s, pages.get(s.source)) for s in report.stacks)
+    problems = "".join(
+        f"<li><code>{esc(f.severity.value)}</code> {esc(f.where)}: {esc(f.message)}</li>"
+        for f in report.findings if f.severity.value == "error"
+    )
+    counts = report.counts()
+    summary = "".join(f"<span><b>{v}</b> {esc(k)}</span>" for k, v in counts.items() if v)
+    total = report.timings.get("total")
+    body = (
+        f'<h1>{esc(title)}</h1><p class="muted">{len(report.sources)} files · {len(report.stacks)} stacks · '
+        f'seamless-usd {esc(report.tool_version)} · exit code {report.exit_code}{f" · {total:.0f} s" if total else ""}</p>'
+        f'<p class="summary">{summary}</p>'
+        f'{inputs}<div class="filters">{labels}</div><div class="cards">{cards}</div>'
+        + _files_table(report, pages)
+        + (f"<h2>Failures</h2><ul class=findings>{problems}</ul>" if problems else "")
+    )
+    return page(title, body, extra_css=_INDEX_CSS + rules, toggle=False)
+
+
+def write_library_html(report: Report, path: Path) -> Path:
+    """The index page at ``path`` and one report per source beside it (``<stem>.files/``)."""
+    from seamless_usd.pipeline.naming import slug
+
+    path = Path(path)
+    folder = path.with_name(f"{path.stem}.files")
+    folder.mkdir(parents=True, exist_ok=True)
+    pages: dict[str, str] = {}
+    for n, source in enumerate(report.sources, 1):
+        target = folder / f"{n:04d}-{slug(Path(source).stem, 40)}.html"
+        atomic_write_text(target, render_html(source_report(report, source), title=f"seamless-usd: {Path(source).name}"))
+        pages[source] = f"{folder.name}/{target.name}"
+    atomic_write_text(path, render_index(report, pages))
+    return path

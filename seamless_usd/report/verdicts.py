@@ -1,0 +1,137 @@
+"""Verdicts in words for the report's figures: "scale kept (0.98)", "centre seam visible (1.6)".
+
+Each figure with a target (the quality benchmark's targets, ``seamless_usd.metrics.TARGETS``: a
+mapping ``key -> (low or None, high or None)``) gets a short sentence saying what the number means
+for the tile and whether it is within its target. The targets are read when first needed; while
+the metrics package does not provide them, the values below are used.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["FALLBACK_TARGETS", "LABELS", "Verdict", "targets", "verdict", "target_text"]
+
+#: The quality benchmark's targets, used when ``seamless_usd.metrics.TARGETS`` is not there.
+FALLBACK_TARGETS: dict[str, tuple[float | None, float | None]] = {
+    "seam_ratio_x": (None, 1.15),
+    "seam_ratio_y": (None, 1.15),
+    "centre_seam_x": (None, 1.15),
+    "centre_seam_y": (None, 1.15),
+    "scale_ratio": (0.9, 1.1),
+    "patch_distance": (None, 1.2),
+}
+
+#: Readable names of the figures (``x``: the seam met walking across the picture, a vertical line).
+LABELS: dict[str, str] = {
+    "seam_ratio_x": "border seam, left|right",
+    "seam_ratio_y": "border seam, top|bottom",
+    "seam_ratio2_x": "border seam (2nd diff.), left|right",
+    "seam_ratio2_y": "border seam (2nd diff.), top|bottom",
+    "centre_seam_x": "centre seam, vertical line",
+    "centre_seam_y": "centre seam, horizontal line",
+    "scale_ratio": "feature scale vs source",
+    "patch_distance": "patch distance vs source",
+    "ps_score": "periodic-plus-smooth score",
+    "detail_ratio": "detail at the borders",
+    "detail_ratio_centre": "detail at the centre lines",
+    "ssim": "SSIM vs source",
+    "gram_distance": "Gram distance vs source",
+}
+
+# key -> (words when within target, words below the low bound, words above the high bound)
+_WORDS: dict[str, tuple[str, str, str]] = {
+    "seam_ratio_x": ("no border seam", "no border seam", "border seam visible"),
+    "seam_ratio_y": ("no border seam", "no border seam", "border seam visible"),
+    "seam_ratio2_x": ("no border seam", "no border seam", "border seam visible"),
+    "seam_ratio2_y": ("no border seam", "no border seam", "border seam visible"),
+    "centre_seam_x": ("no centre seam", "no centre seam", "centre seam visible"),
+    "centre_seam_y": ("no centre seam", "no centre seam", "centre seam visible"),
+    "scale_ratio": ("scale kept", "magnified or blurred", "shrunk or sharpened"),
+    "patch_distance": ("patches like the source's", "patches like the source's", "patches unlike the source's"),
+    "detail_ratio": ("detail kept at the borders", "borders blurred", "borders harsher than the rest"),
+    "detail_ratio_centre": ("detail kept at the centre", "centre blurred", "centre harsher than the rest"),
+    "ssim": ("close to the source", "far from the source", "close to the source"),
+}
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A figure in words: ``text`` ("scale kept (0.98)"), ``ok`` (True within target, False
+    outside, None without a target) and the ``target`` it was judged against."""
+
+    key: str
+    value: float | None
+    text: str
+    ok: bool | None
+    target: tuple[float | None, float | None] | None = None
+
+
+def targets() -> dict[str, tuple[float | None, float | None]]:
+    """The figures' targets: ``seamless_usd.metrics.TARGETS`` over :data:`FALLBACK_TARGETS`."""
+    merged = dict(FALLBACK_TARGETS)
+    try:
+        from seamless_usd import metrics
+
+        found = getattr(metrics, "TARGETS", None)
+    except ImportError:  # pragma: no cover - the metrics package is part of the project
+        found = None
+    if isinstance(found, dict):
+        for key, bounds in found.items():
+            try:
+                low, high = bounds
+            except (TypeError, ValueError):
+                continue
+            merged[str(key)] = (low, high)
+    return merged
+
+
+def _num(value: float) -> str:
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return f"{value:.3g}" if abs(value) < 100 else f"{value:.0f}"
+
+
+def target_text(bounds: tuple[float | None, float | None] | None) -> str:
+    """``"≤ 1.15"``, ``"≥ 0.5"``, ``"0.9-1.1"`` or ``""``."""
+    if not bounds:
+        return ""
+    low, high = bounds
+    if low is not None and high is not None:
+        return f"{_num(low)}–{_num(high)}"
+    if high is not None:
+        return f"≤ {_num(high)}"
+    if low is not None:
+        return f"≥ {_num(low)}"
+    return ""
+
+
+def verdict(key: str, value: float | None, bounds: tuple[float | None, float | None] | None = None) -> Verdict:
+    """The verdict on one figure of a new tile.
+
+    Parameters
+    ----------
+    key : the metric's key (``scale_ratio``, ``centre_seam_x``, ...).
+    value : its value; None or NaN gives "not measured".
+    bounds : ``(low, high)`` target; default from :func:`targets`.
+
+    Examples
+    --------
+    >>> verdict("scale_ratio", 0.98).text
+    'scale kept (0.98)'
+    >>> verdict("centre_seam_x", 1.6).text, verdict("centre_seam_x", 1.6).ok
+    ('centre seam visible (1.6)', False)
+    """
+    bounds = bounds if bounds is not None else targets().get(key)
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return Verdict(key, None, "not measured", None, bounds)
+    value = float(value)
+    within_words, low_words, high_words = _WORDS.get(key, ("within target", "below target", "above target"))
+    if not bounds or bounds == (None, None):
+        return Verdict(key, value, "", None, None)
+    low, high = bounds
+    if low is not None and value < low:
+        return Verdict(key, value, f"{low_words} ({_num(value)})", False, bounds)
+    if high is not None and value > high:
+        return Verdict(key, value, f"{high_words} ({_num(value)})", False, bounds)
+    return Verdict(key, value, f"{within_words} ({_num(value)})", True, bounds)
