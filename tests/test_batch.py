@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import re
 import os
 import shutil
 import signal
@@ -109,6 +110,16 @@ def _run(*args: str, capsys) -> tuple[int, dict]:
     return code, json.loads(capsys.readouterr().out)
 
 
+def _assert_all_written(code: int, payload: dict) -> None:
+    """Everything should work: no error finding, no failed stack, and exit 0 unless a stack's
+    quality function did not pass (exit 1 then, with every such stack reported not-passed)."""
+    errors = [f for f in payload["findings"] if f["severity"] == "error"]
+    assert not errors, errors
+    statuses = [s["status"] for s in payload["stacks"]]
+    assert "failed" not in statuses, payload["stacks"]
+    assert code == (1 if "not-passed" in statuses else 0), (code, statuses)
+
+
 def test_expand_inputs_walks_folders_and_globs_and_leaves_outputs_out(tmp_path):
     lib = _library(tmp_path, copies=2)
     (lib / "brick0" / "scene.seamless.usda").write_text("#usda 1.0\n")
@@ -126,19 +137,27 @@ def test_expand_inputs_walks_folders_and_globs_and_leaves_outputs_out(tmp_path):
 
 def test_make_executor_validates_names():
     assert isinstance(make_executor(None), InProcessExecutor)
-    assert isinstance(make_executor(None, 2), ProcessPoolExecutor)
-    assert isinstance(make_executor("local:2"), DaskExecutor)
-    assert isinstance(make_executor("tcp://127.0.0.1:8786"), DaskExecutor)
-    for bad in ("local:x", "local:0", "ssh://farm", "kubernetes"):
-        with pytest.raises(UsageError):
+    assert isinstance(make_executor("inprocess", 1), InProcessExecutor)
+    pool = make_executor(None, 2)
+    assert isinstance(pool, ProcessPoolExecutor) and pool.workers == 2
+    local = make_executor("local:3")
+    assert isinstance(local, DaskExecutor) and (local.address, local.workers) == ("local", 3)
+    remote = make_executor("tcp://127.0.0.1:8786")
+    assert isinstance(remote, DaskExecutor) and remote.address == "tcp://127.0.0.1:8786"
+    expected = {"local:x": "whole number", "local:0": "at least 1", "ssh://farm": "local:N, tcp://host:port",
+                "kubernetes": "unknown scheduler"}
+    for bad, why in expected.items():
+        with pytest.raises(UsageError, match=re.escape(why)):
             make_executor(bad)
+    with pytest.raises(UsageError, match="at least 1"):
+        make_executor(None, 0)
 
 
 def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, cache, capsys):
     lib = _library(tmp_path)
     report = tmp_path / "out" / "library.html"
     code, first = _run(str(lib), "--cache-dir", str(tmp_path / "cold"), "--report", str(report), capsys=capsys)
-    assert code in (0, 1)
+    _assert_all_written(code, first)
     jsonschema.validate(first, json_schema("report"))
     assert len(first["sources"]) == 4
     # brick x3 (one unique stack) + brick and wood albedo in two.usda: the brick albedo alone is another
@@ -152,9 +171,12 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
         resolved = Path(tex.GetInput("file").Get().resolvedPath)
         assert resolved.parent == lib / f"brick{n}" / "tileable" and resolved.is_file()
     index = report.read_text()
-    assert index.count('href="library.files/') == 4
-    assert all((report.parent / "library.files").glob("*.html"))
+    linked = set(re.findall(r'href="library\.files/([^"#]+\.html)', index))
+    pages = sorted((report.parent / "library.files").glob("*.html"))
+    assert len(pages) == 4 and {page.name for page in pages} == linked  # one page per file, each linked
+    assert all(page.stat().st_size > 0 for page in pages)
     code, second = _run(str(lib), "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    _assert_all_written(code, second)
     assert second["counts"]["trained"] == 0
     assert second["counts"]["from_cache"] == 3
 
@@ -163,7 +185,8 @@ def test_two_stacks_editing_one_layer_in_place_both_land(tmp_path, cache, capsys
     lib = _library(tmp_path, copies=0)
     layer = lib / "looks" / "two.usda"
     code, payload = _run(str(layer), "--in-place", "--cache-dir", str(cache), capsys=capsys)
-    assert code in (0, 1) and len(payload["stacks"]) == 2
+    _assert_all_written(code, payload)
+    assert len(payload["stacks"]) == 2
     stage = Usd.Stage.Open(str(layer))
     for material in ("Brick", "Wood"):
         tex = UsdShade.Shader(stage.GetPrimAtPath(f"/World/Looks/{material}/Albedo"))
@@ -176,11 +199,50 @@ def test_two_stacks_editing_one_layer_in_place_both_land(tmp_path, cache, capsys
 def test_worker_processes_process_two_stacks(tmp_path, cache, capsys, flags):
     lib = _library(tmp_path, copies=0)
     code, payload = _run(str(lib / "looks" / "two.usda"), "--cache-dir", str(tmp_path / "c"), *flags, capsys=capsys)
-    assert code in (0, 1)
+    _assert_all_written(code, payload)
     assert [s["status"] in ("passed", "not-passed") for s in payload["stacks"]] == [True, True]
     assert payload["counts"]["trained"] == 2
-    assert all(s["peak_rss_mb"] > 0 for s in payload["stacks"])
-    assert (lib / "looks" / "two.seamless.usda").is_file()
+    # each stack's tiles were written by a worker and the client's layer points at them
+    stage = Usd.Stage.Open(str(lib / "looks" / "two.seamless.usda"))
+    outputs = set()
+    for s in payload["stacks"]:
+        material = s["material"].strip("<>")
+        tex = UsdShade.Shader(stage.GetPrimAtPath(f"{material}/Albedo"))
+        resolved = Path(tex.GetInput("file").Get().resolvedPath)
+        assert resolved.is_file() and resolved.parent == lib / "looks" / "tileable"
+        assert str(resolved) in [m["output"] for m in s["maps"]]
+        outputs.add(resolved)
+    assert len(outputs) == 2
+
+
+def test_a_warm_rerun_on_a_local_cluster_starts_no_cluster(tmp_path, capsys, monkeypatch):
+    import distributed
+
+    lib = _library(tmp_path, copies=0)
+    cache = tmp_path / "c"
+    code, cold = _run(str(lib / "looks" / "two.usda"), "--cache-dir", str(cache), capsys=capsys)
+    _assert_all_written(code, cold)
+    assert cold["counts"]["trained"] == 2
+
+    started = []
+
+    class NoCluster:
+        def __init__(self, *args, **kwargs):
+            started.append(kwargs)
+            raise RuntimeError("a warm rerun must not start a cluster")
+
+    monkeypatch.setattr(distributed, "LocalCluster", NoCluster)
+    monkeypatch.setattr(distributed, "Client", NoCluster)
+    code, warm = _run(str(lib / "looks" / "two.usda"), "--cache-dir", str(cache), "--scheduler", "local:2",
+                      capsys=capsys)
+    _assert_all_written(code, warm)
+    assert started == []
+    assert warm["counts"]["trained"] == 0 and warm["counts"]["from_cache"] == 2
+    # a changed texture is work again: only then is a cluster asked for
+    shutil.copy(SAMPLES / "textures" / "cloth.png", lib / "looks" / "cloth_copy.png")
+    (lib / "looks" / "two.usda").write_text(TWO_MATERIALS.replace("../textures/wood_color.png", "./cloth_copy.png"))
+    main(["process", "--preset", "tiny", "--cache-dir", str(cache), "--scheduler", "local:2", str(lib / "looks" / "two.usda")])
+    assert len(started) == 1, "the changed stack needs work: the cluster is asked for"
 
 
 def _tiles(folder: Path) -> dict[str, bytes]:
