@@ -65,9 +65,10 @@ def _card(stack: StackReport, link: str | None) -> str:
         picture = f'<img src="{image_data_uri(thumb)}" width="{thumb.shape[1]}" height="{thumb.shape[0]}" alt="{esc(name)}">'
     else:
         picture = f'<div class="ph">{esc(stack.status.value.replace("-", " "))}: no picture</div>'
-    if link:
-        picture = f'<a class="thumb" href="{esc(link)}#{esc(stack.id)}">{picture}</a>'
-        title = f'<a class="mat" href="{esc(link)}#{esc(stack.id)}">&lt;{esc(name)}&gt;</a>'
+    if link:  # "./": the stack's anchor on its file's page (the files table links the pages themselves)
+        target = f"./{link}#{stack.id}"
+        picture = f'<a class="thumb" href="{esc(target)}">{picture}</a>'
+        title = f'<a class="mat" href="{esc(target)}">&lt;{esc(name)}&gt;</a>'
     else:
         title = f'<span class="mat">&lt;{esc(name)}&gt;</span>'
     return (

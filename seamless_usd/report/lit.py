@@ -3,7 +3,7 @@
 Seams in normal and roughness maps hardly show in pictures of the maps; they show as soon as the
 surface is lit from a low angle. This module builds the shading inputs from the maps of one stack
 and shades them with one grazing directional light, a GGX specular term and a little ambient
-light, seen from straight above:
+light, seen from the side where its specular reflection lies:
 
 * **albedo** (``diffuseColor``, ``base_color``, ...) in linear light: sRGB maps are decoded with
   the sRGB EOTF, raw maps are taken as linear;
@@ -40,21 +40,35 @@ _CLAY = 0.35  # linear albedo of a stack without a colour map
 _ROUGHNESS = 0.5  # roughness of a stack without a roughness map
 
 
+def _direction(azimuth: float, elevation: float) -> np.ndarray:
+    az, el = np.radians(azimuth), np.radians(elevation)
+    return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+
+
 @dataclass(frozen=True)
 class Light:
-    """A directional light: ``azimuth`` (degrees, 0 = from the right, 90 = from the top of the
-    picture), ``elevation`` above the surface (degrees; low = grazing), ``intensity`` (irradiance
-    at normal incidence) and the ``ambient`` fraction."""
+    """A directional light and the viewer.
+
+    ``azimuth`` (degrees, 0 = from the right, 90 = from the top of the picture) and ``elevation``
+    above the surface (degrees; low = grazing) place the light; ``intensity`` is its irradiance at
+    normal incidence, ``ambient`` the ambient fraction. The viewer looks from ``view_elevation``
+    on the side opposite the light, where a flat surface's specular lobe lies, so roughness
+    changes show (the picture itself stays laid out as the texture).
+    """
 
     azimuth: float = 135.0
     elevation: float = 20.0
     intensity: float = 4.0
     ambient: float = 0.12
+    view_elevation: float = 50.0
 
     @property
     def direction(self) -> np.ndarray:
-        az, el = np.radians(self.azimuth), np.radians(self.elevation)
-        return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+        return _direction(self.azimuth, self.elevation)
+
+    @property
+    def view(self) -> np.ndarray:
+        return _direction(self.azimuth + 180.0, self.view_elevation)
 
 
 #: The report's light: from the top left, 20 degrees above the surface.
@@ -144,7 +158,7 @@ def shading_inputs(maps: Sequence, values: Sequence[np.ndarray]) -> ShadingInput
 
 
 def shade(inputs: ShadingInputs, light: Light = GRAZING_LIGHT) -> np.ndarray:
-    """Linear radiance ``(H, W, 3)`` seen from straight above under ``light``.
+    """Linear radiance ``(H, W, 3)`` under ``light``, seen from ``light.view``.
 
     Lambert diffuse plus GGX specular (Trowbridge-Reitz distribution, Smith-Schlick geometry,
     Schlick Fresnel with F0 = 0.04 for dielectrics and the albedo for metals), and an ambient term
@@ -159,7 +173,7 @@ def shade(inputs: ShadingInputs, light: Light = GRAZING_LIGHT) -> np.ndarray:
     """
     n = inputs.normal
     L = light.direction
-    V = np.array([0.0, 0.0, 1.0])
+    V = light.view
     H = (L + V) / np.linalg.norm(L + V)
     nl = np.clip(n @ L, 0.0, None)[..., None]
     nv = np.clip(n @ V, 1e-4, None)[..., None]

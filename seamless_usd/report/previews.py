@@ -53,7 +53,8 @@ def _lit_note(maps: Sequence, has_lit: bool) -> str:
     if not has_lit:
         return "no albedo, normal, roughness, metallic or occlusion map: the maps are shown as they are"
     roles = sorted({r.role for m in maps for r in m.roles})
-    return f"lit from the top left, 20° above the surface (GGX); from {', '.join(roles)}"
+    return (f"one light from the top left, 20° above the surface, seen from 50° opposite it (GGX); "
+            f"from {', '.join(roles)}")
 
 
 def stack_previews(maps: Sequence, sources: Sequence[np.ndarray], tiles: Sequence[np.ndarray],

@@ -1,0 +1,201 @@
+"""The HTML report: same-texel-scale pictures and their overlay, verdicts, weight, left-alone and
+failed stacks, the library index. Built from real sample textures (no training)."""
+from __future__ import annotations
+
+import base64
+import re
+from pathlib import Path
+from types import SimpleNamespace as NS
+
+import numpy as np
+import pytest
+
+from seamless_usd.report.html import render_html, write_html, write_library_html
+from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
+from seamless_usd.report.previews import stack_previews
+from seamless_usd.report.repeat import ViewGeometry, repeat_view, view_geometry
+from seamless_usd.report.specimen import specimen_stack
+
+ROOT = Path(__file__).resolve().parents[1]
+BRICK = ROOT / "sample_assets/brick/scene.usda"
+MB = 1024 * 1024
+
+
+def _map(node, role, channels="rgb", color_space="sRGB", is_normal=False):
+    return NS(node=node, roles=(NS(role=role, channels=channels),), channels_used=channels,
+              color_space=color_space, is_normal=is_normal)
+
+
+@pytest.fixture(scope="module")
+def brick_512():
+    """The brick stack (albedo, normal, roughness) at 512 px with grain: hard to compress."""
+    return specimen_stack(BRICK, "periodic", size=512, noise=0.06)
+
+
+# --------------------------------------------------------------------------------------------
+# Same texel scale
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("uv, window, tile_repeats", [((1.0, 1.0), 3.0, 3.0), ((0.5, 0.5), 6.0, 3.0),
+                                                     ((2.0, 2.0), 3.0, 6.0)])
+def test_window_covers_three_repeats_of_the_larger(uv, window, tile_repeats):
+    g = view_geometry((512, 512), uv)
+    assert g.window == (window, window) and g.tile_repeats == (tile_repeats, tile_repeats)
+    assert g.size == (576, 576)
+
+
+def test_window_keeps_texels_square_for_non_square_sources():
+    g = view_geometry((512, 256), (1.0, 1.0))
+    assert g.size == (576, 288)
+
+
+def test_a_tile_covering_twice_the_uv_area_is_shown_at_the_source_texel_scale():
+    rng = np.random.default_rng(0)
+    source = rng.uniform(-1, 1, (64, 64, 3))
+    tile = np.tile(source, (2, 2, 1))  # 128 px covering 2x2 UV units: uv scale 0.5, same texel density
+    p = stack_previews([_map("/M/C", "diffuseColor")], [source], [tile], (0.5, 0.5), max_px=192)
+    assert p.view["window"] == [6.0, 6.0]
+    np.testing.assert_array_equal(p.source_view["/M/C"], p.tile_view["/M/C"])
+    # At 2x the texel scale (the old side-by-side 2x2s) the two would differ.
+    magnified = np.repeat(np.repeat(source, 2, axis=0), 2, axis=1)
+    q = stack_previews([_map("/M/C", "diffuseColor")], [source], [magnified], (0.5, 0.5), max_px=192)
+    assert np.abs(q.source_view["/M/C"].astype(int) - q.tile_view["/M/C"].astype(int)).mean() > 20
+
+
+def test_repeat_view_wraps_at_the_borders_without_smearing_the_seam():
+    img = np.zeros((8, 8))
+    img[:, -1] = 1.0  # a hard seam between the last and the first column
+    g = ViewGeometry(window=(2.0, 2.0), tile_extent=(1.0, 1.0), size=(16, 16))
+    row = repeat_view(img, (1.0, 1.0), g)[0, :, 0]
+    np.testing.assert_allclose(row, np.tile(img[0], 2))
+
+
+def test_overlay_lines_sit_on_the_tile_borders_and_centre_lines(brick_512):
+    stack = specimen_stack(BRICK, "periodic")
+    stack.uv_scale = (0.5, 0.5)
+    src = [np.zeros((64, 64, 3)), np.zeros((64, 64, 3)), np.zeros((64, 64, 1))]
+    maps = [_map(m.node, m.roles[0], m.channels) for m in stack.maps]
+    stack.previews = stack_previews(maps, src, [np.zeros((128, 128, c.shape[2])) for c in src], (0.5, 0.5))
+    page = render_html(Report(sources=[stack.source], stacks=[stack]))
+    svgs = re.findall(r'<svg class="overlay".*?</svg>', page)
+    assert len(svgs) == 2 * 4  # source and tile, for 3 maps and the lit material
+    tile_svg = svgs[1]
+    borders = sorted({float(x) for x in re.findall(r'class="border" x1="([\d.]+)" y1="0"', tile_svg)})
+    centres = sorted({float(x) for x in re.findall(r'class="centre" x1="([\d.]+)" y1="0"', tile_svg)})
+    assert borders == [192.0, 384.0] and centres == [96.0, 288.0, 480.0]
+    source_borders = sorted({float(x) for x in re.findall(r'class="border" x1="([\d.]+)" y1="0"', svgs[0])})
+    assert source_borders == [96.0 * k for k in range(1, 6)]  # six source repeats across
+    assert 'id="overlay-toggle"' in page and "#overlay-toggle:checked ~ main .overlay{display:block}" in page
+    assert "6 x 6 repeats (as authored)" in page and "3 x 3 repeats (UV scale 0.5 x 0.5)" in page
+
+
+# --------------------------------------------------------------------------------------------
+# Verdicts, statuses
+# --------------------------------------------------------------------------------------------
+
+
+def test_verdicts_are_in_words_next_to_the_numbers():
+    m = MapReport(node="/M/C", asset="c.png", output=None, roles=["diffuseColor"], channels="rgb", color_space="sRGB",
+                  metrics={"scale_ratio": 0.98, "patch_distance": 0.9, "centre_seam_x": 1.6, "centre_seam_y": 1.0,
+                           "seam_ratio_x": 1.01, "seam_ratio_y": 1.3, "ssim": 0.5},
+                  source_metrics={"seam_ratio_x": 2.5})
+    stack = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.NOT_PASSED, maps=[m],
+                        failing=["diffuseColor: centre_seam_x 1.6", "diffuseColor: seam_ratio_y 1.3"])
+    page = render_html(Report(sources=["s.usda"], stacks=[stack]))
+    for words in ("scale kept (0.98)", "centre seam visible (1.6)", "no centre seam (1)", "border seam visible (1.3)",
+                  "patches like the source&#x27;s (0.9)", "no border seam (1.01)"):
+        assert words in page, words
+    assert "centre seam, vertical line — centre seam visible (1.6)" in page  # the failing list, readable
+    assert page.count('class="v bad"') == 2 and "0.9–1.1" in page and "≤ 1.15" in page
+
+
+def test_left_alone_and_failed_stacks_say_why():
+    left = StackReport(id="D-1", material="</Decal>", source="s.usda", status=StackStatus.LEFT_ALONE,
+                       intent="uv-atlas", intent_reason="UVs 0.11-0.89, 37 islands")
+    failed = StackReport(id="B-1", material="</Broken>", source="s.usda", status=StackStatus.FAILED,
+                         message="@a.png@: unreadable")
+    page = render_html(Report(sources=["s.usda"], stacks=[left, failed]))
+    assert "<b>Left alone</b>: uv-atlas: UVs 0.11-0.89, 37 islands" in page
+    assert 'class="badge left-alone"' in page and "@a.png@: unreadable" in page
+
+
+def test_data_maps_without_albedo_are_shown_as_they_are():
+    m = _map("/M/H", "displacement", "r", "raw")
+    p = stack_previews([m], [np.zeros((32, 32, 1))], [np.zeros((32, 32, 1))], (1.0, 1.0), max_px=96)
+    assert p.lit_tile is None and p.lit_source is None and "shown as they are" in p.lit_note
+    assert p.tile_view["/M/H"].shape == (96, 96, 3) and p.thumbnail is not None
+
+
+def test_stack_previews_keeps_its_positional_signature():
+    m = _map("/M/C", "diffuseColor")
+    disc = np.zeros((16, 16, 3), np.uint8)
+    p = stack_previews([m], [np.zeros((32, 32, 3))], [np.zeros((32, 32, 3))], (1.0, 1.0), disc)
+    assert p.discriminator is not None and p.lit_tile.shape == p.tile_view["/M/C"].shape
+
+
+# --------------------------------------------------------------------------------------------
+# Weight and self-containment
+# --------------------------------------------------------------------------------------------
+
+
+def _self_contained(page: str) -> None:
+    refs = re.findall(r'(?:src|href)="([^"]*)"', page)
+    external = [r for r in refs if not (r.startswith("data:") or r.startswith("#"))]
+    assert external == [], f"the page refers to outside files: {external[:3]}"
+    assert "<script src" not in page and "@import" not in page and "url(http" not in page
+
+
+def test_a_three_map_512px_page_is_one_file_under_2_mb(brick_512, tmp_path):
+    assert len(brick_512.maps) == 3 and brick_512.working_size == (512, 512)
+    path = write_html(Report(sources=[brick_512.source], stacks=[brick_512]), tmp_path / "report.html")
+    page = path.read_text()
+    size = path.stat().st_size
+    print(f"3-map 512 px page: {size / MB:.2f} MB")
+    assert size < 2 * MB
+    _self_contained(page)
+    uris = re.findall(r'src="data:(image/[a-z]+);base64,([^"]+)"', page)
+    assert len(uris) == 2 * 4  # source and tile of 3 maps and the lit material
+    assert {mime for mime, _ in uris} <= {"image/webp", "image/jpeg"}
+    for mime, data in uris:
+        raw = base64.b64decode(data)
+        assert raw[:4] == b"RIFF" and raw[8:12] == b"WEBP" if mime == "image/webp" else raw[:2] == b"\xff\xd8"
+
+
+def test_the_jpeg_fallback_also_stays_under_2_mb(brick_512, tmp_path, monkeypatch):
+    from seamless_usd.report import webimage
+
+    monkeypatch.setenv("SEAMLESS_USD_REPORT_FORMAT", "jpeg")
+    webimage.web_format.cache_clear()
+    try:
+        page = render_html(Report(sources=[brick_512.source], stacks=[brick_512]))
+    finally:
+        monkeypatch.delenv("SEAMLESS_USD_REPORT_FORMAT")
+        webimage.web_format.cache_clear()
+    print(f"3-map 512 px page, JPEG: {len(page.encode()) / MB:.2f} MB")
+    assert len(page.encode()) < 2 * MB and page.count("data:image/jpeg;base64,") == 8
+
+
+# --------------------------------------------------------------------------------------------
+# Library index
+# --------------------------------------------------------------------------------------------
+
+
+def test_library_index_has_a_card_per_stack_filterable_by_status(brick_512, tmp_path):
+    left = StackReport(id="D-1", material="</Decal>", source="b.usda", status=StackStatus.LEFT_ALONE,
+                       intent="uv-atlas", intent_reason="UVs 0.11-0.89, 37 islands")
+    failed = StackReport(id="X-1", material="</Broken>", source="b.usda", status=StackStatus.FAILED, message="unreadable")
+    report = Report(sources=[brick_512.source, "b.usda"], stacks=[brick_512, left, failed])
+    index_path = write_library_html(report, tmp_path / "library.html")
+    index = index_path.read_text()
+    _self_contained(re.sub(r'href="(\./)?library\.files/[^"]+"', 'href="#"', index))
+    cards = re.findall(r'<div class="card s-([a-z-]+)" data-status="\1">', index)
+    assert sorted(cards) == sorted([brick_512.status.value, "left-alone", "failed"])
+    assert index.count('type="radio"') == 1 + 3  # all + the statuses present
+    assert "#f-left-alone:checked ~ .cards .card:not(.s-left-alone){display:none}" in index
+    assert "uv-atlas: UVs 0.11-0.89, 37 islands" in index and "unreadable" in index
+    assert index.count("data:image/") == 1  # one thumbnail: the processed stack; the others have none
+    assert f'href="./library.files/0001-scene.html#{brick_512.id}"' in index
+    assert index.count('href="library.files/') == 2  # the files table: one link per file
+    pages = sorted((tmp_path / "library.files").glob("*.html"))
+    assert len(pages) == 2 and f'id="{brick_512.id}"' in pages[0].read_text()
