@@ -27,11 +27,13 @@ _INDEX_CSS = """
 .cards{display:grid;grid-template-columns:repeat(auto-fill,minmax(220px,1fr));gap:14px}
 .card{background:#fff;border:1px solid #d9dce3;border-radius:8px;padding:10px;display:flex;flex-direction:column;gap:4px}
 .card a.thumb{display:block;line-height:0}
-.card img,.card .ph{width:100%;aspect-ratio:1/1;object-fit:cover;border:1px solid #c9ccd6;border-radius:4px}
+.card a.thumb{text-decoration:none}
+.card img,.card .ph{width:100%;height:auto;aspect-ratio:1/1;object-fit:cover;border:1px solid #c9ccd6;border-radius:4px}
 .card .ph{display:flex;align-items:center;justify-content:center;background:repeating-linear-gradient(45deg,#f0f1f4,#f0f1f4 8px,#e7e9ee 8px,#e7e9ee 16px);color:#5d6470;font-size:13px;line-height:1.3;text-align:center;padding:8px}
 .card .mat{font-weight:600;word-break:break-all} .card .file{font-size:12px;color:#5d6470;word-break:break-all}
 .card .reason{font-size:12.5px}
-table.lib{border-collapse:collapse;background:#fff;margin-top:8px} table.lib td,table.lib th{border:1px solid #dde;padding:3px 8px;text-align:left}
+main>h2{display:block;margin:22px 0 6px}
+table.lib{border-collapse:collapse;background:#fff} table.lib td,table.lib th{border:1px solid #dde;padding:3px 8px;text-align:left}
 """
 
 
