@@ -67,8 +67,8 @@ def _card(stack: StackReport, link: str | None) -> str:
         picture = f'<img src="{image_data_uri(thumb)}" width="{thumb.shape[1]}" height="{thumb.shape[0]}" alt="{esc(name)}">'
     else:
         picture = f'<div class="ph">{esc(stack.status.value.replace("-", " "))}: no picture</div>'
-    if link:  # "./": the stack's anchor on its file's page (the files table links the pages themselves)
-        target = f"./{link}#{stack.id}"
+    if link:  # the stack's anchor on its file's page
+        target = f"{link}#{stack.id}"
         picture = f'<a class="thumb" href="{esc(target)}">{picture}</a>'
         title = f'<a class="mat" href="{esc(target)}">&lt;{esc(name)}&gt;</a>'
     else:
