@@ -19,7 +19,7 @@ import contextlib
 from pathlib import Path
 from typing import Sequence
 
-from pxr import Sdf, Usd
+from pxr import Sdf, Tf, Usd
 
 from seamless_usd.authoring.files import check_layer, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode
@@ -89,12 +89,16 @@ def author_usd(
         documents = list(dict.fromkeys(
             m.map.document for r in results for m in r.maps if m.map.origin is Origin.MTLX and m.map.document))
         doc_results = [author_mtlx(doc, results, mode=mode, plan_mode=plan_mode) for doc in documents]
-        if in_place:
-            result = _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
-        else:
-            retarget = {Path(doc).resolve(): r.output for doc, r in zip(documents, doc_results)
-                        if r.output and (r.layers_written or (r.dry_run and r.plan))}
-            result = _author_new_layer(stage_path, results, out, mode is WriteMode.DRY_RUN, retarget)
+        with Tf.DiagnosticTrap() as trap:
+            if in_place:
+                result = _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
+            else:
+                retarget = {Path(doc).resolve(): r.output for doc, r in zip(documents, doc_results)
+                            if r.output and (r.layers_written or (r.dry_run and r.plan))}
+                result = _author_new_layer(stage_path, results, out, mode is WriteMode.DRY_RUN, retarget)
+            # usd-core cannot compose .mtlx references (discovery reads them itself): USD's
+            # warnings about them are noise; every other diagnostic is passed on.
+            trap.EraseMatching(lambda d: ".mtlx" in str(d.commentary).lower())
         for doc_result in doc_results:
             result.layers_written += doc_result.layers_written
             result.backups += doc_result.backups
