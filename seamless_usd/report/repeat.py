@@ -96,6 +96,18 @@ def _periodic_blur(img: np.ndarray, sigma: tuple[float, float]) -> np.ndarray:
     return np.fft.irfft2(spectrum, s=(h, w), axes=(0, 1))
 
 
+def _block_factor(n: int, step: float) -> int:
+    """The largest divisor of ``n`` at most ``step / 2``: blocks that tile the image exactly."""
+    limit = int(step // 2)
+    return next((k for k in range(limit, 1, -1) if n % k == 0), 1)
+
+
+def _reduce(img: np.ndarray, kx: int, ky: int) -> np.ndarray:
+    """Block means over ``ky x kx`` blocks (they tile the image, so periodicity is kept)."""
+    h, w, c = img.shape
+    return img.reshape(h // ky, ky, w // kx, kx, c).mean(axis=(1, 3))
+
+
 def _sample_axis(img: np.ndarray, coords: np.ndarray, axis: int) -> np.ndarray:
     """Linear interpolation with wrap-around at texel coordinates ``coords`` along ``axis``."""
     n = img.shape[axis]
@@ -111,7 +123,7 @@ def _sample_axis(img: np.ndarray, coords: np.ndarray, axis: int) -> np.ndarray:
 
 
 def repeat_view(img: np.ndarray, extent: tuple[float, float], geometry: ViewGeometry) -> np.ndarray:
-    """``img`` (covering ``extent`` of UV) repeated over the window, ``(H, W, C)`` float64.
+    """``img`` (covering ``extent`` of UV) repeated over the window, ``(H, W, C)`` float.
 
     Parameters
     ----------
@@ -126,16 +138,19 @@ def repeat_view(img: np.ndarray, extent: tuple[float, float], geometry: ViewGeom
     >>> repeat_view(np.array([[0.0, 1.0], [2.0, 3.0]]), (1.0, 1.0), g)[..., 0].tolist()
     [[0.0, 1.0, 0.0, 1.0], [2.0, 3.0, 2.0, 3.0], [0.0, 1.0, 0.0, 1.0], [2.0, 3.0, 2.0, 3.0]]
     """
-    a = np.asarray(img, dtype=np.float64)
+    a = np.asarray(img, dtype=np.float32)
     if a.ndim == 2:
         a = a[..., None]
     if a.ndim != 3:
         raise ValueError(f"expected (H, W) or (H, W, C), got {np.shape(img)}")
-    h, w = a.shape[:2]
     out_w, out_h = geometry.size
     # Texels of img per output pixel, per axis: > 1 means shrinking, so pre-filter.
-    step_x = geometry.window[0] / extent[0] * w / out_w
-    step_y = geometry.window[1] / extent[1] * h / out_h
+    step_x = geometry.window[0] / extent[0] * a.shape[1] / out_w
+    step_y = geometry.window[1] / extent[1] * a.shape[0] / out_h
+    kx, ky = _block_factor(a.shape[1], step_x), _block_factor(a.shape[0], step_y)
+    if kx > 1 or ky > 1:  # large maps: exact block means first (cheap), the Gaussian does the rest
+        a = _reduce(a, kx, ky)
+        step_x, step_y = step_x / kx, step_y / ky
     a = _periodic_blur(a, (0.5 * step_x if step_x > 1 else 0.0, 0.5 * step_y if step_y > 1 else 0.0))
     xs = (np.arange(out_w) + 0.5) * step_x - 0.5
     ys = (np.arange(out_h) + 0.5) * step_y - 0.5
