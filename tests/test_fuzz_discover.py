@@ -9,7 +9,6 @@ code, a ``<prim>`` or ``@asset@`` location, one line of message).
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 
 import MaterialX as mx
