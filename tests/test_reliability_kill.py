@@ -119,9 +119,17 @@ def check_integrity(lib: Path, cache: Path, originals: dict[str, str]) -> dict[s
 
 
 def _finish(proc: subprocess.Popen) -> tuple[int, dict]:
+    """The run's exit code and report; everything should work: no error finding, no failed
+    stack, and exit 0 unless a stack's quality function did not pass (then 1)."""
     out, err = proc.communicate(timeout=300)
     assert proc.returncode in (0, 1), err.decode(errors="replace")[-3000:]
-    return proc.returncode, json.loads(out)
+    report = json.loads(out)
+    errors = [f for f in report["findings"] if f["severity"] == "error"]
+    assert not errors, errors
+    statuses = [s["status"] for s in report["stacks"]]
+    assert "failed" not in statuses, report["stacks"]
+    assert proc.returncode == (1 if "not-passed" in statuses else 0), (proc.returncode, statuses)
+    return proc.returncode, report
 
 
 def check_final(lib: Path, report: dict) -> None:

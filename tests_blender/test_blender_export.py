@@ -176,15 +176,6 @@ def test_script_registration_without_the_addon(prefs, brick_scene, recorder, tmp
 # --- end to end: the real process_stage -------------------------------------------------------
 
 
-def _process_stage_available() -> bool:
-    try:
-        import seamless_usd
-
-        return callable(getattr(seamless_usd, "process_stage", None))
-    except ImportError:
-        return False
-
-
 def _connected_shader(shader, input_name):
     from pxr import UsdShade
 
@@ -195,7 +186,6 @@ def _connected_shader(shader, input_name):
     return UsdShade.Shader(source.GetPrim())
 
 
-@pytest.mark.skipif(not _process_stage_available(), reason="seamless_usd.process_stage is not in this checkout yet")
 def test_export_writes_tileable_maps_with_uv_transform(prefs, brick_scene, monkeypatch, tmp_path):
     real = common._default_process
     reports = []
@@ -230,7 +220,9 @@ def test_export_writes_tileable_maps_with_uv_transform(prefs, brick_scene, monke
             f"<{shader.GetPath()}> st is not fed by a UsdTransform2d"
         )
         scale = transform.GetInput("scale").Get()
-        assert scale is not None and tuple(scale) != (1.0, 1.0), f"<{transform.GetPath()}> scale {scale}"
+        (stack,) = report.stacks
+        assert scale is not None and tuple(scale) == pytest.approx(stack.uv_scale, rel=1e-5), (
+            f"<{transform.GetPath()}> scale {scale}, the stack's UV scale {stack.uv_scale}")
         reader = _connected_shader(transform, "in")
         assert reader is not None and reader.GetIdAttr().Get() == "UsdPrimvarReader_float2"
         api = shader.GetPrim().GetMetadata("apiSchemas")
@@ -263,7 +255,6 @@ print("EXPORT", bpy.ops.wm.usd_export(filepath=sys.argv[3]))
 """
 
 
-@pytest.mark.skipif(not _process_stage_available(), reason="seamless_usd.process_stage is not in this checkout yet")
 def test_installs_and_runs_as_an_extension(tmp_path):
     """The zip of blender_addon/seamless_usd_export installs as an extension (manifest checked by
     Blender), and its hook runs on export (a dry run: the stack is planned, nothing written)."""
