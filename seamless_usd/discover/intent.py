@@ -91,15 +91,22 @@ def _reduce(a: np.ndarray, size: int) -> np.ndarray:
 
 def measure_map(m: TextureMap, thresholds: Thresholds = THRESHOLDS) -> tuple[float, float] | None:
     """(periodic-plus-smooth score, worst wrap-around seam ratio) of the channels ``m`` uses,
-    or None when the file is not measured (in a package, too large, unreadable)."""
-    import OpenImageIO as oiio
-
-    from seamless_usd.metrics import ps_score, seam_ratios
-
+    or None when the file is not measured (in a package, too large, unreadable, non-finite)."""
     if not m.resolved or m.in_package or m.image is None:
         return None
     if m.image.width * m.image.height > thresholds.measure_max_pixels:
         return None
+    try:
+        return _measure(m, thresholds)
+    except (ValueError, RuntimeError, OSError):  # a file imaging will report on: not measured here
+        return None
+
+
+def _measure(m: TextureMap, thresholds: Thresholds) -> tuple[float, float] | None:
+    import OpenImageIO as oiio
+
+    from seamless_usd.metrics import ps_score, seam_ratios
+
     inp = oiio.ImageInput.open(m.resolved)
     if inp is None:
         return None
@@ -115,6 +122,8 @@ def measure_map(m: TextureMap, thresholds: Thresholds = THRESHOLDS) -> tuple[flo
         return None
     pixels = np.asarray(pixels, dtype=np.float64)
     pixels = pixels.reshape(pixels.shape[0], pixels.shape[1], -1)
+    if not np.isfinite(pixels).all():
+        return None  # NaN / inf texels: no wrap-around measure (imaging reports them)
     channels = [i for i, c in enumerate("rgba") if c in m.channels_used and i < pixels.shape[2]]
     pixels = _reduce(pixels[..., channels or [0]], thresholds.measure_size)
     if float(np.ptp(pixels)) == 0.0:

@@ -7,7 +7,6 @@ process afterwards, one source at a time. One failing stack or source is reporte
 """
 from __future__ import annotations
 
-import fnmatch
 import itertools
 import time
 import traceback
@@ -17,6 +16,8 @@ from pathlib import Path
 
 from seamless_usd import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
+from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_stacks
+from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.discover.types import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
@@ -28,13 +29,10 @@ from seamless_usd.pipeline.naming import tile_filename
 from seamless_usd.pipeline.stackjob import JobSettings, StackJob, StackOutcome, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 
-__all__ = ["process_paths", "process_stage", "select_stacks"]
+__all__ = ["process_paths", "process_stage", "select_stacks", "blocked_stacks", "BLOCKING_SKIPS"]
 
 USD_SUFFIXES = {".usd", ".usda", ".usdc", ".usdz"}
 TILING, ALREADY_TILEABLE = "tiling", "already-tileable"  # discover.intent.Intent values
-# A texture of a material skipped for one of these reasons blocks the material's stacks: making
-# the other maps tileable (and rescaling their UVs) would misalign them with the skipped one.
-BLOCKING_SKIPS = frozenset({"missing-file", "unreadable-file", "udim", "too-small"})
 MTLX_SUFFIXES = {".mtlx"}
 
 
@@ -43,30 +41,6 @@ def _authoring():
     from seamless_usd import authoring
 
     return authoring
-
-
-def _matches(stack: TextureStack, patterns: Sequence[str]) -> bool:
-    path = stack.material.strip("<>")
-    name = path.rsplit("/", 1)[-1]
-    return any(fnmatch.fnmatchcase(path, p) or fnmatch.fnmatchcase(name, p) for p in patterns)
-
-
-def select_stacks(scan: ScanResult, patterns: Sequence[str]) -> list[TextureStack]:
-    """Stacks whose material path or name matches one of ``patterns`` (all when empty)."""
-    if not patterns:
-        return list(scan.stacks)
-    return [stack for stack in scan.stacks if _matches(stack, patterns)]
-
-
-def left_alone_stacks(stacks: Sequence[TextureStack], options: Options, source: str) -> set[tuple[str, str]]:
-    """Stacks not meant to tile (uv-atlas, already-tileable, other) that are not forced: they are
-    reported with their intent and not trained (already-tileable ones only get wrap = repeat)."""
-    if options.force:
-        return set()
-    return {
-        (source, s.id) for s in stacks
-        if s.intent and s.intent != TILING and not _matches(s, options.force_materials)
-    }
 
 
 @dataclass
@@ -289,23 +263,6 @@ class _Source:
     stacks: list[TextureStack]
 
 
-def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
-    """Stacks left alone because a texture of their material was skipped (see BLOCKING_SKIPS)."""
-    out = {}
-    for stack in stacks:
-        reasons = [
-            f"{f.where} ({f.code})"
-            for f in scan.findings
-            if f.severity is Severity.SKIPPED and f.code in BLOCKING_SKIPS and f.material == stack.material
-        ]
-        if reasons:
-            out[(source, stack.id)] = (
-                f"left alone: {', '.join(reasons)} of this material cannot be processed, and tiling the other "
-                "maps would misalign them; fix or remove that texture and run again"
-            )
-    return out
-
-
 def _scan_source(path: Path, patterns: Sequence[str]) -> _Source:
     """Open and scan one input; InputError when it cannot be read."""
     if not path.exists():
@@ -429,7 +386,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
         try:
             src = _scan_source(path, run.options.materials)
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
-            run.left_alone.update(left_alone_stacks(src.stacks, run.options, str(src.path)))
+            run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
             sources.append(src)
         except InputError as exc:
             run.report.unreadable.append(str(path))
@@ -458,7 +415,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.report.findings += scan.findings
     stacks = select_stacks(scan, run.options.materials)
     run.blocked.update(blocked_stacks(scan, stacks, label))
-    run.left_alone.update(left_alone_stacks(stacks, run.options, label))
+    run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))
     out_dir = _output_dir(run.options, source)
     if run.options.mode != authoring.WriteMode.DRY_RUN:
         _run_jobs(run, [(label, stacks, out_dir)])

@@ -1,0 +1,58 @@
+"""Which stacks of a scan a run works on: selected by material, not blocked by a skipped
+texture of their material, and meant to tile (unless forced)."""
+from __future__ import annotations
+
+import fnmatch
+from collections.abc import Sequence
+
+from seamless_usd.discover.intent import Intent
+from seamless_usd.discover.types import ScanResult, TextureStack
+from seamless_usd.findings import Severity
+
+__all__ = ["BLOCKING_SKIPS", "select_stacks", "blocked_stacks", "left_alone_stacks"]
+
+# A texture of a material skipped for one of these reasons blocks the material's stacks: making
+# the other maps tileable (and rescaling their UVs) would misalign them with the skipped one.
+BLOCKING_SKIPS = frozenset({"missing-file", "unreadable-file", "udim", "too-small"})
+
+
+def _matches(stack: TextureStack, patterns: Sequence[str]) -> bool:
+    path = stack.material.strip("<>")
+    name = path.rsplit("/", 1)[-1]
+    return any(fnmatch.fnmatchcase(path, p) or fnmatch.fnmatchcase(name, p) for p in patterns)
+
+
+def select_stacks(scan: ScanResult, patterns: Sequence[str]) -> list[TextureStack]:
+    """Stacks whose material path or name matches one of ``patterns`` (all when empty)."""
+    if not patterns:
+        return list(scan.stacks)
+    return [stack for stack in scan.stacks if _matches(stack, patterns)]
+
+
+def left_alone_stacks(stacks: Sequence[TextureStack], source: str, force: bool = False,
+                      force_materials: Sequence[str] = ()) -> set[tuple[str, str]]:
+    """Stacks not meant to tile (uv-atlas, already-tileable, other) that are not forced: they are
+    reported with their intent and not trained (already-tileable ones only get wrap = repeat)."""
+    if force:
+        return set()
+    return {
+        (source, s.id) for s in stacks
+        if s.intent and s.intent != Intent.TILING.value and not _matches(s, force_materials)
+    }
+
+
+def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
+    """Stacks left alone because a texture of their material was skipped (see BLOCKING_SKIPS)."""
+    out = {}
+    for stack in stacks:
+        reasons = [
+            f"{f.where} ({f.code})"
+            for f in scan.findings
+            if f.severity is Severity.SKIPPED and f.code in BLOCKING_SKIPS and f.material == stack.material
+        ]
+        if reasons:
+            out[(source, stack.id)] = (
+                f"left alone: {', '.join(reasons)} of this material cannot be processed, and tiling the other "
+                "maps would misalign them; fix or remove that texture and run again"
+            )
+    return out
