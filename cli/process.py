@@ -119,6 +119,9 @@ class _ProgressView:
             d = event.detail
             c_h, c_w = d.candidate.crop_size
             p.update(self.step, total=d.planned, completed=d.index, rate=f"Q search, crop {c_h}x{c_w}")
+        elif event.kind == "refine" and self.step is not None and event.detail is not None:
+            d = event.detail
+            p.update(self.step, total=None, rate=f"refining at {d['tile'][1]}x{d['tile'][0]} ({d['seconds']:.1f}s)")
         elif event.kind == "stack-done":
             p.advance(self.stacks)
 

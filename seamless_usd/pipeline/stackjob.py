@@ -89,10 +89,12 @@ class StackOutcome:
     peak_rss_mb: float = 0.0  # peak resident memory of the process that ran the job
     previews: Previews = field(default_factory=Previews, repr=False)
     findings: list[Finding] = field(default_factory=list)  # warnings while loading (e.g. non-finite pixels)
+    failing: list[str] = field(default_factory=list)  # "asset: figure value" outside the fidelity targets
 
     @property
     def passed(self) -> bool:
-        return bool(self.q.get("passed"))
+        """Q passed and every map's fidelity figures are inside their targets."""
+        return bool(self.q.get("passed")) and not self.failing
 
     def fill_report(self, report: StackReport, stack: TextureStack, reused: bool) -> None:
         report.status = (
@@ -103,10 +105,13 @@ class StackOutcome:
         if reused:
             report.duplicate_of = self.stack_id
             report.message = f"identical to stack {self.stack_id}: its result is reused"
-        elif not self.passed:
+        elif not self.q.get("passed"):
             report.message = "no candidate passed the quality function Q; the best one was written"
+        elif self.failing:
+            report.message = "not faithful to the source: " + "; ".join(self.failing)
         elif self.cached:
             report.message = "result taken from the cache"
+        report.failing = list(self.failing)
         for name in ("crop_size", "tile_size", "working_size", "resampled", "uv_scale", "q", "candidates",
                      "timings", "model_hash", "device", "precision"):
             setattr(report, name, getattr(self, name))
@@ -138,7 +143,6 @@ class StackOutcome:
 def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None) -> StackOutcome:
     """Run one stack job end to end (see module docstring)."""
     from seamless_usd import imaging, metrics, synthesis
-    from seamless_usd.authoring import uv_scale_for
 
     emit = progress or (lambda kind, detail: None)
     stack, settings = job.stack, job.settings
@@ -156,12 +160,14 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     config = synthesis.get_preset(settings.preset)
     if settings.iterations is not None:
         config = dataclasses.replace(config, iterations=settings.iterations)
+    refine_config = synthesis.RefineConfig() if settings.refine == "on" else None
     key = stack_key(
         (
             (n, p.pixels, f"{m.channels_used}|{m.color_space.value}|{m.is_normal}|{sorted(r.role for r in m.roles)}")
             for n, p, m in zip(names, inputs, stack.maps)
         ),
-        dataclasses.asdict(config),
+        {**dataclasses.asdict(config), "tile_size": settings.tile_size,
+         "refine": None if refine_config is None else dataclasses.asdict(refine_config)},
         settings.seed,
     )
     entry = StackCache(settings.cache_dir).entry(key)
@@ -169,15 +175,11 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         cached = entry.load()
         if cached is None:
             _drop_unusable_checkpoint(entry.checkpoint_dir)
-            t1 = time.perf_counter()
-            model = synthesis.train(
-                inputs, config, seed=settings.seed, device=settings.device,
-                checkpoint_dir=entry.checkpoint_dir, progress=lambda p: emit("train", p),
+            made = synthesis.make_tile(
+                inputs, config, refine_config=refine_config, tile_size=settings.tile_size, seed=settings.seed,
+                device=settings.device, checkpoint_dir=entry.checkpoint_dir, progress=emit,
             )
-            timings["train"] = time.perf_counter() - t1
-            t2 = time.perf_counter()
-            tile = synthesis.sample(model, inputs, seed=settings.seed, progress=lambda p: emit("sample", p))
-            timings["sample"] = time.perf_counter() - t2
+            tile = made.gan
             meta = {
                 "crop_size": list(tile.crop_size),
                 "q": _q_dict(tile),
@@ -185,10 +187,18 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                 "model_hash": tile.model_hash,
                 "device": tile.device,
                 "precision": tile.precision,
-                "timings": dict(timings),
+                "timings": {**timings, **made.timings},
+                "uv_scale": list(made.uv_scale),
+                "scale": {
+                    "structure_px": round(made.structure_px, 1),
+                    "working_factor": made.working_factor,
+                    "gan_working_size": [made.working_size[1], made.working_size[0]],
+                    "refined": made.refined,
+                    "refine_levels": made.refine_levels,
+                },
             }
             discriminator = _discriminator_preview(tile)
-            tiles = dict(tile.maps)
+            tiles = dict(made.maps)
             if discriminator is not None:
                 tiles["__discriminator__"] = discriminator.astype(np.float32)
             entry.store(tiles, meta)
@@ -215,8 +225,11 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
 
     crop = tuple(int(v) for v in meta["crop_size"])
     tile_hw = tuple(int(v) for v in next(iter(tiles.values())).shape[:2])
-    working = tuple(int(v) for v in pixels.working_size)
-    uv_scale = tuple(float(v) for v in uv_scale_for(working, (crop[1], crop[0])))
+    scale = dict(meta["scale"])
+    working = tuple(int(v) for v in scale["gan_working_size"])
+    uv_scale = tuple(float(v) for v in meta["uv_scale"])
+    failing = [f"{m.asset}: {figure}" for m in stack.maps
+               for figure in metrics.failing_figures(outcomes[map_identity(m)].metrics)]
     previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator)
     return StackOutcome(
         stack_id=stack.id,
@@ -224,7 +237,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         crop_size=crop,
         tile_size=tile_hw,
         working_size=working,
-        resampled=dict(pixels.policy_record),
+        resampled={**pixels.policy_record, "gan": scale},
+        failing=failing,
         uv_scale=uv_scale,
         q=dict(meta["q"]),
         candidates=int(meta["candidates"]),

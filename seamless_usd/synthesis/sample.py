@@ -25,21 +25,38 @@ class SamplingProgress:
     candidate: Candidate
 
 
-def crop_plan(height: int, width: int, config, seed: int) -> Iterator[tuple[tuple[int, int], tuple[int, int]]]:
-    """((c_h, c_w), (y, x)) candidates: the whole stack first, then ``crops_per_size`` random crops per smaller
-    size, the larger side shrinking by ``crop_step`` and the aspect kept, until the smaller side is below c_min."""
+#: Source-sized tiles: the crop search starts at half the stack (its 2c tile is the stack's size) and
+#: stops where the tile would be magnified by more than 1/0.8 = 1.25 when brought to that size.
+SOURCE_TILE_MIN_FRACTION = 0.8
+
+
+def crop_plan(height: int, width: int, config, seed: int, tile_size: str = "paper"
+              ) -> Iterator[tuple[tuple[int, int], tuple[int, int]]]:
+    """((c_h, c_w), (y, x)) candidates, the aspect kept, the larger side shrinking by ``crop_step``.
+
+    ``tile_size="paper"``: the whole stack first, then ``crops_per_size`` random crops per smaller size
+    until the smaller side is below c_min (paper section 4.2). ``"source"``: the tile is to have the
+    stack's own size, so crops start at half the stack (the centre one, then ``crops_per_size`` random
+    ones at that size) and stop at ``SOURCE_TILE_MIN_FRACTION`` of it.
+    """
+    assert tile_size in ("paper", "source"), f"tile_size must be 'paper' or 'source', got {tile_size!r}"
     rng = np.random.default_rng([seed, 7])
     long_side = max(height, width)
-    size = long_side
+    size = long_side if tile_size == "paper" else long_side // 2
+    stop = max(config.c_min, 16) if tile_size == "paper" else 16
+    smallest = 0 if tile_size == "paper" else SOURCE_TILE_MIN_FRACTION * long_side / 2
     first = True
     count = 0
     while True:
         ch = int(height * size / long_side) // 4 * 4
         cw = int(width * size / long_side) // 4 * 4
-        if min(ch, cw) < max(config.c_min, 16):
+        if min(ch, cw) < stop or size < smallest:
             return
         if first:
             offsets = [((height - ch) // 2, (width - cw) // 2)]
+            if tile_size == "source":
+                offsets += [(int(rng.integers(0, height - ch + 1)), int(rng.integers(0, width - cw + 1)))
+                            for _ in range(config.crops_per_size)]
         else:
             offsets = [(int(rng.integers(0, height - ch + 1)), int(rng.integers(0, width - cw + 1)))
                        for _ in range(config.crops_per_size)]
@@ -60,7 +77,7 @@ def _to_numpy(t: torch.Tensor, is_normal: bool) -> np.ndarray:  # (1, C, H, W) -
 
 
 @torch.no_grad()
-def sample(model: TrainedModel, maps: list[MapInput], *, seed: int = 0,
+def sample(model: TrainedModel, maps: list[MapInput], *, seed: int = 0, tile_size: str = "paper",
            progress: Callable[[SamplingProgress], None] | None = None) -> TileResult:
     """Search crops from c_max down to c_min; return the first tileable stack, or the best one flagged failing.
 
@@ -79,7 +96,7 @@ def sample(model: TrainedModel, maps: list[MapInput], *, seed: int = 0,
 
     t_start = time.perf_counter()
     timings = {"generate_s": 0.0, "quality_s": 0.0}
-    plan = list(crop_plan(H, W, cfg, seed))
+    plan = list(crop_plan(H, W, cfg, seed, tile_size))
     assert plan, f"stack {H}x{W} is smaller than c_min={cfg.c_min}"
     candidates: list[Candidate] = []
     best: tuple[float, int, list[torch.Tensor]] | None = None

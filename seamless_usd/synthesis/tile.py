@@ -1,0 +1,120 @@
+"""A stack's tile end to end: working resolution, SeamlessGAN training and sampling, refinement.
+
+>>> from seamless_usd.synthesis import MapInput, get_preset
+>>> import numpy as np
+>>> maps = [MapInput("albedo", np.random.default_rng(0).uniform(-1, 1, (64, 64, 3)).astype(np.float32))]
+>>> made = make_tile(maps, get_preset("tiny"))          # doctest: +SKIP
+>>> made.maps["albedo"].shape                            # doctest: +SKIP
+(64, 64, 3)
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from .config import SynthesisConfig
+from .data import effective_k
+from .refine import RefineConfig, refine
+from .sample import sample
+from .scale import structure_size, working_factor
+from .train import train
+from .types import MapInput, TileResult, stack_shape
+
+__all__ = ["MadeTile", "make_tile", "downsample_maps", "TILE_SIZES"]
+
+TILE_SIZES = ("source", "paper")
+
+
+@dataclass
+class MadeTile:
+    """The written tile of a stack and how it was made."""
+
+    maps: dict[str, np.ndarray]  # name -> (h, w, C) float32, periodic; source texels when refined
+    tile_size: tuple[int, int]  # (h, w) of ``maps``
+    grid_size: tuple[int, int]  # (h, w) of the pixel grid the tile's texels belong to (the UV unit square)
+    uv_scale: tuple[float, float]  # (u, v): multiply UVs by this to keep the texel density
+    structure_px: float  # structure size estimated on the source (px at the source's resolution)
+    working_factor: float  # GAN working resolution / source resolution
+    working_size: tuple[int, int]  # (h, w) the GAN trained at
+    gan: TileResult  # the SeamlessGAN candidate chosen by Q (crop, Q, candidates) at the working resolution
+    refined: bool
+    refine_levels: list[dict] = field(default_factory=list)
+    timings: dict[str, float] = field(default_factory=dict)
+
+
+def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInput]:
+    """Maps resized to ``size = (h, w)`` (antialiased bilinear; normals renormalised)."""
+    out = []
+    for m in maps:
+        if m.pixels.shape[:2] == tuple(size):
+            out.append(m)
+            continue
+        t = torch.from_numpy(np.ascontiguousarray(m.pixels.transpose(2, 0, 1)))[None]
+        r = F.interpolate(t, size=size, mode="bilinear", antialias=True, align_corners=False)[0]
+        if m.is_normal and r.shape[0] >= 3:
+            r = torch.cat([F.normalize(r[:3], dim=0, eps=1e-6), r[3:]], 0)
+        out.append(MapInput(m.name, np.ascontiguousarray(r.clamp(-1, 1).permute(1, 2, 0).numpy()), m.is_normal))
+    return out
+
+
+def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: RefineConfig | None = RefineConfig(),
+              tile_size: str = "source", seed: int = 0, device: str | torch.device | None = None,
+              checkpoint_dir: str | Path | None = None,
+              progress: Callable[[str, Any], None] | None = None) -> MadeTile:
+    """Make a tileable stack from ``maps`` (full resolution, network domain).
+
+    1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there.
+    2. Sample: the crop search with the discriminator's Q (``tile_size="source"``: crops of half the
+       working stack, so the tile has the stack's size; ``"paper"``: from the whole stack down).
+    3. With ``refine_config``, refine the GAN tile into a tile of source texels at full resolution,
+       ``tile_size`` deciding its pixel size (the source's, or the paper's 2c brought to full
+       resolution). Without it, the GAN tile at the working resolution is the result.
+    """
+    assert tile_size in TILE_SIZES, f"tile_size must be one of {TILE_SIZES}, got {tile_size!r}"
+    emit = progress or (lambda kind, detail: None)
+    timings: dict[str, float] = {}
+    H, W = stack_shape(maps)
+    t0 = time.perf_counter()
+    structure = structure_size([m.pixels for m in maps])
+    f = working_factor(H, W, effective_k(config.k, H, W), structure)
+    work_hw = (max(32, round(H * f) // 4 * 4), max(32, round(W * f) // 4 * 4))
+    work_hw = (min(work_hw[0], H), min(work_hw[1], W))
+    f_y, f_x = work_hw[0] / H, work_hw[1] / W
+    working = downsample_maps(maps, work_hw)
+    timings["scale"] = time.perf_counter() - t0
+
+    t1 = time.perf_counter()
+    model = train(working, config, seed=seed, device=device, checkpoint_dir=checkpoint_dir,
+                  progress=lambda p: emit("train", p))
+    timings["train"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    gan = sample(model, working, seed=seed, tile_size=tile_size, progress=lambda p: emit("sample", p))
+    timings["sample"] = time.perf_counter() - t2
+    gan_hw = next(iter(gan.maps.values())).shape[:2]
+
+    if refine_config is None:
+        uv = (work_hw[1] / gan_hw[1], work_hw[0] / gan_hw[0])
+        return MadeTile(dict(gan.maps), tuple(gan_hw), work_hw, uv, structure, f, work_hw, gan, False,
+                        timings=timings)
+    if tile_size == "source":
+        out_hw = (H, W)
+    else:  # the paper's 2c x 2c, at the source's resolution
+        out_hw = (round(gan_hw[0] / f_y), round(gan_hw[1] / f_x))
+    t3 = time.perf_counter()
+    result = refine([m.pixels for m in maps], [gan.maps[m.name] for m in maps], out_hw, refine_config,
+                    seed=seed, device=device, progress=lambda info: emit("refine", info))
+    timings["refine"] = time.perf_counter() - t3
+    tiles = {m.name: _finish(t, m.is_normal) for m, t in zip(maps, result.maps)}
+    uv = (W / out_hw[1], H / out_hw[0])
+    return MadeTile(tiles, out_hw, (H, W), uv, structure, f, work_hw, gan, True, result.levels, timings)
+
+
+def _finish(values: np.ndarray, is_normal: bool) -> np.ndarray:
+    """Copied source texels are already valid; normals are unit vectors already (copied, not mixed)."""
+    return np.ascontiguousarray(values, dtype=np.float32)
