@@ -10,7 +10,7 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
-__all__ = ["PatchSpace", "patch_cost", "exhaustive_search", "patchmatch", "vote", "gather", "occurrence_bias", "clamp_field"]
+__all__ = ["PatchSpace", "patch_cost", "patchmatch", "vote", "gather", "occurrence_bias", "clamp_field"]
 
 
 class PatchSpace:
@@ -70,25 +70,6 @@ def patch_cost(tile_desc: torch.Tensor, space: PatchSpace, field: torch.Tensor, 
     if bias is not None:
         d = d + bias.reshape(-1)[flat]
     return d.reshape(field.shape[:2])
-
-
-def exhaustive_search(tile_desc: torch.Tensor, space: PatchSpace, bias: torch.Tensor | None,
-                      chunk: int = 2048) -> torch.Tensor:
-    """Exact nearest source patch for every tile pixel (chunked ``|a|^2 - 2ab + |b|^2``)."""
-    k, h, w = tile_desc.shape
-    t = tile_desc.reshape(k, -1).T  # (Nt, k)
-    s = space.source_desc.reshape(k, -1)  # (k, Ns)
-    s_norm = (s ** 2).sum(0)
-    if bias is not None:
-        s_norm = s_norm + bias.reshape(-1)
-    best = torch.empty(t.shape[0], dtype=torch.int64, device=t.device)
-    for i in range(0, t.shape[0], chunk):
-        block = t[i: i + chunk]
-        d = s_norm[None, :] - 2.0 * (block @ s)
-        best[i: i + chunk] = d.argmin(dim=1)
-    vy, vx = space.valid
-    field = torch.stack([best // vx + space.r, best % vx + space.r], dim=-1)
-    return field.reshape(h, w, 2)
 
 
 def patchmatch(tile_desc: torch.Tensor, space: PatchSpace, field: torch.Tensor, bias: torch.Tensor | None,

@@ -18,6 +18,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from seamless_usd.metrics import scale_ratio
+
 from .config import SynthesisConfig
 from .data import effective_k
 from .refine import RefineConfig, refine
@@ -26,9 +28,15 @@ from .scale import structure_size, working_factor
 from .train import train
 from .types import MapInput, TileResult, stack_shape
 
-__all__ = ["MadeTile", "make_tile", "downsample_maps", "TILE_SIZES"]
+__all__ = ["MadeTile", "make_tile", "downsample_maps", "TILE_SIZES", "LAYOUT_SCALE_RANGE"]
 
 TILE_SIZES = ("source", "paper")
+
+#: A GAN tile seeds the refinement only when every map's feature scale is within this range of the
+#: working source's: a generator that has not learnt the texture yet (noise: about 6 with the tiny
+#: test preset) would only be copied faithfully into nonsense, and the refinement starts from a
+#: random field instead. The default preset's brick tile scores 1.0-1.3.
+LAYOUT_SCALE_RANGE = (0.5, 2.0)
 
 
 @dataclass
@@ -44,6 +52,8 @@ class MadeTile:
     working_size: tuple[int, int]  # (h, w) the GAN trained at
     gan: TileResult  # the SeamlessGAN candidate chosen by Q (crop, Q, candidates) at the working resolution
     refined: bool
+    layout_scale: dict[str, float] = field(default_factory=dict)  # per map, the GAN tile's scale ratio
+    layout_used: bool = False  # whether the GAN tile seeded the refinement
     refine_levels: list[dict] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -72,7 +82,8 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there.
     2. Sample: the crop search with the discriminator's Q (``tile_size="source"``: crops of half the
        working stack, so the tile has the stack's size; ``"paper"``: from the whole stack down).
-    3. With ``refine_config``, refine the GAN tile into a tile of source texels at full resolution,
+    3. With ``refine_config``, refine the GAN tile (when its feature scale is plausible, see
+       :data:`LAYOUT_SCALE_RANGE`; else a random start) into a tile of source texels at full resolution,
        ``tile_size`` deciding its pixel size (the source's, or the paper's 2c brought to full
        resolution). Without it, the GAN tile at the working resolution is the result.
     """
@@ -107,14 +118,14 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     else:  # the paper's 2c x 2c, at the source's resolution
         out_hw = (round(gan_hw[0] / f_y), round(gan_hw[1] / f_x))
     t3 = time.perf_counter()
-    result = refine([m.pixels for m in maps], [gan.maps[m.name] for m in maps], out_hw, refine_config,
+    layout_scale = {w.name: round(scale_ratio(gan.maps[w.name], w.pixels, w.is_normal), 3) for w in working}
+    low, high = LAYOUT_SCALE_RANGE
+    use_layout = all(low <= v <= high for v in layout_scale.values())
+    layout = [gan.maps[m.name] for m in maps] if use_layout else None
+    result = refine([m.pixels for m in maps], layout, out_hw, refine_config,
                     seed=seed, device=device, progress=lambda info: emit("refine", info))
     timings["refine"] = time.perf_counter() - t3
-    tiles = {m.name: _finish(t, m.is_normal) for m, t in zip(maps, result.maps)}
+    tiles = {m.name: np.ascontiguousarray(t, dtype=np.float32) for m, t in zip(maps, result.maps)}
     uv = (W / out_hw[1], H / out_hw[0])
-    return MadeTile(tiles, out_hw, (H, W), uv, structure, f, work_hw, gan, True, result.levels, timings)
-
-
-def _finish(values: np.ndarray, is_normal: bool) -> np.ndarray:
-    """Copied source texels are already valid; normals are unit vectors already (copied, not mixed)."""
-    return np.ascontiguousarray(values, dtype=np.float32)
+    return MadeTile(tiles, out_hw, (H, W), uv, structure, f, work_hw, gan, True, layout_scale, use_layout,
+                    result.levels, timings)
