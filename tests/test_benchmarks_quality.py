@@ -37,7 +37,9 @@ def test_baselines_on_a_small_real_stack(tmp_path, capsys):
         assert naive["gram_distance"] is None
         assert "picture" not in naive
         pic = oiio.ImageBuf(str(tmp_path / fade["picture"])).spec()
-        assert (pic.width, pic.height, pic.nchannels) == (2 * 56 + 8 + 2 * 64, 128, 3)
+        assert (pic.width, pic.height, pic.nchannels) == (2 * 64 + 8 + 2 * 64, 128, 3)  # one texel scale
+        assert fade["picture"].endswith(".jpg")
+        assert naive["scale_ratio"] == 1.0 and naive["patch_distance"] < 1.0
     md = (tmp_path / "quality.md").read_text()
     assert "## wood" in md and "| crossfade |" in md and "## Targets" in md
 

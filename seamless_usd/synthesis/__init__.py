@@ -15,10 +15,10 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 from .config import PRESETS, SynthesisConfig, get_preset
 from .refine import RefineConfig, RefineResult, refine
 from .sample import SamplingProgress, sample
-from .tile import MadeTile, make_tile
+from .tile import MadeTile, downsample_maps, make_tile
 from .train import TrainedModel, train
 from .types import Candidate, MapInput, QResult, TileResult, TrainingProgress
 
 __all__ = ["SynthesisConfig", "PRESETS", "get_preset", "MapInput", "train", "sample", "TrainedModel",
            "TileResult", "QResult", "Candidate", "TrainingProgress", "SamplingProgress",
-           "RefineConfig", "RefineResult", "refine", "MadeTile", "make_tile"]
+           "RefineConfig", "RefineResult", "refine", "MadeTile", "make_tile", "downsample_maps"]

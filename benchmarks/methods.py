@@ -1,0 +1,112 @@
+"""The methods the quality benchmark compares, beyond the simple baselines of ``baselines.py``.
+
+``seamlessgan``
+    SeamlessGAN alone (``--refine off``): trained at the stack's working resolution, sampled with
+    the crop search and Q. Its tile lives on the working grid, so its figures are taken against the
+    source brought to that grid (same texel scale).
+``refine-random``
+    The toroidal exemplar refinement alone, from a block-random start, at the source's resolution.
+``seamlessgan+refine``
+    The product's default: the GAN's tile seeds the refinement (the same trained model as
+    ``seamlessgan``, so the two rows differ only by the refinement).
+``img2texture``
+    The ``img2texture`` package from PyPI (overlap-and-blend of opposite borders through PIL, 8-bit),
+    the tool many users reach for today. Normal maps are renormalised afterwards.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+__all__ = ["MethodResult", "SYNTHESIS_METHODS", "run_synthesis", "img2texture_tile", "to_source_grid"]
+
+SYNTHESIS_METHODS = ("seamlessgan", "refine-random", "seamlessgan+refine")
+
+
+@dataclass
+class MethodResult:
+    """The tiles of one method on one stack, what it reported, and the grid its texels belong to."""
+
+    tiles: dict[str, np.ndarray]
+    seconds: float
+    info: dict = field(default_factory=dict)
+    references: dict[str, np.ndarray] | None = None  # the source on the tile's grid, when it is not the source's
+
+
+def img2texture_tile(pixels: np.ndarray, is_normal: bool = False, overlap: float = 0.25) -> np.ndarray:
+    """Run img2texture's ``image_to_seamless`` on a network-domain map (through 8-bit, as the tool does)."""
+    from img2texture import image_to_seamless
+    from PIL import Image
+
+    c = pixels.shape[2]
+    v = np.clip(np.rint((pixels + 1.0) * 127.5), 0, 255).astype(np.uint8)
+    img = Image.fromarray(v[..., 0] if c == 1 else v[..., :3], "L" if c == 1 else "RGB")
+    out = np.asarray(image_to_seamless(img, overlap=overlap), dtype=np.float32) / 127.5 - 1.0
+    out = out[..., None] if out.ndim == 2 else out
+    out = out[..., :1] if c == 1 else out[..., :3]
+    if c == 4:  # img2texture drops alpha: blend it the same way as grey
+        alpha = img2texture_tile(pixels[..., 3:], False, overlap)
+        out = np.concatenate([out, alpha], axis=2)
+    if is_normal and out.shape[2] >= 3:
+        out[..., :3] /= np.maximum(np.linalg.norm(out[..., :3], axis=-1, keepdims=True), 1e-12)
+    return np.ascontiguousarray(out, dtype=np.float32)
+
+
+def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str], preset: str, seed: int,
+                  log: Callable[[str], None], iterations: int | None = None) -> dict[str, MethodResult]:
+    """The synthesis methods asked for, training SeamlessGAN once for both GAN rows."""
+    from seamless_usd import synthesis as syn
+
+    config = syn.get_preset(preset)
+    if iterations is not None:
+        config = config.replace(iterations=iterations)
+    maps = [syn.MapInput(k, np.ascontiguousarray(px, dtype=np.float32), n) for k, (px, n) in stack.items()]
+    out: dict[str, MethodResult] = {}
+    if "refine-random" in methods:
+        t0 = time.perf_counter()
+        res = syn.refine([m.pixels for m in maps], None, maps[0].pixels.shape[:2], seed=seed)
+        out["refine-random"] = MethodResult({m.name: t for m, t in zip(maps, res.maps)}, time.perf_counter() - t0,
+                                            {"levels": len(res.levels)})
+    if not {"seamlessgan", "seamlessgan+refine"} & set(methods):
+        return out
+    step = max(1, config.iterations // 10)
+
+    def progress(kind: str, p) -> None:
+        if kind == "train" and (p.iteration % step == 0 or p.iteration == p.total):
+            log(f"    train {p.iteration}/{p.total}  {p.it_per_s:.1f} it/s  eta {p.eta_s / 60:.1f} min")
+
+    t0 = time.perf_counter()
+    made = syn.make_tile(maps, config, seed=seed, progress=progress)
+    total = time.perf_counter() - t0
+    gan = made.gan
+    info = {
+        "preset": preset, "iterations": config.iterations, "crop_size": list(gan.crop_size), "passed": bool(gan.passed),
+        "working_size": list(made.working_size), "structure_px": round(made.structure_px, 1),
+        "train_seconds": round(made.timings.get("train", 0.0), 2),
+        "sample_seconds": round(made.timings.get("sample", 0.0), 2),
+    }
+    gan_seconds = total - made.timings.get("refine", 0.0)
+    if "seamlessgan" in methods:
+        working = {w.name: w.pixels for w in syn.downsample_maps(maps, made.working_size)}
+        out["seamlessgan"] = MethodResult(dict(gan.maps), gan_seconds, dict(info), references=working)
+    if "seamlessgan+refine" in methods:
+        out["seamlessgan+refine"] = MethodResult(
+            dict(made.maps), total,
+            {**info, "layout_used": made.layout_used, "refine_seconds": round(made.timings.get("refine", 0.0), 2)})
+    return out
+
+
+def to_source_grid(tile: np.ndarray, reference: np.ndarray, source: np.ndarray) -> np.ndarray:
+    """A tile made on ``reference``'s grid, resized so its texels have the ``source``'s size."""
+    if reference.shape[:2] == source.shape[:2]:
+        return tile
+    import torch
+    import torch.nn.functional as F
+
+    fy, fx = source.shape[0] / reference.shape[0], source.shape[1] / reference.shape[1]
+    size = (max(1, round(tile.shape[0] * fy)), max(1, round(tile.shape[1] * fx)))
+    t = torch.from_numpy(np.ascontiguousarray(tile.transpose(2, 0, 1)))[None]
+    return F.interpolate(t, size=size, mode="bilinear", align_corners=False)[0].permute(1, 2, 0).numpy()
