@@ -109,9 +109,10 @@ def test_new_layer_edits_resolve_to_written_tiles(processed):
 
 def test_uv_transform_keeps_texel_scale(processed):
     [stack] = processed["payload"]["stacks"]
-    W, H = stack["working_size"]
-    c_h, c_w = stack["crop_size"]
-    assert stack["uv_scale"] == pytest.approx([W / (2 * c_w), H / (2 * c_h)])
+    W, H = stack["resampled"]["working_size"]  # the texture's pixel grid, which spans the UV unit square
+    tile_h, tile_w = stack["tile_size"]
+    assert (tile_h, tile_w) == (H, W)  # the default tile has the source's pixel size ...
+    assert stack["uv_scale"] == pytest.approx([W / tile_w, H / tile_h]) == [1.0, 1.0]  # ... and texel density
     stage = Usd.Stage.Open(str(processed["scene"].with_name("scene.seamless.usda")))
     albedo = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Brick/Albedo"))
     [src] = albedo.GetInput("st").GetConnectedSources()[0]

@@ -204,20 +204,24 @@ def _check_written(run: Run, handed, edit, failure: str | None = None) -> None:
 
 def _planned_result(stack: TextureStack, out_dir: Path, options: Options):
     """What a dry run shows authoring: the tile paths that would be written, and the UV scale if the
-    first candidate (the whole texture, c = working size) passes Q."""
+    first candidate passes Q: a source-sized refined tile keeps the UVs (scale 1); the paper's tile
+    of the whole texture (c = working size) halves them."""
     from seamless_usd.authoring import MapResult, Provenance, StackResult, uv_scale_for
     from seamless_usd.imaging import WorkingResolution, output_extension
 
     sizes = [(m.image.width, m.image.height) for m in stack.maps if m.image is not None]
     working = WorkingResolution(max_size=options.max_size).working_size(sizes) if sizes else (1, 1)
-    uv = uv_scale_for(working, working)
+    if options.tile_size == "source" and options.refine == "on":
+        uv, crop = (1.0, 1.0), (working[0] // 2, working[1] // 2)
+    else:
+        uv, crop = uv_scale_for(working, working), working
     maps = [
         MapResult(map=m, output_path=out_dir / tile_filename(m.asset, stack.id, output_extension(m.image)))
         for m in stack.maps
         if m.image is not None
     ]
     prov = Provenance(
-        source_asset=", ".join(m.asset for m in stack.maps), crop_size=working, uv_scale=uv, q_passed=False,
+        source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=False,
         q_tau=0.0, q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__,
     )
     return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov)
