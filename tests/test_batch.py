@@ -13,6 +13,7 @@ from pathlib import Path
 
 import jsonschema
 import pytest
+from runchecks import assert_all_written as _assert_all_written
 from pxr import Usd, UsdShade
 
 from seamless_usd.errors import UsageError
@@ -110,14 +111,6 @@ def _run(*args: str, capsys) -> tuple[int, dict]:
     return code, json.loads(capsys.readouterr().out)
 
 
-def _assert_all_written(code: int, payload: dict) -> None:
-    """Everything should work: no error finding, no failed stack, and exit 0 unless a stack's
-    quality function did not pass (exit 1 then, with every such stack reported not-passed)."""
-    errors = [f for f in payload["findings"] if f["severity"] == "error"]
-    assert not errors, errors
-    statuses = [s["status"] for s in payload["stacks"]]
-    assert "failed" not in statuses, payload["stacks"]
-    assert code == (1 if "not-passed" in statuses else 0), (code, statuses)
 
 
 def test_expand_inputs_walks_folders_and_globs_and_leaves_outputs_out(tmp_path):

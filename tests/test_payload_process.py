@@ -8,6 +8,7 @@ from pathlib import Path
 
 import MaterialX as mx
 import pytest
+from runchecks import assert_all_written as _assert_all_written
 from pxr import Sdf, Usd, UsdShade
 
 from seamless_usd.authoring import MapResult, Provenance, StackResult, author_usd
@@ -35,12 +36,6 @@ def _process(*args: str, cache: Path, capsys) -> tuple[int, dict]:
     return code, json.loads(capsys.readouterr().out)
 
 
-def _assert_all_written(code: int, payload: dict) -> None:
-    errors = [f for f in payload["findings"] if f["severity"] == "error"]
-    assert not errors, errors
-    statuses = [s["status"] for s in payload["stacks"]]
-    assert "failed" not in statuses, payload["stacks"]
-    assert code == (1 if "not-passed" in statuses else 0), (code, statuses)
 
 
 def _file(stage: Usd.Stage, prim: str) -> str:

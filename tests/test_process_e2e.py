@@ -10,6 +10,7 @@ from pathlib import Path
 import jsonschema
 import OpenImageIO as oiio
 import pytest
+from runchecks import assert_all_written as _assert_all_written
 from pxr import Sdf, Usd, UsdShade
 
 from seamless_usd_cli.main import main
@@ -43,14 +44,6 @@ def _process(*args: str, cache: Path) -> int:
     return main(["process", "--preset", "tiny", "--cache-dir", str(cache), *args])
 
 
-def _assert_all_written(code: int, payload: dict) -> None:
-    """Everything should work: no error finding, no failed stack, and exit 0 unless a stack's
-    quality function did not pass (exit 1 then, with every such stack reported not-passed)."""
-    errors = [f for f in payload["findings"] if f["severity"] == "error"]
-    assert not errors, errors
-    statuses = [s["status"] for s in payload["stacks"]]
-    assert "failed" not in statuses, payload["stacks"]
-    assert code == (1 if "not-passed" in statuses else 0), (code, statuses)
 
 
 def _texture_files(stage: Usd.Stage) -> dict[str, Path]:

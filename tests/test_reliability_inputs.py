@@ -436,7 +436,9 @@ def test_full_disk_real_small_filesystem(tmp_path, capsys, shared_cache):
     with small_filesystem(tmp_path / "full", "200k") as out:
         if out is None:
             pytest.skip("cannot mount a small tmpfs here; the fault-injecting test covers a full disk")
-        code, report, _ = run_cli(capsys, str(scene), "--output-dir", str(out), "--cache-dir", str(shared_cache))
+        # the paper's 2c tiles (4x the source's area): the first stack fits in 200 KB, the three do not
+        code, report, _ = run_cli(capsys, str(scene), "--output-dir", str(out), "--cache-dir", str(shared_cache),
+                                  "--tile-size", "paper")
         failures = _write_failures(report)
         written = [Path(m["output"]) for s in report["stacks"] if s["status"] != "failed" for m in s["maps"]]
         assert code == 1 and failures and written, report["stacks"]
