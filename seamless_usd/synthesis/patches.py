@@ -26,11 +26,14 @@ class PatchSpace:
         c, h, w = source.shape
         assert h >= patch and w >= patch, f"source {h}x{w} is smaller than a {patch}x{patch} patch"
         self.patch, self.r = patch, patch // 2
-        cols = F.unfold(source[None], patch)[0]  # (C*p*p, N) valid patches
-        n = cols.shape[1]
-        if n > samples:
-            idx = torch.randperm(n, generator=generator)[:samples].to(cols.device)
-            cols = cols[:, idx]
+        ny, nx = h - patch + 1, w - patch + 1
+        n = min(samples, ny * nx)  # sampled patch positions (never the whole unfolded source: 2K-4K)
+        idx = torch.randperm(ny * nx, generator=generator)[:n].to(source.device)
+        ys, xs = idx // nx, idx % nx
+        offs = torch.arange(patch, device=source.device)
+        rows = (ys[:, None] + offs[None, :])[:, :, None]  # (n, p, 1)
+        cols_ = (xs[:, None] + offs[None, :])[:, None, :]  # (n, 1, p)
+        cols = source[:, rows, cols_].permute(1, 0, 2, 3).reshape(n, -1).T  # (C*p*p, n), unfold's order
         self.mean = cols.mean(dim=1, keepdim=True)  # (C*p*p, 1)
         centred = cols - self.mean
         cov = centred @ centred.T / max(cols.shape[1] - 1, 1)

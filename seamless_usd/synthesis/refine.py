@@ -170,12 +170,21 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
         t0 = time.perf_counter()
         s_hw = (max(config.patch + 1, round(H * s)), max(config.patch + 1, round(W * s)))
         t_hw = (max(config.patch, round(th * s)), max(config.patch, round(tw * s)))
+        if li > 0 and max(t_hw) > config.carry_above:  # carry only: no descriptors, no search
+            valid = (s_hw[0] - 2 * r, s_hw[1] - 2 * r)
+            ratio = (t_hw[0] / prev_tile[0], t_hw[1] / prev_tile[1])
+            fld = _carry(fld, t_hw, ratio, (s_hw[0] / prev_src[0], s_hw[1] / prev_src[1]), r, valid)
+            prev_tile, prev_src = t_hw, s_hw
+            info = {"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": 0, "mean_cost": None,
+                    "seconds": round(time.perf_counter() - t0, 3)}
+            levels.append(info)
+            if progress is not None:
+                progress(info)
+            continue
         level_src = _resize(src, s_hw)
         space = PatchSpace(level_src, config.patch, config.dims, gen)
         finest_two = li >= len(scales) - 2
         iters = config.iterations if not finest_two or li == 0 else config.fine_iterations
-        if li > 0 and max(t_hw) > config.carry_above:
-            iters = 0
         if fld is None:
             # a coherent block-random start; with a layout, the coarsest level's searches match the layout
             # (PatchMatch with the coherence and occurrence terms: an exact per-pixel search collapses
