@@ -27,7 +27,9 @@ __all__ = ["add_arguments", "run"]
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("paths", nargs="+", metavar="PATH",
                    help="USD stages (.usd/.usda/.usdc/.usdz), .mtlx documents, folders (walked) or glob patterns")
-    p.add_argument("--preset", default="default", help="synthesis preset: paper, default, draft, tiny (default: %(default)s)")
+    p.add_argument("--preset", default="default",
+                   help="synthesis preset: default (CPU), draft (minutes; often not faithful), paper (GPU) "
+                        "(default: %(default)s)")
     p.add_argument("--materials", action="append", default=[], metavar="GLOB",
                    help="only materials whose path or name matches (repeatable)")
     p.add_argument("--dry-run", action="store_true",
