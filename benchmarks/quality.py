@@ -466,7 +466,8 @@ def to_markdown(result: dict) -> str:
         "periodic-plus-smooth score (0 when periodic), detail ratio in the border seam bands and in "
         f"the centre bands (band half-width {s['band_fraction']:.0%} of the size, high-pass sigma "
         f"{s['highpass_sigma']} px; < 1 when blurred), SSIM of the tile repeated to the source's size, "
-        "and the relative Gram distance (0 = same statistics). See `seamless_usd/metrics.py`.",
+        "the relative Gram distance (0 = same statistics), and the feature-scale ratio and patch distance "
+        "against the source. See `seamless_usd/metrics/`.",
         "",
     ]
     lines += [
