@@ -64,13 +64,16 @@ class RefineResult:
     seconds: float = 0.0
 
 
-def joint_features(maps: list[np.ndarray]) -> np.ndarray:
-    """(H, W, sum C_i) float32: every map scaled so that each contributes equally to patch distances."""
-    parts = []
-    for m in maps:
-        m = np.asarray(m, dtype=np.float32)
-        spread = float(np.sqrt(((m - m.mean(axis=(0, 1))) ** 2).sum(axis=-1).mean()))
-        parts.append(m / max(spread, 1e-3))
+def _spread(m: np.ndarray) -> float:
+    """RMS distance of a map's pixels to its mean colour (at least 1e-3, for flat maps)."""
+    m = np.asarray(m, dtype=np.float32)
+    return max(float(np.sqrt(((m - m.mean(axis=(0, 1))) ** 2).sum(axis=-1).mean())), 1e-3)
+
+
+def joint_features(maps: list[np.ndarray], like: list[np.ndarray] | None = None) -> np.ndarray:
+    """(H, W, sum C_i) float32: every map divided by its spread (that of ``like``'s map when given),
+    so that each contributes equally to patch distances."""
+    parts = [np.asarray(m, dtype=np.float32) / _spread(ref) for m, ref in zip(maps, like or maps)]
     return np.concatenate(parts, axis=2)
 
 
@@ -152,13 +155,8 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
     src = torch.from_numpy(np.ascontiguousarray(joint_features(sources).transpose(2, 0, 1))).to(dev)
     if layout is not None:
         assert len(layout) == len(sources), f"layout has {len(layout)} maps, the stack {len(sources)}"
-        # the layout is described in the source's feature units (same per-map scaling)
-        lay_parts = []
-        for s_map, l_map in zip(sources, layout):
-            s_map = np.asarray(s_map, np.float32)
-            spread = float(np.sqrt(((s_map - s_map.mean(axis=(0, 1))) ** 2).sum(axis=-1).mean()))
-            lay_parts.append(np.asarray(l_map, np.float32) / max(spread, 1e-3))
-        lay = torch.from_numpy(np.ascontiguousarray(np.concatenate(lay_parts, 2).transpose(2, 0, 1))).to(dev)
+        lay_np = joint_features(layout, like=sources)  # in the source's feature units
+        lay = torch.from_numpy(np.ascontiguousarray(lay_np.transpose(2, 0, 1))).to(dev)
     H, W = src.shape[1:]
     th, tw = tile_hw
     scales = level_scales(tile_hw, config.coarsest)
@@ -214,7 +212,7 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
         if cost is None:
             cost = patch_cost(space.describe(gather(level_src, fld), periodic=True), space, fld, None)
         info = {"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": iters,
-                "mean_cost": float(cost.mean()) if cost is not None else 0.0,
+                "mean_cost": float(cost.mean()),
                 "seconds": round(time.perf_counter() - t0, 3)}
         levels.append(info)
         if progress is not None:
