@@ -103,10 +103,9 @@ def to_source_grid(tile: np.ndarray, reference: np.ndarray, source: np.ndarray) 
     """A tile made on ``reference``'s grid, resized so its texels have the ``source``'s size."""
     if reference.shape[:2] == source.shape[:2]:
         return tile
-    import torch
-    import torch.nn.functional as F
+    from seamless_usd.synthesis import MapInput, downsample_maps
 
     fy, fx = source.shape[0] / reference.shape[0], source.shape[1] / reference.shape[1]
     size = (max(1, round(tile.shape[0] * fy)), max(1, round(tile.shape[1] * fx)))
-    t = torch.from_numpy(np.ascontiguousarray(tile.transpose(2, 0, 1)))[None]
-    return F.interpolate(t, size=size, mode="bilinear", align_corners=False)[0].permute(1, 2, 0).numpy()
+    [resized] = downsample_maps([MapInput("tile", np.ascontiguousarray(tile, dtype=np.float32))], size)
+    return resized.pixels

@@ -108,7 +108,6 @@ def test_crop_plan_for_source_sized_tiles():
 
 
 def test_make_tile_source_sized_and_refine_off():
-    rng = np.random.default_rng(3)
     albedo = _load("wood_color.png")[:128, :160]
     rough = _load("wood_roughness.png")[:128, :160]
     maps = [MapInput("a", albedo), MapInput("r", rough)]
@@ -125,4 +124,3 @@ def test_make_tile_source_sized_and_refine_off():
     paper = make_tile(maps, get_preset("tiny"), tile_size="paper", seed=0)
     gh, gw = next(iter(paper.gan.maps.values())).shape[:2]
     assert paper.tile_size == (round(gh / (paper.working_size[0] / 128)), round(gw / (paper.working_size[1] / 160)))
-    assert rng is not None

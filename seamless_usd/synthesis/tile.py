@@ -59,7 +59,7 @@ class MadeTile:
 
 
 def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInput]:
-    """Maps resized to ``size = (h, w)`` (antialiased bilinear; normals renormalised)."""
+    """Maps resized to ``size = (h, w)`` (bilinear, antialiased when shrinking; normals renormalised)."""
     out = []
     for m in maps:
         if m.pixels.shape[:2] == tuple(size):
