@@ -55,14 +55,22 @@ def img2texture_tile(pixels: np.ndarray, is_normal: bool = False, overlap: float
     return np.ascontiguousarray(out, dtype=np.float32)
 
 
+def preset_config(preset: str, iterations: int | None = None, batch: int | None = None):
+    """The preset, with the benchmark's overrides of its iterations and crops per step."""
+    from seamless_usd.synthesis import get_preset
+
+    config = get_preset(preset)
+    overrides = {k: v for k, v in (("iterations", iterations), ("batch", batch)) if v is not None}
+    return config.replace(**overrides) if overrides else config
+
+
 def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str], preset: str, seed: int,
-                  log: Callable[[str], None], iterations: int | None = None) -> dict[str, MethodResult]:
+                  log: Callable[[str], None], iterations: int | None = None, batch: int | None = None
+                  ) -> dict[str, MethodResult]:
     """The synthesis methods asked for, training SeamlessGAN once for both GAN rows."""
     from seamless_usd import synthesis as syn
 
-    config = syn.get_preset(preset)
-    if iterations is not None:
-        config = config.replace(iterations=iterations)
+    config = preset_config(preset, iterations, batch)
     maps = [syn.MapInput(k, np.ascontiguousarray(px, dtype=np.float32), n) for k, (px, n) in stack.items()]
     out: dict[str, MethodResult] = {}
     if "refine-random" in methods:

@@ -49,7 +49,7 @@ ROOT = HERE.parent
 if str(HERE) not in sys.path:  # the baselines sit beside this script
     sys.path.insert(0, str(HERE))
 
-from methods import SYNTHESIS_METHODS, MethodResult, img2texture_tile, run_synthesis, to_source_grid
+from methods import SYNTHESIS_METHODS, MethodResult, img2texture_tile, preset_config, run_synthesis, to_source_grid
 from baselines import BASELINES  # noqa: E402
 
 from seamless_usd import metrics as M  # noqa: E402
@@ -329,6 +329,7 @@ def run(
     preset: str = "default",
     seed: int = 0,
     iterations: int | None = None,
+    batch: int | None = None,
     out: Path = DEFAULT_OUT,
     textures_dir: Path = SHARED_DIR,
     max_size: int | None = None,
@@ -368,11 +369,7 @@ def run(
         "complete": False,
     }
     if set(methods) & set(SYNTHESIS_METHODS):  # presets are tuned over time: keep what this run used
-        from seamless_usd.synthesis import get_preset
-
-        config = get_preset(preset)
-        if iterations is not None:
-            config = config.replace(iterations=iterations)
+        config = preset_config(preset, iterations, batch)
         result["settings"]["preset_config"] = json.loads(config.to_json())
     for stack_name in stacks:
         stack = load_stack(stack_name, textures_dir, max_size)
@@ -380,7 +377,7 @@ def run(
         synthesis = [m for m in methods if m in SYNTHESIS_METHODS]
         if synthesis:
             log(f"{stack_name}: {', '.join(synthesis)} ...")
-            made = run_synthesis(stack, synthesis, preset, seed, log, iterations=iterations)
+            made = run_synthesis(stack, synthesis, preset, seed, log, iterations=iterations, batch=batch)
         for method in methods:
             log(f"{stack_name}: {method} ...")
             if method in SYNTHESIS_METHODS:
@@ -550,6 +547,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=0, help="training and sampling seed (default: %(default)s)")
     p.add_argument("--iterations", type=int, default=None,
                    help="override the preset's training iterations (quality-vs-time curves)")
+    p.add_argument("--batch", type=int, default=None, help="override the preset's crops per training step")
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: benchmarks/results)")
     p.add_argument("--textures-dir", type=Path, default=SHARED_DIR, help="MaterialX images for the mx_* stacks (default: ../shared/textures from the repository root)")
     p.add_argument("--max-size", type=int, default=None, help="downscale inputs to at most this many px (quick runs)")
@@ -590,6 +588,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             preset=a.preset,
             seed=a.seed,
             iterations=a.iterations,
+            batch=a.batch,
             out=a.out,
             textures_dir=a.textures_dir,
             max_size=a.max_size,

@@ -34,118 +34,15 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
 
+if str(HERE) not in sys.path:  # steps.py sits beside this script
+    sys.path.insert(0, str(HERE))
+
 from seamless_usd.synthesis import MapInput, get_preset, sample, train  # noqa: E402
-from seamless_usd.synthesis.config import SynthesisConfig  # noqa: E402
-from seamless_usd.synthesis.features import build_feature_extractor  # noqa: E402
 from seamless_usd.synthesis.precision import cpu_supports_bf16, resolve_precision  # noqa: E402
-from seamless_usd.synthesis.step import Batch, training_step  # noqa: E402
 from seamless_usd.synthesis.train import TrainedModel, build_networks  # noqa: E402
+from steps import CHANNELS, bench_compile, bench_steps, bench_wait_policy, load_average, profile_step  # noqa: E402
 
-CHANNELS = [3, 3, 1]  # albedo, normal, roughness
-
-
-def matmul_gflops(dtype: torch.dtype, n: int = 2048, seconds: float = 1.5) -> float:
-    a, b = torch.randn(n, n).to(dtype), torch.randn(n, n).to(dtype)
-    a @ b
-    reps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        a @ b
-        reps += 1
-    return 2 * n**3 * reps / (time.perf_counter() - t0) / 1e9
-
-
-class StepRunner:
-    """Training steps of one configuration on a fixed random batch (crop positions do not change speed)."""
-
-    def __init__(self, cfg: SynthesisConfig, precision: str):
-        self.cfg, self.precision, self.dev = cfg, precision, torch.device("cpu")
-        self.G, self.D = build_networks(cfg, CHANNELS, seed=0)
-        self.ext = build_feature_extractor(cfg)
-        self.opt_g = torch.optim.Adam(self.G.parameters(), lr=cfg.lr, betas=cfg.betas)
-        self.opt_d = torch.optim.Adam(self.D.parameters(), lr=cfg.lr, betas=cfg.betas)
-        k = cfg.k
-        target = torch.rand(1, sum(CHANNELS), 2 * k, 2 * k) * 2 - 1  # (N, C, 2k, 2k)
-        self.batch = Batch(target[:, :, k // 2: k // 2 + k, k // 2: k // 2 + k], target)
-
-    def step(self) -> None:
-        training_step(self.G, self.D, self.opt_g, self.opt_d, self.ext, self.batch, CHANNELS, self.cfg,
-                      self.dev, self.precision)
-
-    def flops(self) -> int:
-        from torch.utils.flop_counter import FlopCounterMode
-        with FlopCounterMode(display=False) as fc:
-            self.step()
-        return fc.get_total_flops()
-
-    def rate(self, steps: int, threads: int) -> float:
-        torch.set_num_threads(threads)
-        self.step()  # warm-up (oneDNN primitive creation)
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            self.step()
-        return steps / (time.perf_counter() - t0)
-
-
-def bench_steps(rounds: int, seconds_per_variant: float) -> dict:
-    precision = resolve_precision("auto", torch.device("cpu"))
-    variants = {
-        "paper": (get_preset("paper"), 2),
-        "default": (get_preset("default"), 2),
-        "default@1thread": (get_preset("default"), 1),
-        "default-no-style": (get_preset("default").replace(lambda_style=0.0), 2),
-        "default-ngf32": (get_preset("default").replace(ngf=32, ndf=32, n_res_blocks=5, style_channels=32), 2),
-        "draft": (get_preset("draft"), 2),
-        "draft@1thread": (get_preset("draft"), 1),
-    }
-    runners = {name: StepRunner(cfg, precision) for name, (cfg, _) in variants.items()}
-    flops = {name: r.flops() for name, r in runners.items()}
-    rates: dict[str, list[float]] = {name: [] for name in variants}
-    peaks: dict[str, list[float]] = {"fp32": [], "bf16": []}
-    for rnd in range(rounds):
-        torch.set_num_threads(2)
-        peaks["fp32"].append(matmul_gflops(torch.float32))
-        peaks["bf16"].append(matmul_gflops(torch.bfloat16, n=512 if not cpu_supports_bf16() else 2048, seconds=0.5))
-        for name, (cfg, threads) in variants.items():
-            probe = runners[name].rate(1, threads)
-            steps = max(1, int(seconds_per_variant * probe))
-            rates[name].append(runners[name].rate(steps, threads))
-            print(f"  round {rnd + 1}/{rounds} {name:18s} {rates[name][-1]:7.2f} it/s", flush=True)
-    torch.set_num_threads(2)
-    peak32, peak16 = float(np.median(peaks["fp32"])), float(np.median(peaks["bf16"]))
-    out = {"precision": precision, "matmul_gflops": {"fp32": peaks["fp32"], "bf16": peaks["bf16"]},
-           "variants": {}}
-    for name, (cfg, threads) in variants.items():
-        r = float(np.median(rates[name]))
-        gflops = flops[name] * r / 1e9
-        out["variants"][name] = {
-            "k": cfg.k, "ngf": cfg.ngf, "ndf": cfg.ndf, "res_blocks": cfg.n_res_blocks, "threads": threads,
-            "lambda_style": cfg.lambda_style, "it_per_s": rates[name], "it_per_s_median": r,
-            "gflop_per_step": flops[name] / 1e9, "achieved_gflops": gflops,
-            "fraction_of_fp32_peak": gflops / peak32, "fraction_of_bf16_peak": gflops / peak16,
-            "iterations": cfg.iterations, "train_minutes_at_median": cfg.iterations / r / 60}
-    return out
-
-
-def _steprate_child(preset: str, threads: int, steps: int) -> None:
-    """Runs in a subprocess (so the OpenMP wait policy can differ): print the preset's training it/s."""
-    print(json.dumps({"it_per_s": StepRunner(get_preset(preset), resolve_precision("auto", torch.device("cpu")))
-                      .rate(steps, threads)}))
-
-
-def bench_wait_policy(rounds: int, preset: str = "default", steps: int = 8) -> dict:
-    """2 threads with spinning (ACTIVE) vs sleeping (PASSIVE) OpenMP waits vs 1 thread, interleaved."""
-    import os
-    variants = {"2 threads, OMP_WAIT_POLICY=ACTIVE": ("ACTIVE", 2), "2 threads, OMP_WAIT_POLICY=PASSIVE": ("PASSIVE", 2),
-                "1 thread": ("PASSIVE", 1)}
-    out: dict[str, list[float]] = {name: [] for name in variants}
-    for _ in range(rounds):
-        for name, (policy, threads) in variants.items():
-            env = dict(os.environ, OMP_WAIT_POLICY=policy)
-            proc = subprocess.run([sys.executable, __file__, "--_steprate", str(threads), "--preset", preset,
-                                   "--steps", str(steps)], capture_output=True, text=True, check=True, env=env)
-            out[name].append(json.loads(proc.stdout.strip().splitlines()[-1])["it_per_s"])
-            print(f"  {preset} {name}: {out[name][-1]:.2f} it/s", flush=True)
-    return {"preset": preset, "it_per_s": out, "median": {k: float(np.median(v)) for k, v in out.items()}}
+MAX_LOAD = 1.5  # 1-minute load average above which figures are refused (or, with --allow-load, flagged)
 
 
 def _sample_child(size: int, preset: str, whole_search: bool) -> None:
@@ -271,29 +168,55 @@ def write_markdown(record: dict, path: Path) -> None:
     lines = ["# Speed benchmark", "", f"Written by `benchmarks/speed.py`. Machine: {m.get('cpu')}, "
              f"{m.get('threads')} threads, torch {m.get('torch')}, CPU capability {m.get('cpu_capability')}, "
              f"native bf16: {m.get('native_bf16')}.", ""]
+    flagged = record.get("loaded")
+    if flagged:
+        lines += [f"> **WARNING: measured on a loaded machine** (1-minute load average {flagged} at the start, above "
+                  f"{MAX_LOAD}); these figures understate the hardware.", ""]
     st = record.get("steps")
     if st:
         pk = st["matmul_gflops"]
         lines += ["## Training steps (variants interleaved, median of rounds)", "",
                   f"Precision chosen at run time: **{st['precision']}**. Matmul peaks measured in the same run "
-                  f"(2048x2048): fp32 {np.median(pk['fp32']):.1f} GFLOP/s (rounds: "
-                  f"{', '.join(f'{v:.1f}' for v in pk['fp32'])}), bf16 {np.median(pk['bf16']):.2f} GFLOP/s.", "",
-                  "| variant | k | ngf/ndf | res | threads | GFLOP/step | it/s (rounds) | GFLOP/s | of fp32 peak "
-                  "| of bf16 peak | preset iterations -> minutes |",
-                  "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|"]
+                  f"(2048x2048, 2 threads): fp32 {np.median(pk['fp32']):.1f} GFLOP/s (rounds: "
+                  f"{', '.join(f'{v:.1f}' for v in pk['fp32'])}; load {', '.join(f'{v:.2f}' for v in st['matmul_load'])}), "
+                  f"bf16 {np.median(pk['bf16']):.2f} GFLOP/s. A crop is one 2k target; an iteration is one optimiser "
+                  "step over `batch` crops.", "",
+                  "| variant | k | ngf/ndf | res | batch | threads | engine | GFLOP/step | it/s (rounds) | crops/s "
+                  "| GFLOP/s | of fp32 peak | load | preset iterations -> minutes |",
+                  "|---|---:|---:|---:|---:|---:|---|---:|---|---:|---:|---:|---|---|"]
         for name, v in st["variants"].items():
-            lines.append(f"| {name} | {v['k']} | {v['ngf']}/{v['ndf']} | {v['res_blocks']} | {v['threads']} | "
-                         f"{v['gflop_per_step']:.2f} | {v['it_per_s_median']:.2f} "
-                         f"({', '.join(f'{r:.2f}' for r in v['it_per_s'])}) | {v['achieved_gflops']:.1f} | "
-                         f"{100 * v['fraction_of_fp32_peak']:.0f}% | {100 * v['fraction_of_bf16_peak']:.0f}% | "
+            lines.append(f"| {name} | {v['k']} | {v['ngf']}/{v['ndf']} | {v['res_blocks']} | {v['batch']} | "
+                         f"{v['threads']} | {v['engine']} | {v['gflop_per_step']:.2f} | {v['it_per_s_median']:.2f} "
+                         f"({', '.join(f'{r:.2f}' for r in v['it_per_s'])}) | {v['crops_per_s_median']:.2f} | "
+                         f"{v['achieved_gflops']:.1f} | {100 * v['fraction_of_fp32_peak']:.0f}% | "
+                         f"{', '.join(f'{x:.2f}' for x in v['load'])} | "
                          f"{v['iterations']} -> {v['train_minutes_at_median']:.1f} |")
         lines.append("")
     wp = record.get("wait_policy")
-    if wp:
-        lines += [f"## OpenMP wait policy ({wp['preset']} preset, subprocesses interleaved)", "",
-                  "| setting | it/s (rounds) | median |", "|---|---|---:|"]
-        for name, v in wp["it_per_s"].items():
-            lines.append(f"| {name} | {', '.join(f'{r:.2f}' for r in v)} | {wp['median'][name]:.2f} |")
+    if wp and "crops_per_s" in wp:
+        lines += [f"## OpenMP wait policy and crop workers ({wp['preset']} network, subprocesses interleaved)", "",
+                  "| setting | crops/s (rounds) | median | load |", "|---|---|---:|---|"]
+        for name, v in wp["crops_per_s"].items():
+            lines.append(f"| {name} | {', '.join(f'{r:.2f}' for r in v)} | {wp['median'][name]:.2f} | "
+                         f"{', '.join(f'{x:.2f}' for x in wp['load'][name])} |")
+        lines.append("")
+    cp = record.get("compile")
+    if cp:
+        lines += [f"## torch.compile ({cp['preset']} preset, {cp['threads']} thread, fresh processes)", "",
+                  "| run | first step s (compile included) | then it/s | load |", "|---|---:|---:|---:|"]
+        for run in ("cold", "warm", "eager"):
+            r = cp[run]
+            lines.append(f"| {run if run != 'eager' else 'eager (no compile)'} | {r['first_step_s']:.1f} | "
+                         f"{r['it_per_s']:.2f} | {r['load']:.2f} |")
+        lines.append("")
+    pf = record.get("profile")
+    if pf:
+        lines += [f"## Profile: top ops by self CPU time ({pf['variant']}, {pf['steps']} steps, "
+                  f"{pf['step_ms']:.0f} ms a step under the profiler, load {pf['load']:.2f})", "",
+                  "| op | ms per step | share | calls per step |", "|---|---:|---:|---:|"]
+        for r in pf["top"]:
+            lines.append(f"| `{r['op']}` | {r['self_ms_per_step']:.1f} | {100 * r['share']:.0f}% | "
+                         f"{r['calls_per_step']:.0f} |")
         lines.append("")
     sm = record.get("sampling")
     if sm:
@@ -346,23 +269,27 @@ def main(argv=None) -> int:
     ap.add_argument("--seam-compare", default=None, help="compare seam_training_prob values with this preset")
     ap.add_argument("--probs", default="0,0.3", help="seam_training_prob values for --seam-compare")
     ap.add_argument("--_sample", type=int, default=None, help=argparse.SUPPRESS)
-    ap.add_argument("--_steprate", type=int, default=None, help=argparse.SUPPRESS)
-    ap.add_argument("--steps", type=int, default=8, help=argparse.SUPPRESS)
     ap.add_argument("--skip-policy", action="store_true")
+    ap.add_argument("--compile", action="store_true", help="also time torch.compile, cold and warm (several minutes)")
+    ap.add_argument("--allow-load", action="store_true",
+                    help=f"report even when the load average is above {MAX_LOAD} at the start (figures are flagged)")
     ap.add_argument("--whole", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
-    if a._steprate is not None:
-        _steprate_child(a.preset, a._steprate, a.steps)
-        return 0
     if a._sample is not None:
         _sample_child(a._sample, a.preset, a.whole)
         return 0
+    load = load_average()
+    if load > MAX_LOAD and not a.allow_load:
+        print(f"error: the 1-minute load average is {load:.2f} (above {MAX_LOAD}): other jobs would slow every "
+              "figure down. Wait for an idle machine, or pass --allow-load to record flagged figures.", file=sys.stderr)
+        return 2
     RESULTS.mkdir(parents=True, exist_ok=True)
     json_path = RESULTS / "speed.json"
     record = json.loads(json_path.read_text()) if json_path.exists() else {}
     record["machine"] = {"cpu": platform.processor() or platform.machine(), "threads": torch.get_num_threads(),
                          "torch": torch.__version__, "cpu_capability": torch.backends.cpu.get_cpu_capability(),
-                         "native_bf16": cpu_supports_bf16()}
+                         "native_bf16": cpu_supports_bf16(), "load_at_start": load}
+    record["loaded"] = load if load > MAX_LOAD else None
     if a.e2e:
         record.setdefault("end_to_end", {})[a.e2e] = end_to_end(a.e2e)
     elif a.seam_compare:
@@ -376,6 +303,10 @@ def main(argv=None) -> int:
             record["steps"] = bench_steps(a.rounds, a.seconds)
         if not a.skip_policy:
             record["wait_policy"] = bench_wait_policy(a.rounds)
+        if not a.skip_steps:
+            record["profile"] = profile_step()
+        if a.compile:
+            record["compile"] = bench_compile()
         if not a.skip_sampling:
             sizes = [int(s) for s in a.sizes.split(",")]
             new = bench_sampling(a.preset, sizes, whole_search_sizes=[512])

@@ -34,11 +34,16 @@ class SynthesisConfig:
     style_channels: int = 32  # random extractor: channels per scale; small so style does not dominate the step
     style_seed: int = 1234  # random extractor filters are fixed by this seed, independent of the training seed
     seam_training_prob: float = 0.0  # beyond the paper: fraction of G steps fed a 2x2-tiled latent (off by default)
+    batch: int = 1  # crops per optimiser step (paper: 1); the loss is the mean of the per-crop losses
 
     # --- run control ---
     checkpoint_every: int = 500  # iterations between checkpoints (one is always written at the end)
     progress_every: int = 10  # iterations between progress callbacks
     precision: str = "auto"  # "auto" (CUDA: bf16/fp16, CPU: bf16 if supported else fp32), "fp32", "bf16", "fp16"
+    workers: int = 0  # CPU threads computing the crops of a step in parallel; 0 (auto): one per crop, up to torch's
+    #                   threads, and one thread in all for a single crop of a small network; N: N workers sharing
+    #                   torch's threads as intra-op threads
+    compile: str = "auto"  # torch.compile the training step: "auto" (on for CUDA, off on the CPU), "on", "off"
 
     # --- sampling (paper section 4.2) ---
     tiling: str = "circular"  # "circular": one period of the infinitely tiled latent (exactly periodic, 4x cheaper);
@@ -58,6 +63,8 @@ class SynthesisConfig:
         assert self.style_features in ("random", "vgg19"), (
             f"style_features must be 'random' or 'vgg19', got {self.style_features!r}")
         assert 0.0 <= self.seam_training_prob <= 1.0, "seam_training_prob is a probability"
+        assert self.batch >= 1 and self.workers >= 0, "batch must be >= 1 and workers >= 0"
+        assert self.compile in ("auto", "on", "off"), f"compile must be 'auto', 'on' or 'off', got {self.compile!r}"
 
     def replace(self, **changes) -> "SynthesisConfig":
         return dataclasses.replace(self, **changes)
@@ -76,7 +83,7 @@ class SynthesisConfig:
     def training_fields(self) -> dict:
         """The fields that change the trained weights (run control and sampling excluded)."""
         skip = {"checkpoint_every", "progress_every", "tiling", "c_min", "crop_step", "crops_per_size",
-                "max_candidates", "gamma", "band_fraction", "chunk_pixels", "vgg_weights"}
+                "max_candidates", "gamma", "band_fraction", "chunk_pixels", "vgg_weights", "workers", "compile"}
         return {k: v for k, v in dataclasses.asdict(self).items() if k not in skip}
 
 

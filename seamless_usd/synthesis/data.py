@@ -29,12 +29,13 @@ def effective_k(k: int, height: int, width: int) -> int:
     return fit
 
 
-def training_crops(seed: int, step: int, height: int, width: int, k: int) -> tuple[int, int, int, int]:
+def training_crops(seed: int, step: int, height: int, width: int, k: int, index: int = 0) -> tuple[int, int, int, int]:
     """(ty, tx, sy, sx): the 2k target crop's corner in the stack and the k source crop's corner inside it.
 
-    A pure function of (seed, step), so a resumed run sees exactly the crops an uninterrupted one would.
+    A pure function of (seed, step, index), so a resumed run sees exactly the crops an uninterrupted one
+    would; ``index`` numbers the crops of one step (crop 0 is the one a one-crop run sees).
     """
-    rng = np.random.default_rng([seed, step])
+    rng = np.random.default_rng([seed, step] if index == 0 else [seed, step, 1000 + index])
     ty = int(rng.integers(0, height - 2 * k + 1))
     tx = int(rng.integers(0, width - 2 * k + 1))
     sy = int(rng.integers(0, k + 1))

@@ -156,12 +156,16 @@ def gram(f: torch.Tensor) -> torch.Tensor:  # (N, C, H, W) -> (N, C, C), normali
 
 def style_loss(extractor: nn.Module, fake: torch.Tensor, real: torch.Tensor) -> torch.Tensor:
     """Sum over layers of the Gram-matrix MSE of ``fake`` vs ``real`` (N, C, H, W), relative to the real Gram's
-    mean square, so the loss is about 1 for unrelated textures whatever the extractor's scale."""
+    mean square, so the loss is about 1 for unrelated textures whatever the extractor's scale.
+
+    Each image of the batch is compared and normalised on its own and the batch mean is returned, so a
+    batch of N crops gives the mean of the N one-crop losses.
+    """
     ff = extractor(to_rgb_batch(fake))
     with torch.no_grad():
         fr = extractor(to_rgb_batch(real))
     total = fake.new_zeros((), dtype=torch.float32)
     for a, b in zip(ff, fr):
-        ga, gb = gram(a), gram(b)
-        total = total + F.mse_loss(ga, gb) / (gb.square().mean() + 1e-8)
+        ga, gb = gram(a), gram(b)  # (N', C, C)
+        total = total + ((ga - gb).square().mean((1, 2)) / (gb.square().mean((1, 2)) + 1e-8)).mean()
     return total

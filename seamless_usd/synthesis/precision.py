@@ -6,7 +6,7 @@ import functools
 
 import torch
 
-__all__ = ["pick_device", "cpu_supports_bf16", "resolve_precision", "autocast"]
+__all__ = ["pick_device", "cpu_supports_bf16", "choose_precision", "resolve_precision", "autocast"]
 
 
 def pick_device(device: str | torch.device | None = None) -> torch.device:
@@ -28,15 +28,26 @@ def cpu_supports_bf16() -> bool:
         return False
 
 
-def resolve_precision(requested: str, device: torch.device) -> str:
-    """Map "auto" to a concrete precision for ``device``: "bf16", "fp16" or "fp32"."""
+def choose_precision(requested: str, device_type: str, *, cuda_bf16: bool = False, cpu_bf16: bool = False) -> str:
+    """Map "auto" to "bf16", "fp16" or "fp32" from what the device can do (a pure function, testable anywhere).
+
+    >>> choose_precision("auto", "cuda", cuda_bf16=False)
+    'fp16'
+    """
     if requested != "auto":
         return requested
-    if device.type == "cuda":
-        return "bf16" if torch.cuda.is_bf16_supported() else "fp16"
-    if device.type == "cpu" and cpu_supports_bf16():
+    if device_type == "cuda":
+        return "bf16" if cuda_bf16 else "fp16"
+    if device_type == "cpu" and cpu_bf16:
         return "bf16"
     return "fp32"
+
+
+def resolve_precision(requested: str, device: torch.device) -> str:
+    """Map "auto" to a concrete precision for ``device``: "bf16", "fp16" or "fp32"."""
+    return choose_precision(requested, device.type,
+                            cuda_bf16=device.type == "cuda" and torch.cuda.is_bf16_supported(),
+                            cpu_bf16=device.type == "cpu" and cpu_supports_bf16())
 
 
 _DTYPES = {"bf16": torch.bfloat16, "fp16": torch.float16}

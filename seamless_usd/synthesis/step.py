@@ -1,33 +1,42 @@
 """One adversarial-expansion training step: losses for D and G, and the update.
 
-Forward passes run under ``precision.autocast``; every loss is reduced in fp32.
+Forward passes run under ``precision.autocast``; every loss is reduced in fp32. A step may hold several
+crops; its loss is the mean of the per-crop losses. On the GPU the crops go through the networks as one
+batch; on the CPU each crop is a micro-batch of its own, computed on a ``CropWorkers`` thread, and the
+per-crop gradients are summed in crop order, so the weights do not depend on how many threads ran.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import torch
 import torch.nn.functional as F
 from torch import nn
 
 from .config import SynthesisConfig
+from .engine import CropWorkers
 from .features import style_loss
 from .networks import Discriminator, Generator
 from .precision import autocast
 
-__all__ = ["Batch", "generate", "d_loss", "g_loss", "training_step"]
+__all__ = ["Batch", "generate", "d_loss", "g_loss", "training_step", "StepFunctions"]
 
 
 @dataclass
 class Batch:
-    source: torch.Tensor  # (1, Ctot, k, k) or (1, Ctot, k/2, k/2) for a seam-training step
-    target: torch.Tensor  # (1, Ctot, 2k, 2k)
+    source: torch.Tensor  # (N, Ctot, k, k) or (N, Ctot, k/2, k/2) for a seam-training step
+    target: torch.Tensor  # (N, Ctot, 2k, 2k)
     seam: bool = False  # source is a half-size crop whose latent is tiled 2x2 before decoding
 
+    def crops(self) -> list["Batch"]:
+        """One single-crop batch per crop."""
+        return [Batch(self.source[i: i + 1], self.target[i: i + 1], self.seam) for i in range(self.source.shape[0])]
 
-def generate(G: Generator, batch: Batch) -> torch.Tensor:  # -> (1, Ctot, 2k, 2k)
+
+def generate(G: Generator, batch: Batch) -> torch.Tensor:  # -> (N, Ctot, 2k, 2k)
     if batch.seam:
-        x0 = G.encode(batch.source)  # (1, 2ngf, k/4, k/4)
+        x0 = G.encode(batch.source)  # (N, 2ngf, k/4, k/4)
         outs = G.decode(x0.repeat(1, 1, 2, 2))  # latent copies meet in the middle: G must heal the seam
     else:
         outs = G(batch.source)
@@ -63,20 +72,81 @@ def g_loss(D: Discriminator, extractor: nn.Module, fake: torch.Tensor, batch: Ba
     return total, {"g_adv": float(adv.detach()), "l1": float(l1.detach()), "style": float(sty.detach())}
 
 
+@dataclass
+class StepFunctions:
+    """The differentiable pieces of a step; ``train`` may swap in compiled versions (``engine.maybe_compile``)."""
+
+    generate: Callable = generate
+    d_loss: Callable = d_loss
+    g_loss: Callable = g_loss
+
+
 def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, opt_d: torch.optim.Optimizer,
                   extractor: nn.Module, batch: Batch, channels: list[int], config: SynthesisConfig,
-                  device: torch.device, precision: str, scaler=None) -> dict[str, float]:
-    """Update D once, then G once (pix2pix order). Returns the losses as floats."""
-    with autocast(device, precision):
-        fake = generate(G, batch)  # (1, Ctot, 2k, 2k)
+                  device: torch.device, precision: str, scaler=None, workers: CropWorkers | None = None,
+                  stacked: bool = False, fns: StepFunctions | None = None) -> dict[str, float]:
+    """Update D once, then G once (pix2pix order), on every crop of ``batch``. Returns the mean losses as floats.
+
+    ``stacked`` runs the crops as one batch (the GPU path, and the only one with an fp16 ``scaler``);
+    otherwise each crop is a micro-batch, run on ``workers`` threads when given.
+    """
+    fns = fns or StepFunctions()
+    if stacked or scaler is not None:
+        return _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device, precision, scaler, fns)
+    crops = batch.crops()
+    n = len(crops)
+    run = workers.map if workers is not None else (lambda fn, *xs: list(map(fn, *xs)))
+    d_params = list(D.parameters())
+    g_params = list(G.parameters())
+
+    def d_part(crop: Batch):
+        with autocast(device, precision):
+            fake = fns.generate(G, crop)  # (1, Ctot, 2k, 2k)
+        loss = fns.d_loss(D, fake, crop.target, device, precision)
+        return fake, float(loss.detach()), torch.autograd.grad(loss / n, d_params, allow_unused=True)
 
     D.requires_grad_(True)
-    loss_d = d_loss(D, fake, batch.target, device, precision)
+    d_out = run(d_part, crops)
+    _set_grads(d_params, [g for _, _, g in d_out])
+    opt_d.step()
+
+    def g_part(crop: Batch, fake: torch.Tensor):
+        loss, parts = fns.g_loss(D, extractor, fake, crop, channels, config, device, precision)
+        return float(loss.detach()), parts, torch.autograd.grad(loss / n, g_params, allow_unused=True)
+
+    D.requires_grad_(False)  # G's backward goes through D without computing D weight gradients
+    g_out = run(g_part, crops, [f for f, _, _ in d_out])
+    D.requires_grad_(True)
+    _set_grads(g_params, [g for _, _, g in g_out])
+    opt_g.step()
+    mean = lambda xs: sum(xs) / n  # noqa: E731
+    parts = {k: mean([p[k] for _, p, _ in g_out]) for k in g_out[0][1]}
+    return {"d": mean([d for _, d, _ in d_out]), "g": mean([g for g, _, _ in g_out]), **parts}
+
+
+def _set_grads(params: list[torch.Tensor], per_crop: list[tuple]) -> None:
+    """``p.grad`` = the sum of the per-crop gradients, added in crop order (deterministic)."""
+    for i, p in enumerate(params):
+        total = None
+        for grads in per_crop:
+            g = grads[i]
+            if g is not None:
+                total = g if total is None else total + g
+        p.grad = total
+
+
+def _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device, precision, scaler,
+                  fns: StepFunctions) -> dict[str, float]:
+    with autocast(device, precision):
+        fake = fns.generate(G, batch)  # (N, Ctot, 2k, 2k)
+
+    D.requires_grad_(True)
+    loss_d = fns.d_loss(D, fake, batch.target, device, precision)
     opt_d.zero_grad(set_to_none=True)
     _backward_step(loss_d, opt_d, scaler)
 
     D.requires_grad_(False)  # G's backward goes through D without accumulating D weight gradients
-    loss_g, parts = g_loss(D, extractor, fake, batch, channels, config, device, precision)
+    loss_g, parts = fns.g_loss(D, extractor, fake, batch, channels, config, device, precision)
     opt_g.zero_grad(set_to_none=True)
     _backward_step(loss_g, opt_g, scaler)
     D.requires_grad_(True)

@@ -15,11 +15,12 @@ from .checkpoint import (CHECKPOINT_NAME, load_checkpoint, load_optimizer_tensor
                          save_checkpoint, versions)
 from .config import SynthesisConfig
 from .data import effective_k, stack_tensor, training_crops
+from .engine import CropWorkers, EnginePlan, engine_for, maybe_compile
 from .features import build_feature_extractor
 from .networks import Discriminator, Generator, init_weights
 from .precision import pick_device, resolve_precision
 from .schedule import learning_rate
-from .step import Batch, training_step
+from .step import Batch, StepFunctions, d_loss, g_loss, generate, training_step
 from .types import MapInput, TrainingProgress, stack_shape
 
 __all__ = ["TrainedModel", "train", "training_hash", "build_networks"]
@@ -41,6 +42,7 @@ class TrainedModel:
     device: torch.device = field(default_factory=lambda: torch.device("cpu"))
     precision: str = "fp32"
     versions: dict = field(default_factory=versions)
+    engine: EnginePlan | None = None  # how it was trained (None when loaded from a file)
 
     def _meta(self) -> dict:
         return {"kind": "model", "config": self.config.to_json(), "hash": self.hash, "names": self.names,
@@ -105,7 +107,8 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
     progress : called every ``config.progress_every`` iterations with a ``TrainingProgress``.
     """
     dev = pick_device(device)
-    precision = resolve_precision(config.precision, dev)
+    plan = engine_for(config, dev)
+    precision = plan.precision
     H, W = stack_shape(maps)
     k = effective_k(config.k, H, W)
     channels = [m.channels for m in maps]
@@ -117,7 +120,8 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
     extractor = build_feature_extractor(config).to(dev).eval()
     opt_g = torch.optim.Adam(G.parameters(), lr=config.lr, betas=config.betas)
     opt_d = torch.optim.Adam(D.parameters(), lr=config.lr, betas=config.betas)
-    scaler = torch.amp.GradScaler(dev.type) if precision == "fp16" else None
+    scaler = torch.amp.GradScaler(dev.type) if plan.grad_scaler else None
+    fns = StepFunctions(maybe_compile(generate, plan), maybe_compile(d_loss, plan), maybe_compile(g_loss, plan))
 
     start = 0
     ckpt = Path(checkpoint_dir) / CHECKPOINT_NAME if checkpoint_dir is not None else None
@@ -133,7 +137,7 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
         start = int(meta["step"])
 
     model = TrainedModel(G, D, config, key, [m.name for m in maps], channels, [bool(m.is_normal) for m in maps],
-                         k, start, dev, precision)
+                         k, start, dev, precision, engine=plan)
 
     def save(step: int) -> None:
         if ckpt is None:
@@ -147,26 +151,42 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
 
     x = stack_tensor(maps, dev)  # (1, Ctot, H, W)
     t0 = time.perf_counter()
-    for step in range(start, total):
-        lr = learning_rate(step, total, config.lr, config.lr_milestones, config.lr_decay)
-        for opt in (opt_g, opt_d):
-            for group in opt.param_groups:
-                group["lr"] = lr
-        ty, tx, sy, sx = training_crops(seed, step, H, W, k)
-        target = x[:, :, ty: ty + 2 * k, tx: tx + 2 * k]  # (1, Ctot, 2k, 2k)
-        seam = config.seam_training_prob > 0 and (
-            np.random.default_rng([seed, step, 1]).random() < config.seam_training_prob)
-        size = k // 2 if seam else k
-        source = target[:, :, sy: sy + size, sx: sx + size]  # (1, Ctot, k, k), or k/2 for a seam step
-        losses = training_step(G, D, opt_g, opt_d, extractor, Batch(source, target, seam), channels, config,
-                               dev, precision, scaler)
-        done = step + 1
-        if done % config.checkpoint_every == 0 or done == total:
-            save(done)
-        if progress is not None and (done % config.progress_every == 0 or done == total):
-            elapsed = time.perf_counter() - t0
-            rate = (done - start) / max(elapsed, 1e-9)
-            progress(TrainingProgress(done, total, rate, (total - done) / max(rate, 1e-9), losses, elapsed))
+    with CropWorkers(plan) as workers:
+        for step in range(start, total):
+            lr = learning_rate(step, total, config.lr, config.lr_milestones, config.lr_decay)
+            for opt in (opt_g, opt_d):
+                for group in opt.param_groups:
+                    group["lr"] = lr
+            batch = _step_batch(x, seed, step, k, config)
+            losses = training_step(G, D, opt_g, opt_d, extractor, batch, channels, config, dev, precision, scaler,
+                                   workers, plan.stacked, fns)
+            done = step + 1
+            if done % config.checkpoint_every == 0 or done == total:
+                save(done)
+            if progress is not None and (done % config.progress_every == 0 or done == total):
+                elapsed = time.perf_counter() - t0
+                rate = (done - start) / max(elapsed, 1e-9)
+                progress(TrainingProgress(done, total, rate, (total - done) / max(rate, 1e-9), losses, elapsed))
     model.step = total
     G.eval(), D.eval()
     return model
+
+
+def _step_batch(x: torch.Tensor, seed: int, step: int, k: int, config: SynthesisConfig) -> Batch:
+    """The ``config.batch`` crops of one step: 2k targets from the stack ``x`` (1, Ctot, H, W), k sources in them.
+
+    A seam step (``seam_training_prob``) feeds every crop a k/2 source whose latent is tiled 2x2.
+    """
+    H, W = x.shape[2:]
+    seam = config.seam_training_prob > 0 and (
+        np.random.default_rng([seed, step, 1]).random() < config.seam_training_prob)
+    size = k // 2 if seam else k
+    sources, targets = [], []
+    for index in range(config.batch):
+        ty, tx, sy, sx = training_crops(seed, step, H, W, k, index)
+        target = x[:, :, ty: ty + 2 * k, tx: tx + 2 * k]  # (1, Ctot, 2k, 2k)
+        targets.append(target)
+        sources.append(target[:, :, sy: sy + size, sx: sx + size])  # (1, Ctot, k, k), or k/2 for a seam step
+    if config.batch == 1:
+        return Batch(sources[0], targets[0], seam)
+    return Batch(torch.cat(sources), torch.cat(targets), seam)
