@@ -4,14 +4,19 @@
 Measures, in one run and interleaved (the machine is shared and its speed drifts):
 
 - large fp32 and bf16 matmul peaks (GFLOP/s);
-- training it/s per preset and per variant (threads, style loss off), and the achieved FLOP/s of a
-  training step (FLOPs counted with ``torch.utils.flop_counter``) as a fraction of both peaks;
+- training it/s and crops/s per preset and per variant (threads, crops per step, style loss off), and
+  the achieved FLOP/s of a training step (FLOPs counted with ``torch.utils.flop_counter``) as a
+  fraction of both peaks; OpenMP wait policies; the top ops of a step; ``--compile``: torch.compile
+  cold and warm (``steps.py``);
 - sampling: time and peak RSS for one candidate at c_max, and for the preset's whole search, at 512 and
   2048 px (each in a fresh subprocess so that RSS is its own);
 - end to end (``--e2e PRESET``): train + sample a 512 px three-map stack made from the bundled brick
   maps, and write the 2x2 tiling of each output map beside the naive 2x2 tiling of its input.
 
-    .venv/bin/python benchmarks/speed.py                  # steps + sampling, about 5 minutes
+    .venv/bin/python benchmarks/speed.py                  # steps + sampling, about 10 minutes
+
+It refuses to run when the 1-minute load average is above 1.5 (``--allow-load`` records flagged
+figures), and it records the load average beside every figure.
     .venv/bin/python benchmarks/speed.py --e2e draft      # end-to-end run of one preset
 """
 from __future__ import annotations

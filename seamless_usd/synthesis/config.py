@@ -90,10 +90,11 @@ class SynthesisConfig:
 PRESETS: dict[str, SynthesisConfig] = {
     # The paper's numbers (section 5); meant for a GPU.
     "paper": SynthesisConfig(),
-    # CPU presets sized with benchmarks/speed.py (figures in benchmarks/results/speed.md): on a shared 2-core
-    # AVX2 host a training step runs at 4-10 GFLOP/s, so width and crop are cut until the 512 px three-map
-    # stack trains and samples inside the budget (default <= 15 min, draft <= 3 min) with margin.
-    "default": SynthesisConfig(k=64, ngf=16, ndf=16, n_res_blocks=4, style_channels=16, iterations=1200,
+    # CPU presets sized from idle-machine figures (benchmarks/results/speed.md): on one core of the 2-core AVX2
+    # host a default step on a three-map stack runs at 7-8 it/s, so 2400 iterations train in about 5.5 min.
+    # Doubling 1200 -> 2400 iterations took the maps inside both fidelity targets from 6 to 8 of 12 and the
+    # patch-distance median from 1.02 to 0.93 (benchmarks/results/quality.md); draft stays a quick look.
+    "default": SynthesisConfig(k=64, ngf=16, ndf=16, n_res_blocks=4, style_channels=16, iterations=2400,
                                crop_step=32, max_candidates=12, checkpoint_every=200),
     "draft": SynthesisConfig(k=32, ngf=16, ndf=16, n_res_blocks=3, style_channels=16, iterations=350,
                              crop_step=64, max_candidates=4, checkpoint_every=100),
