@@ -22,7 +22,7 @@ from typing import Callable, Iterable, TypeVar
 import torch
 
 from .config import SynthesisConfig
-from .precision import choose_precision, cpu_supports_bf16
+from .precision import bf16_support, choose_precision
 
 __all__ = ["EnginePlan", "plan_engine", "engine_for", "CropWorkers", "compile_cache_dir", "maybe_compile"]
 
@@ -83,9 +83,7 @@ def plan_engine(config: SynthesisConfig, device_type: str, *, threads: int, cuda
 
 def engine_for(config: SynthesisConfig, device: torch.device) -> EnginePlan:
     """``plan_engine`` with what this machine's device really supports."""
-    cuda_bf16 = device.type == "cuda" and torch.cuda.is_bf16_supported()
-    return plan_engine(config, device.type, threads=torch.get_num_threads(), cuda_bf16=cuda_bf16,
-                       cpu_bf16=device.type == "cpu" and cpu_supports_bf16())
+    return plan_engine(config, device.type, threads=torch.get_num_threads(), **bf16_support(device))
 
 
 class CropWorkers:

@@ -6,7 +6,7 @@ import functools
 
 import torch
 
-__all__ = ["pick_device", "cpu_supports_bf16", "choose_precision", "resolve_precision", "autocast"]
+__all__ = ["pick_device", "cpu_supports_bf16", "choose_precision", "bf16_support", "resolve_precision", "autocast"]
 
 
 def pick_device(device: str | torch.device | None = None) -> torch.device:
@@ -43,11 +43,15 @@ def choose_precision(requested: str, device_type: str, *, cuda_bf16: bool = Fals
     return "fp32"
 
 
+def bf16_support(device: torch.device) -> dict[str, bool]:
+    """What ``device`` can do natively, as the ``cuda_bf16`` / ``cpu_bf16`` flags of ``choose_precision``."""
+    return {"cuda_bf16": device.type == "cuda" and torch.cuda.is_bf16_supported(),
+            "cpu_bf16": device.type == "cpu" and cpu_supports_bf16()}
+
+
 def resolve_precision(requested: str, device: torch.device) -> str:
     """Map "auto" to a concrete precision for ``device``: "bf16", "fp16" or "fp32"."""
-    return choose_precision(requested, device.type,
-                            cuda_bf16=device.type == "cuda" and torch.cuda.is_bf16_supported(),
-                            cpu_bf16=device.type == "cpu" and cpu_supports_bf16())
+    return choose_precision(requested, device.type, **bf16_support(device))
 
 
 _DTYPES = {"bf16": torch.bfloat16, "fp16": torch.float16}

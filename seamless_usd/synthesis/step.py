@@ -95,7 +95,7 @@ def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, 
         return _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device, precision, scaler, fns)
     crops = batch.crops()
     n = len(crops)
-    run = workers.map if workers is not None else (lambda fn, *xs: list(map(fn, *xs)))
+    run = workers.map if workers is not None else (lambda fn, *xs: list(map(fn, *xs)))  # serial without a pool
     d_params = list(D.parameters())
     g_params = list(G.parameters())
 
