@@ -55,22 +55,22 @@ def img2texture_tile(pixels: np.ndarray, is_normal: bool = False, overlap: float
     return np.ascontiguousarray(out, dtype=np.float32)
 
 
-def preset_config(preset: str, iterations: int | None = None, batch: int | None = None):
-    """The preset, with the benchmark's overrides of its iterations and crops per step."""
+def preset_config(preset: str, iterations: int | None = None, batch: int | None = None, seeds: int | None = None):
+    """The preset, with the benchmark's overrides of its iterations, crops per step and seeds."""
     from seamless_usd.synthesis import get_preset
 
     config = get_preset(preset)
-    overrides = {k: v for k, v in (("iterations", iterations), ("batch", batch)) if v is not None}
+    overrides = {k: v for k, v in (("iterations", iterations), ("batch", batch), ("seeds", seeds)) if v is not None}
     return config.replace(**overrides) if overrides else config
 
 
 def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str], preset: str, seed: int,
-                  log: Callable[[str], None], iterations: int | None = None, batch: int | None = None
-                  ) -> dict[str, MethodResult]:
+                  log: Callable[[str], None], iterations: int | None = None, batch: int | None = None,
+                  seeds: int | None = None) -> dict[str, MethodResult]:
     """The synthesis methods asked for, training SeamlessGAN once for both GAN rows."""
     from seamless_usd import synthesis as syn
 
-    config = preset_config(preset, iterations, batch)
+    config = preset_config(preset, iterations, batch, seeds)
     maps = [syn.MapInput(k, np.ascontiguousarray(px, dtype=np.float32), n) for k, (px, n) in stack.items()]
     out: dict[str, MethodResult] = {}
     if "refine-random" in methods:
@@ -96,6 +96,8 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
         "train_seconds": round(made.timings.get("train", 0.0), 2),
         "sample_seconds": round(made.timings.get("sample", 0.0), 2),
     }
+    if made.seeds:
+        info["seeds"] = made.seeds
     gan_seconds = total - made.timings.get("refine", 0.0)
     if "seamlessgan" in methods:
         working = {w.name: w.pixels for w in syn.downsample_maps(maps, made.working_size)}

@@ -8,22 +8,12 @@ ratios, SSIM and Gram distance to the source), and writes:
 
 - ``<out>/quality.json``: every figure, with the run's settings;
 - ``<out>/quality.md``: the same as Markdown tables, with the issue's targets checked;
-- ``<out>/tiles/<stack>__<map>__<method>.png``: the 2x2 tiling of the method's tile (left) beside
+- ``<out>/tiles/<stack>__<map>__<method>.jpg``: the 2x2 tiling of the method's tile (left) beside
   the naive 2x2 tiling of the input (right), for every method but ``naive``.
 
-Stacks
-------
-``brick``, ``wood``, ``cloth``
-    The bundled sample maps (``sample_assets/textures``), already off-grid windows of periodic
-    textures, so not tileable.
-``mx_brick``, ``mx_wood``, ``mx_cloth``
-    Other off-grid windows cut from the MaterialX images in ``../shared/textures`` (relative to
-    the repository root; ``--textures-dir`` overrides it), the same window from every map of a
-    stack, downscaled like the samples. Left out with a note when the folder is absent, unless
-    asked for by name.
-
-Maps enter the network domain as ``2 v - 1`` of their file values ``v`` in ``[0, 1]`` (colour stays
-display-encoded; normal maps become vectors), which is the domain the metrics read.
+Stacks: the bundled samples (``brick``, ``wood``, ``cloth``) and windows of the MaterialX images in
+``../shared/textures`` (``mx_*``; ``--textures-dir`` overrides the folder), defined in
+``benchmarks/stacks.py``. The tables are written by ``benchmarks/quality_md.py``.
 
 Run from anywhere, e.g.::
 
@@ -37,7 +27,6 @@ import json
 import platform
 import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -51,6 +40,8 @@ if str(HERE) not in sys.path:  # the baselines sit beside this script
 
 from methods import SYNTHESIS_METHODS, MethodResult, img2texture_tile, preset_config, run_synthesis, to_source_grid
 from baselines import BASELINES  # noqa: E402
+from quality_md import TARGETS, fmt, to_markdown  # noqa: E402,F401 (re-exported)
+from stacks import SHARED_DIR, STACKS, MapFile, StackSpec, load_stack  # noqa: E402,F401 (re-exported)
 
 from seamless_usd import metrics as M  # noqa: E402
 
@@ -65,158 +56,12 @@ __all__ = [
     "main",
 ]
 
-SAMPLES_DIR = ROOT / "sample_assets" / "textures"
-SHARED_DIR = ROOT.parent / "shared" / "textures"  # ../shared/textures from the repository root
 DEFAULT_OUT = HERE / "results"
-SEAMLESSGAN = "seamlessgan"
 #: Methods by name, in the order the tables list them.
 METHODS: tuple[str, ...] = (*SYNTHESIS_METHODS, "img2texture", *BASELINES)
 
-#: The targets every map is held to: (figure, comparison, threshold). Fidelity against the source
-#: (feature scale, patch distance) and seams across the border and the centre lines, from
-#: ``seamless_usd.metrics.TARGETS``; the product passes a stack on the fidelity ones.
-TARGETS: tuple[tuple[str, str, float], ...] = tuple(
-    (key, op, bound)
-    for key, (low, high) in M.TARGETS.items()
-    for op, bound in ((">=", low), ("<=", high))
-    if bound is not None
-)
-
-
-def _figure(row: dict, key: str):
-    if key == "detail_ratio_min":
-        pair = (row.get("detail_ratio"), row.get("detail_ratio_centre"))
-        return None if None in pair else min(pair)
-    return row.get(key)
-
-
 def _log(line: str) -> None:
     print(line, flush=True)  # flushed: long runs are often watched through a redirected file
-
-
-@dataclass(frozen=True)
-class MapFile:
-    """One map of a stack: a name, the file, its channels and whether it holds normals."""
-
-    name: str
-    file: str
-    channels: int  # channels kept (the first ones): 1 for grey/roughness maps stored as RGB
-    is_normal: bool = False
-
-
-@dataclass(frozen=True)
-class StackSpec:
-    """A stack of maps read from ``folder`` (``samples`` or ``shared``), optionally windowed.
-
-    ``window`` is ``(x, y, size, out_size)``: a ``size`` px square at ``(x, y)`` resized to
-    ``out_size`` px, cut the same from every map.
-    """
-
-    folder: str
-    maps: tuple[MapFile, ...]
-    window: tuple[int, int, int, int] | None = None
-    note: str = ""
-
-
-#: Stacks by name.
-STACKS: dict[str, StackSpec] = {
-    "brick": StackSpec(
-        "samples",
-        (
-            MapFile("albedo", "brick_albedo.png", 3),
-            MapFile("normal", "brick_normal.png", 3, True),
-            MapFile("roughness", "brick_roughness.png", 1),
-        ),
-        note="sample: 700 px window at (137, 291) of the MaterialX brick, 256 px",
-    ),
-    "wood": StackSpec(
-        "samples",
-        (MapFile("color", "wood_color.png", 3), MapFile("roughness", "wood_roughness.png", 1)),
-        note="sample: 900 px window at (413, 97) of the MaterialX wood, 256 px",
-    ),
-    "cloth": StackSpec(
-        "samples",
-        (MapFile("color", "cloth.png", 3),),
-        note="sample: 400 px window at (61, 133) of the MaterialX cloth, 200 px",
-    ),
-    "mx_brick": StackSpec(
-        "shared",
-        (
-            MapFile("base_gray", "brick_base_gray.jpg", 1),
-            MapFile("normal", "brick_normal.jpg", 3, True),
-            MapFile("roughness", "brick_roughness.jpg", 1),
-        ),
-        window=(1013, 389, 700, 256),
-        note="700 px window at (1013, 389) of the 2048 px MaterialX brick maps, 256 px",
-    ),
-    "mx_wood": StackSpec(
-        "shared",
-        (MapFile("color", "wood_color.jpg", 3), MapFile("roughness", "wood_roughness.jpg", 1)),
-        window=(1091, 733, 900, 256),
-        note="900 px window at (1091, 733) of the 2048 px MaterialX wood maps, 256 px",
-    ),
-    "mx_cloth": StackSpec(
-        "shared",
-        (MapFile("color", "cloth.jpg", 3),),
-        window=(197, 163, 400, 200),
-        note="400 px window at (197, 163) of the 640 px MaterialX cloth photo, 200 px",
-    ),
-}
-
-
-# --------------------------------------------------------------------------------------------
-# Inputs
-# --------------------------------------------------------------------------------------------
-
-
-def _read(path: Path, window: tuple[int, int, int, int] | None, max_size: int | None) -> np.ndarray:
-    """File values as float32 ``(H, W, C)`` in [0, 1], windowed and resized with OpenImageIO."""
-    buf = oiio.ImageBuf(str(path))
-    if buf.has_error:
-        raise RuntimeError(f"cannot read @{path}@: {buf.geterror()}")
-    nch = buf.nchannels
-    if window is not None:
-        x, y, size, out_size = window
-        spec = buf.spec()
-        if x + size > spec.width or y + size > spec.height:
-            raise RuntimeError(f"window {window} does not fit @{path}@ ({spec.width}x{spec.height})")
-        buf = oiio.ImageBufAlgo.cut(buf, oiio.ROI(x, x + size, y, y + size, 0, 1, 0, nch))
-        buf = oiio.ImageBufAlgo.resize(buf, roi=oiio.ROI(0, out_size, 0, out_size, 0, 1, 0, nch))
-    if max_size is not None:
-        spec = buf.spec()
-        scale = max_size / max(spec.width, spec.height)
-        if scale < 1:
-            w, h = max(8, round(spec.width * scale)), max(8, round(spec.height * scale))
-            buf = oiio.ImageBufAlgo.resize(buf, roi=oiio.ROI(0, w, 0, h, 0, 1, 0, nch))
-    return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32)
-
-
-def load_stack(
-    name: str, textures_dir: Path = SHARED_DIR, max_size: int | None = None
-) -> dict[str, tuple[np.ndarray, bool]]:
-    """The maps of stack ``name`` in the network domain: ``{map: (pixels (H, W, C), is_normal)}``.
-
-    Parameters
-    ----------
-    name : str
-        A key of :data:`STACKS`.
-    textures_dir : pathlib.Path
-        Folder of the MaterialX images for the ``mx_*`` stacks.
-    max_size : int, optional
-        Downscale so that the longest side is at most this (quick runs).
-    """
-    spec = STACKS[name]
-    folder = SAMPLES_DIR if spec.folder == "samples" else textures_dir
-    if not folder.is_dir():
-        raise FileNotFoundError(
-            f"stack {name!r} needs the MaterialX images in @{folder}@ (see its README); "
-            f"pass --textures-dir, or leave {name!r} out of --stacks"
-        )
-    out = {}
-    for m in spec.maps:
-        v = _read(folder / m.file, spec.window, max_size)[..., : m.channels]
-        out[m.name] = (v * 2.0 - 1.0, m.is_normal)
-    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -330,6 +175,7 @@ def run(
     seed: int = 0,
     iterations: int | None = None,
     batch: int | None = None,
+    seeds: int | None = None,
     out: Path = DEFAULT_OUT,
     textures_dir: Path = SHARED_DIR,
     max_size: int | None = None,
@@ -337,8 +183,12 @@ def run(
     pictures: bool = True,
     log: Callable[[str], None] = _log,
     command: str | None = None,
+    update: bool = False,
 ) -> dict:
     """Run the benchmark and write ``quality.json``, ``quality.md`` and the pictures.
+
+    ``update`` keeps the rows of the other methods from the ``quality.json`` already in ``out``, so
+    one method can be re-run (a preset changed) while the rest of the table stands.
 
     Returns
     -------
@@ -369,15 +219,32 @@ def run(
         "complete": False,
     }
     if set(methods) & set(SYNTHESIS_METHODS):  # presets are tuned over time: keep what this run used
-        config = preset_config(preset, iterations, batch)
+        config = preset_config(preset, iterations, batch, seeds)
         result["settings"]["preset_config"] = json.loads(config.to_json())
+    kept: list[dict] = []
+    if update and (out / "quality.json").exists():
+        previous = json.loads((out / "quality.json").read_text())
+        kept = [r for r in previous["results"] if r["method"] not in methods]
+        others = {r["method"] for r in kept}
+        result["settings"]["methods"] = [m for m in METHODS if m in others or m in methods]
+        result["settings"]["command"] = (f"{command} (rows of {', '.join(methods)}; the other rows from "
+                                         f"{previous['settings'].get('command')})")
+        for key in ("preset", "preset_config"):
+            result["settings"].setdefault(key, previous["settings"].get(key))
+        result["settings"]["stacks"] = dict(previous["settings"].get("stacks", {}))
+    order = {m: i for i, m in enumerate(METHODS)}
+    stack_order = {n: i for i, n in enumerate(STACKS)}
+
+    def merged() -> None:  # the kept rows and this run's, in stack then method order
+        result["results"] = sorted(kept + rows, key=lambda r: (stack_order.get(r["stack"], 99), order[r["method"]]))
     for stack_name in stacks:
         stack = load_stack(stack_name, textures_dir, max_size)
         result["settings"]["stacks"][stack_name] = STACKS[stack_name].note
         synthesis = [m for m in methods if m in SYNTHESIS_METHODS]
         if synthesis:
             log(f"{stack_name}: {', '.join(synthesis)} ...")
-            made = run_synthesis(stack, synthesis, preset, seed, log, iterations=iterations, batch=batch)
+            made = run_synthesis(stack, synthesis, preset, seed, log, iterations=iterations, batch=batch,
+                                 seeds=seeds)
         for method in methods:
             log(f"{stack_name}: {method} ...")
             if method in SYNTHESIS_METHODS:
@@ -409,13 +276,15 @@ def run(
                     write_picture(out / "tiles" / name, side_by_side(shown, src_full, is_normal))
                     row["picture"] = f"tiles/{name}"
                 log(
-                    f"  {map_name:<10} scale {_fmt(m['scale_ratio'])}  patch {_fmt(m['patch_distance'])}  "
+                    f"  {map_name:<10} scale {fmt(m['scale_ratio'])}  patch {fmt(m['patch_distance'])}  "
                     f"seam x {m['seam_ratio_x']:.2f} y {m['seam_ratio_y']:.2f}  "
                     f"centre x {m['centre_seam_x']:.2f} y {m['centre_seam_y']:.2f}  "
                     f"p+s {m['ps_score']:.3f}  detail {m['detail_ratio']:.2f}  ssim {m['ssim']:.3f}"
                 )
+        merged()
         _write(out, result)  # after every stack, so a long run leaves its figures as it goes
     result["complete"] = True
+    merged()
     _write(out, result)
     log(f"wrote @{out / 'quality.md'}@ and @{out / 'quality.json'}@")
     return result
@@ -425,109 +294,6 @@ def _write(out: Path, result: dict) -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / "quality.json").write_text(json.dumps(result, indent=1) + "\n")
     (out / "quality.md").write_text(to_markdown(result))
-
-
-def _meets(v, op: str, threshold: float) -> bool:
-    return v is not None and (v <= threshold if op == "<=" else v >= threshold)
-
-
-def _fmt(v, digits=2) -> str:
-    if v is None:
-        return "–"
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    return f"{v:.{digits}f}" if isinstance(v, float) else str(v)
-
-
-def to_markdown(result: dict) -> str:
-    """The benchmark's figures as Markdown: one table per stack and a target summary per method."""
-    s = result["settings"]
-    lines = ["# Quality benchmark", ""]
-    if not result.get("complete", True):
-        lines += ["**Partial: the run is still going or was stopped; only the stacks below are done.**", ""]
-    if s.get("command"):
-        lines += [f"Command: `{s['command']}`", ""]
-    lines += [
-        f"Methods: {', '.join(s['methods'])}"
-        + (f"; SeamlessGAN preset `{s['preset']}`" if s.get("preset") else "")
-        + (
-            " (k={k}, ngf={ngf}, res blocks={n_res_blocks}, {iterations} iterations, tiling {tiling})".format(
-                **s["preset_config"]
-            )
-            if s.get("preset_config")
-            else ""
-        )
-        + f"; seed {s['seed']}" + (f"; inputs downscaled to <= {s['max_size']} px" if s.get("max_size") else ""),
-        "",
-        "Columns: seam ratio per axis (first / second differences; about 1 when seamless), "
-        "periodic-plus-smooth score (0 when periodic), detail ratio in the border seam bands and in "
-        f"the centre bands (band half-width {s['band_fraction']:.0%} of the size, high-pass sigma "
-        f"{s['highpass_sigma']} px; < 1 when blurred), SSIM of the tile repeated to the source's size, "
-        "the relative Gram distance (0 = same statistics), and the feature-scale ratio and patch distance "
-        "against the source. See `seamless_usd/metrics/`.",
-        "",
-    ]
-    lines += [
-        "Reading the figures: a seam ratio compares one row (or column) pair with the mean of all, so "
-        "for coarse or strongly periodic patterns (bricks, weave) it ranges about 0.6-1.6 on seamless "
-        "tiles (see the crossfade rows); the periodic-plus-smooth score of a seamless but fine-grained "
-        "(noise-like) tile is not 0 but about 0.03-0.15, because Moisan's boundary term also counts "
-        "ordinary neighbour differences. Compare methods on the same map.",
-        "",
-    ]
-    for note in result.get("notes", []):
-        lines += [f"- {note}"]
-    lines += [""]
-    header = (
-        "| map | method | tile | seam x | seam y | seam² x | seam² y | ctr seam x | ctr seam y | p+s | detail "
-        "| detail ctr | SSIM | Gram | scale | patch | s |"
-    )
-    sep = "|---|---|---|" + "---:|" * (len(M.METRIC_KEYS) + 1)
-    rows = result["results"]
-    for stack in s["stacks"]:
-        lines += [f"## {stack}", "", s["stacks"][stack], "", header, sep]
-        for r in (r for r in rows if r["stack"] == stack):
-            tile = "x".join(str(n) for n in r["tile_size"])
-            extra = ""
-            if r["method"].startswith(SEAMLESSGAN) and r.get("passed") is not None:
-                extra = "" if r["passed"] else " (Q failed)"
-            if r.get("layout_used") is False:
-                extra += " (GAN layout rejected: random start)"
-            lines.append(
-                f"| {r['map']}{' (normal)' if r['is_normal'] else ''} | {r['method']}{extra} | {tile} | "
-                + " | ".join(
-                    _fmt(r.get(k), 3 if k in ("ps_score", "ssim", "gram_distance") else 2)
-                    for k in M.METRIC_KEYS
-                )
-                + f" | {_fmt(r['seconds'], 1)} |"
-            )
-        lines += [""]
-    lines += ["## Medians per method", "", "| method | maps | " + " | ".join(M.METRIC_KEYS) + " |"]
-    lines += ["|---|---:|" + "---:|" * len(M.METRIC_KEYS)]
-    for method in s["methods"]:
-        mine = [r for r in rows if r["method"] == method]
-        cells = []
-        for k in M.METRIC_KEYS:
-            vals = [r[k] for r in mine if r.get(k) is not None]
-            cells.append(_fmt(float(np.median(vals)), 3) if vals else "–")
-        lines.append(f"| {method} | {len(mine)} | " + " | ".join(cells) + " |")
-    lines += [""]
-    lines += [
-        "## Targets",
-        "",
-        "Maps meeting each target (`seamless_usd.metrics.TARGETS`: feature scale and patch distance "
-        "against the source, seams across the border and the centre lines):",
-        "",
-    ]
-    lines += ["| method | " + " | ".join(f"{k} {op} {v}" for k, op, v in TARGETS) + " | all |"]
-    lines += ["|---|" + "---:|" * (len(TARGETS) + 1)]
-    for method in s["methods"]:
-        mine = [r for r in rows if r["method"] == method]
-        cells = [f"{sum(_meets(_figure(r, k), op, v) for r in mine)}/{len(mine)}" for k, op, v in TARGETS]
-        every = sum(all(_meets(_figure(r, k), op, v) for k, op, v in TARGETS) for r in mine)
-        lines.append(f"| {method} | " + " | ".join(cells) + f" | {every}/{len(mine)} |")
-    lines += [""]
-    return "\n".join(lines)
 
 
 def _names(text: str, valid: Sequence[str], what: str) -> list[str]:
@@ -548,6 +314,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--iterations", type=int, default=None,
                    help="override the preset's training iterations (quality-vs-time curves)")
     p.add_argument("--batch", type=int, default=None, help="override the preset's crops per training step")
+    p.add_argument("--seeds", type=int, default=None, help="override the preset's seeds trained side by side")
+    p.add_argument("--update", action="store_true",
+                   help="keep the other methods' rows of the quality.json already in --out (re-run some methods only)")
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: benchmarks/results)")
     p.add_argument("--textures-dir", type=Path, default=SHARED_DIR, help="MaterialX images for the mx_* stacks (default: ../shared/textures from the repository root)")
     p.add_argument("--max-size", type=int, default=None, help="downscale inputs to at most this many px (quick runs)")
@@ -589,12 +358,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             seed=a.seed,
             iterations=a.iterations,
             batch=a.batch,
+            seeds=a.seeds,
             out=a.out,
             textures_dir=a.textures_dir,
             max_size=a.max_size,
             gram=not a.no_gram,
             pictures=not a.no_pictures,
             command=" ".join(["benchmarks/quality.py", *(sys.argv[1:] if argv is None else argv)]),
+            update=a.update,
         )
     except (FileNotFoundError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -45,7 +45,8 @@ if str(HERE) not in sys.path:  # steps.py sits beside this script
 from seamless_usd.synthesis import MapInput, get_preset, sample, train  # noqa: E402
 from seamless_usd.synthesis.precision import cpu_supports_bf16, resolve_precision  # noqa: E402
 from seamless_usd.synthesis.train import TrainedModel, build_networks  # noqa: E402
-from steps import CHANNELS, bench_compile, bench_steps, bench_wait_policy, load_average, profile_step  # noqa: E402
+from steps import (CHANNELS, bench_compile, bench_seeds, bench_steps, bench_wait_policy, load_average,  # noqa: E402
+                   profile_step)
 
 MAX_LOAD = 1.5  # 1-minute load average above which figures are refused (or, with --allow-load, flagged)
 
@@ -205,6 +206,18 @@ def write_markdown(record: dict, path: Path) -> None:
             lines.append(f"| {name} | {', '.join(f'{r:.2f}' for r in v)} | {wp['median'][name]:.2f} | "
                          f"{', '.join(f'{x:.2f}' for x in wp['load'][name])} |")
         lines.append("")
+    sd = record.get("seeds")
+    if sd:
+        lines += [f"## Two seeds side by side ({sd['preset']} preset, one thread each, {sd['steps']} steps a round)",
+                  "", "| run | it/s per round | median | load |", "|---|---|---:|---|",
+                  f"| one run alone (1 thread) | {', '.join(f'{r:.2f}' for r in sd['one_run_it_per_s'])} | "
+                  f"{sd['one_run_median']:.2f} | {', '.join(f'{x:.2f}' for x in sd['load'])} |"]
+        for i in range(2):
+            lines.append(f"| seed {i + 1} of 2 side by side | {', '.join(f'{p[i]:.2f}' for p in sd['pair_it_per_s'])} | "
+                         f"{sd['pair_median_per_run'][i]:.2f} | |")
+        lines += ["", f"Both cores give {sd['pair_median_sum']:.2f} it/s in all "
+                  f"({sd['pair_median_sum'] / sd['one_run_median']:.2f}x one run); each seed trains at "
+                  f"{min(sd['pair_median_per_run']) / sd['one_run_median']:.0%} of a lone run's speed.", ""]
     cp = record.get("compile")
     if cp:
         lines += [f"## torch.compile ({cp['preset']} preset, {cp['threads']} thread, fresh processes)", "",
@@ -306,6 +319,8 @@ def main(argv=None) -> int:
     else:
         if not a.skip_steps:
             record["steps"] = bench_steps(a.rounds, a.seconds)
+        if not a.skip_steps:
+            record["seeds"] = bench_seeds(a.rounds)
         if not a.skip_policy:
             record["wait_policy"] = bench_wait_policy(a.rounds)
         if not a.skip_steps:

@@ -61,17 +61,22 @@ class StepRunner:
         g = torch.Generator().manual_seed(0)
         target = torch.rand(cfg.batch, sum(CHANNELS), 2 * k, 2 * k, generator=g) * 2 - 1  # (N, C, 2k, 2k)
         self.batch = Batch(target[:, :, k // 2: k // 2 + k, k // 2: k // 2 + k], target)
+        self.steps = 0  # steps run, for the D period (cfg.d_every)
 
     def step(self, workers: CropWorkers | None) -> None:
+        update_d = self.steps % self.cfg.d_every == 0
+        self.steps += 1
         training_step(self.G, self.D, self.opt_g, self.opt_d, self.ext, self.batch, CHANNELS, self.cfg, self.dev,
-                      self.plan.precision, None, workers, self.plan.stacked, self.fns)
+                      self.plan.precision, None, workers, self.plan.stacked, self.fns, update_d)
 
     def flops(self) -> int:
-        """FLOPs of one step, counted on this thread (the counter does not see worker threads)."""
+        """FLOPs of one step (the mean over a D period), counted on this thread (not on worker threads)."""
         from torch.utils.flop_counter import FlopCounterMode
+        self.steps = 0
         with FlopCounterMode(display=False) as fc:
-            self.step(None)
-        return fc.get_total_flops()
+            for _ in range(self.cfg.d_every):
+                self.step(None)
+        return fc.get_total_flops() // self.cfg.d_every
 
     def rate(self, steps: int) -> float:
         with CropWorkers(self.plan) as workers:
@@ -91,6 +96,9 @@ def step_variants() -> dict[str, tuple[SynthesisConfig, int]]:
         "default net, batch 2, 2 crop workers": (default.replace(batch=2), 2),
         "default net, batch 2, 1 thread": (default.replace(batch=2), 1),
         "default, no style loss (auto)": (default.replace(lambda_style=0.0), 2),
+        "default, D every 2nd step (auto)": (default.replace(d_every=2), 2),
+        "default, D every 3rd step (auto)": (default.replace(d_every=3), 2),
+        "default, resize-conv upsampling (auto)": (default.replace(upsample="resize"), 2),
         "draft (auto: 1 thread)": (draft, 2),
         "draft, 2 intra-op threads": (draft.replace(workers=1), 2),
         "paper (2 intra-op threads)": (get_preset("paper"), 2),
@@ -132,6 +140,31 @@ def bench_steps(rounds: int, seconds_per_variant: float) -> dict:
             "fraction_of_fp32_peak": gflops / peak32, "fraction_of_bf16_peak": gflops / peak16,
             "iterations": cfg.iterations, "train_minutes_at_median": cfg.iterations / r / 60}
     return out
+
+
+def bench_seeds(rounds: int, steps: int = 40, preset: str = "default") -> dict:
+    """Two seeds trained side by side (``config.seeds = 2``): two one-thread runs at once, against one alone.
+
+    it/s per run; the pair's sum is the iterations the two cores deliver for a stack.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    cfg = get_preset(preset)
+    alone, pair, loads = [], [], []
+    for _ in range(rounds):
+        torch.set_num_threads(1)
+        loads.append(load_average())
+        alone.append(StepRunner(cfg, 1).rate(steps))
+        runners = [StepRunner(cfg, 1), StepRunner(cfg, 1)]
+        with ThreadPoolExecutor(2, initializer=torch.set_num_threads, initargs=(1,)) as pool:
+            pair.append(list(pool.map(lambda r: r.rate(steps), runners)))
+        print(f"  seeds: one run {alone[-1]:.2f} it/s; two side by side {pair[-1][0]:.2f} + {pair[-1][1]:.2f} it/s "
+              f"(load {loads[-1]:.2f})", flush=True)
+    torch.set_num_threads(2)
+    per_run = [float(np.median([p[i] for p in pair])) for i in range(2)]
+    return {"preset": preset, "steps": steps, "load": loads, "one_run_it_per_s": alone,
+            "one_run_median": float(np.median(alone)), "pair_it_per_s": pair, "pair_median_per_run": per_run,
+            "pair_median_sum": sum(per_run)}
 
 
 def profile_step(name: str = "default (batch 1, auto: 1 thread)", steps: int = 20, top: int = 10) -> dict:

@@ -40,7 +40,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--device", help="cpu, cuda, cuda:N (default: CUDA when present)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-size", type=int, help="working-resolution cap in pixels (longest side); default native")
-    p.add_argument("--iterations", type=int, help="override the preset's training iterations")
+    p.add_argument("--iterations", type=_positive, help="override the preset's training iterations")
+    p.add_argument("--seeds", type=_positive,
+                   help="override the preset's seeds trained side by side on the CPU's cores; the tile whose "
+                        "fidelity figures are best is kept (1 halves the work where the cores are busy already)")
     p.add_argument("--max-pixels", type=int, default=1 << 28,
                    help="refuse images whose header claims more pixels, before decoding (default: %(default)s)")
     p.add_argument("--cache-dir", type=Path, help="trained models and checkpoints (default: user cache dir)")
@@ -61,6 +64,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print the JSON report on stdout")
 
 
+def _positive(text: str) -> int:
+    """An argparse type: an integer of at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
 def _options(args: argparse.Namespace, progress) -> Options:
     writing = WriteMode.IN_PLACE if args.in_place else WriteMode.NEW_LAYER
     return Options(
@@ -77,6 +91,7 @@ def _options(args: argparse.Namespace, progress) -> Options:
         max_size=args.max_size,
         max_pixels=args.max_pixels,
         iterations=args.iterations,
+        seeds=args.seeds,
         jobs=args.jobs,
         scheduler=args.scheduler,
         refine=args.refine,

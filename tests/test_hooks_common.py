@@ -148,10 +148,11 @@ def test_options_for_stage_maps_every_setting(tmp_path):
     Options, WriteMode = _real_options()
     stage = _stage_on_disk(tmp_path)
     s = HookSettings(preset="draft", materials=("/M/*",), output_dir="maps", device="cpu", seed=5, dry_run=True,
-                     report="report.html", cache_dir=str(tmp_path / "cache"), max_size=64, iterations=10)
+                     report="report.html", cache_dir=str(tmp_path / "cache"), max_size=64, iterations=10, seeds=2)
     o = common.options_for_stage(s, stage)
     assert isinstance(o, Options)
-    assert (o.preset, o.materials, o.device, o.seed, o.max_size, o.iterations) == ("draft", ("/M/*",), "cpu", 5, 64, 10)
+    assert (o.preset, o.materials, o.device, o.seed, o.max_size, o.iterations, o.seeds) == (
+        "draft", ("/M/*",), "cpu", 5, 64, 10, 2)
     assert o.output_dir == tmp_path.resolve() / "maps"
     assert o.report == tmp_path.resolve() / "report.html"
     assert o.cache_dir == tmp_path / "cache"
@@ -162,8 +163,8 @@ def test_options_for_stage_leaves_defaults_alone(tmp_path):
     Options, _ = _real_options()
     o = common.options_for_stage(HookSettings(), _stage_on_disk(tmp_path))
     d = Options()
-    assert (o.output_dir, o.device, o.report, o.cache_dir, o.max_size, o.iterations, o.mode) == (
-        d.output_dir, d.device, d.report, d.cache_dir, d.max_size, d.iterations, d.mode
+    assert (o.output_dir, o.device, o.report, o.cache_dir, o.max_size, o.iterations, o.seeds, o.mode) == (
+        d.output_dir, d.device, d.report, d.cache_dir, d.max_size, d.iterations, d.seeds, d.mode
     )
 
 

@@ -21,6 +21,8 @@ from seamless_usd.fileio import confine
 from seamless_usd.pipeline.naming import tile_filename
 from seamless_usd.synthesis.checkpoint import CHECKPOINT_NAME, load_checkpoint
 
+from seamless_usd_cli.main import main
+
 from test_reliability_inputs import image_size, run_cli, texture, write_image, write_scene
 
 
@@ -70,6 +72,41 @@ def test_planted_pickle_checkpoint_is_refused_and_the_stack_retrained(tmp_path, 
         tensors, meta = load_checkpoint(checkpoint)  # replaced by a real checkpoint of this stack
         assert meta["step"] > 0 and tensors
         (entry / "manifest.json").unlink()
+
+
+def test_every_seeds_checkpoint_is_checked_and_a_planted_one_removed(tmp_path, capsys):
+    marker = tmp_path / "marker.txt"
+    scene, cache = _scene(tmp_path), tmp_path / "cache"
+    code, report, _ = run_cli(capsys, str(scene), "--cache-dir", str(cache), "--seeds", "2")
+    assert code in (0, 1), report
+    [stack] = report["stacks"]
+    seeds = stack["resampled"]["gan"]["seeds"]
+    assert [s["seed"] for s in seeds] == [0, 1] and sum(s["chosen"] for s in seeds) == 1
+    entry = _entry(cache)
+    second = entry / "checkpoints" / "seed-1" / CHECKPOINT_NAME
+    assert load_checkpoint(second)[1]["step"] > 0
+    for name in ("manifest.json", "tiles.safetensors"):
+        (entry / name).unlink()
+    second.write_bytes(pickle.dumps({"G.weight": _Payload(marker)}))
+    code, report, _ = run_cli(capsys, str(scene), "--cache-dir", str(cache), "--seeds", "2")
+    assert code in (0, 1), report
+    assert report["stacks"][0]["origin"] == "trained"
+    assert not marker.exists(), "the planted checkpoint was unpickled"
+    assert load_checkpoint(second)[1]["step"] > 0  # the second seed trained again from scratch
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "two"])
+def test_seeds_and_iterations_must_be_positive_whole_numbers(tmp_path, capsys, value):
+    scene = _scene(tmp_path)
+    for option in ("--seeds", "--iterations"):
+        try:
+            code = main(["process", str(scene), option, value])
+        except SystemExit as exit_:  # argparse's usage error
+            code = exit_.code
+        assert code == 2
+        err = capsys.readouterr().err
+        assert option in err and "Traceback" not in err
+    assert not (scene.parent / "tileable").exists()  # refused before anything was written
 
 
 def test_corrupt_cached_tile_is_not_used(tmp_path, capsys):

@@ -32,6 +32,26 @@ def test_generator_doubles_size_with_one_decoder_per_map():
     assert G.encode(torch.zeros(1, 7, 16, 24)).shape == (1, 16, 8, 12)  # x0 at half resolution, 2*ngf channels
 
 
+@pytest.mark.parametrize("upsample", ["transposed", "resize"])
+def test_both_upsampling_kinds_double_the_size(upsample):
+    G = Generator(7, [3, 1], ngf=8, n_res_blocks=1, upsample=upsample)
+    assert [tuple(o.shape) for o in G(torch.zeros(1, 7, 16, 24))] == [(1, 3, 32, 48), (1, 1, 32, 48)]
+
+
+def test_resize_convolution_has_no_checkerboard_on_a_flat_input():
+    """A flat latent through a x2 step: the transposed convolution's uneven overlap gives the four
+    pixel phases different values (the checkerboard); nearest x2 + 3x3 conv gives one flat value."""
+    torch.manual_seed(0)
+    flat = torch.ones(1, 8, 12, 12)
+    for upsample, checkered in (("transposed", True), ("resize", False)):
+        dec = Generator(3, [3], ngf=4, n_res_blocks=1, upsample=upsample).decoders[0]
+        with torch.no_grad():
+            y = dec.up1[0](flat)[0, :, 4:-4, 4:-4]  # (C, 2H, 2W) away from the borders
+        phases = torch.stack([y[:, i::2, j::2].mean() for i in (0, 1) for j in (0, 1)])
+        spread = float(phases.max() - phases.min()) / (float(y.abs().mean()) + 1e-12)
+        assert (spread > 0.1) == checkered, (upsample, spread)
+
+
 def test_discriminator_is_a_patch_map_of_probabilities():
     D = Discriminator(7, ndf=8)
     d = D(torch.randn(1, 7, 64, 64))

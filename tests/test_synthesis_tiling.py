@@ -1,4 +1,4 @@
-"""Latent tiling: the kept centre is one period; chunked decoding equals unchunked."""
+"""Latent tiling: the kept centre is one period; chunked decoding equals unchunked (both upsampling kinds)."""
 import numpy as np
 import pytest
 import torch
@@ -26,13 +26,17 @@ def _seam_ratio(img: torch.Tensor) -> tuple[float, float]:
     return wrap_x / interior_x, wrap_y / interior_y
 
 
-def _model(seed=0):
-    G, _ = build_networks(get_preset("tiny").replace(ngf=8, n_res_blocks=2), [3, 1], seed=seed)
+def _model(seed=0, upsample="transposed"):
+    G, _ = build_networks(get_preset("tiny").replace(ngf=8, n_res_blocks=2, upsample=upsample), [3, 1], seed=seed)
     return G.eval()
 
 
-def test_circular_tile_is_exactly_periodic():
-    G = _model()
+UPSAMPLE = pytest.mark.parametrize("upsample", ["transposed", "resize"])
+
+
+@UPSAMPLE
+def test_circular_tile_is_exactly_periodic(upsample):
+    G = _model(upsample=upsample)
     src = torch.rand(1, 4, 32, 48, generator=torch.Generator().manual_seed(1)) * 2 - 1
     with torch.no_grad():
         outs = tile_generate(G, src, "circular")
@@ -50,8 +54,9 @@ def test_circular_tile_is_exactly_periodic():
         assert rx < 1.5 and ry < 1.5, f"wrap-around step {rx:.2f}x / {ry:.2f}x the interior step"
 
 
-def test_repeat_tile_centre_wraps_around_like_its_interior():
-    G = _model()
+@UPSAMPLE
+def test_repeat_tile_centre_wraps_around_like_its_interior(upsample):
+    G = _model(upsample=upsample)
     src = torch.rand(1, 4, 64, 64, generator=torch.Generator().manual_seed(2)) * 2 - 1
     with torch.no_grad():
         outs = tile_generate(G, src, "repeat")
@@ -66,8 +71,9 @@ def test_repeat_tile_centre_wraps_around_like_its_interior():
     assert np.corrcoef(circ[0].flatten().numpy(), outs[0].flatten().numpy())[0, 1] > 0.95
 
 
-def test_chunked_decoding_matches_unchunked():
-    G = _model(3)
+@UPSAMPLE
+def test_chunked_decoding_matches_unchunked(upsample):
+    G = _model(3, upsample)
     src = torch.rand(1, 4, 40, 56, generator=torch.Generator().manual_seed(3)) * 2 - 1
     with torch.no_grad():
         full = tile_generate(G, src, "circular", chunk_pixels=None)

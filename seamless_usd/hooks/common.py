@@ -139,6 +139,8 @@ def options_for_stage(
         changes["max_size"] = settings.max_size
     if settings.iterations > 0:
         changes["iterations"] = settings.iterations
+    if settings.seeds > 0:
+        changes["seeds"] = settings.seeds
     if settings.dry_run:
         changes["mode"] = seamless_usd.WriteMode.DRY_RUN
     return seamless_usd.Options(**changes)

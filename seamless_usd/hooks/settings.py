@@ -43,6 +43,7 @@ class HookSettings:
     cache_dir: str = ""  # "" = the user's cache folder
     max_size: int = 0  # working-resolution cap in px (longest side); 0 = native size
     iterations: int = 0  # training iterations; 0 = the preset's
+    seeds: int = 0  # seeds trained side by side, the best tile kept; 0 = the preset's
     strict: bool = False  # fail the DCC's export when a stack fails or the run raises
 
     def with_(self, **changes: Any) -> "HookSettings":
@@ -119,6 +120,7 @@ _PARSERS: dict[str, Callable[[object], Any]] = {
     "cache_dir": _parse_str,
     "max_size": _parse_int,
     "iterations": _parse_int,
+    "seeds": _parse_int,
     "strict": parse_bool,
 }
 assert set(_PARSERS) == set(SETTING_NAMES), "every HookSettings field needs a parser"

@@ -42,6 +42,7 @@ class Options:
     max_size: int | None = None  # working-resolution cap (longest side, px); None = native size
     max_pixels: int | None = 1 << 28  # images whose header claims more pixels are refused before decoding
     iterations: int | None = None  # override the preset's training iterations
+    seeds: int | None = None  # override the preset's seeds trained side by side (the best tile is kept)
     scheduler: str | None = None  # None: in this process; "local:N": N local Dask workers; "tcp://host:port"
     jobs: int | None = None  # stacks trained at once (local workers); None: 1 in process, N for local:N
     refine: str = "on"  # "on": exemplar refinement to the source's resolution; "off": the pure SeamlessGAN tile
@@ -58,7 +59,7 @@ class Options:
         out = {}
         for name in (
             "preset", "materials", "mode", "plan_mode", "output_layer", "output_dir", "device", "seed",
-            "cache_dir", "max_size", "max_pixels", "iterations", "scheduler", "jobs", "refine", "tile_size",
+            "cache_dir", "max_size", "max_pixels", "iterations", "seeds", "scheduler", "jobs", "refine", "tile_size",
             "force", "force_materials",
         ):
             value = getattr(self, name)

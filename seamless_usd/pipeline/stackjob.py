@@ -31,6 +31,7 @@ class JobSettings:
 
     preset: str = "default"
     iterations: int | None = None
+    seeds: int | None = None
     seed: int = 0
     device: str | None = None
     max_size: int | None = None
@@ -42,7 +43,7 @@ class JobSettings:
     @classmethod
     def from_options(cls, options) -> "JobSettings":
         return cls(
-            preset=options.preset, iterations=options.iterations, seed=options.seed,
+            preset=options.preset, iterations=options.iterations, seeds=options.seeds, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
             max_pixels=options.max_pixels, refine=options.refine, tile_size=options.tile_size,
         )
@@ -160,6 +161,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     config = synthesis.get_preset(settings.preset)
     if settings.iterations is not None:
         config = dataclasses.replace(config, iterations=settings.iterations)
+    if settings.seeds is not None:
+        config = dataclasses.replace(config, seeds=settings.seeds)
     refine_config = synthesis.RefineConfig() if settings.refine == "on" else None
     key = stack_key(
         (
@@ -197,6 +200,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                     "layout_used": made.layout_used,
                     "layout_scale": {m.asset: made.layout_scale.get(n) for n, m in zip(names, stack.maps)},
                     "refine_levels": made.refine_levels,
+                    "seeds": made.seeds,  # with several seeds: each one's figures, and the one kept
                 },
             }
             discriminator = _discriminator_preview(tile)
@@ -264,13 +268,14 @@ def _drop_unusable_checkpoint(checkpoint_dir: Path) -> None:
     """
     from seamless_usd.synthesis.checkpoint import CHECKPOINT_NAME, load_checkpoint
 
-    path = Path(checkpoint_dir) / CHECKPOINT_NAME
-    if not path.exists():
-        return
-    try:
-        load_checkpoint(path)
-    except (ValueError, KeyError):
-        path.unlink(missing_ok=True)
+    root = Path(checkpoint_dir)
+    for path in [root / CHECKPOINT_NAME, *sorted(root.glob(f"seed-*/{CHECKPOINT_NAME}"))]:  # one per seed
+        if not path.exists():
+            continue
+        try:
+            load_checkpoint(path)
+        except (ValueError, KeyError):
+            path.unlink(missing_ok=True)
 
 
 def _peak_rss_mb() -> float:

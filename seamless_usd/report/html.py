@@ -53,6 +53,14 @@ def _policy_text(record: dict) -> str | None:
     return text
 
 
+def _seeds_text(seeds: list[dict] | None) -> str | None:
+    """The seeds trained side by side, each with its worst figure in units of its target, and the one kept."""
+    if not seeds:
+        return None
+    return ", ".join(f"seed {s['seed']}: {s['score']:.2f}" + (" (Q passed)" if s.get("q_passed") else "")
+                     + (" — kept" if s.get("chosen") else "") for s in seeds) + " (worst figure / its target)"
+
+
 def _map_name(m: MapReport) -> str:
     return ", ".join(m.roles) or Path(m.asset).name
 
@@ -174,6 +182,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
         "working size (w x h)": fmt(stack.working_size) if stack.working_size else None,
         "working resolution": _policy_text(stack.resampled),
         "candidates tried": stack.candidates or None,
+        "GAN seeds": _seeds_text(stack.resampled.get("gan", {}).get("seeds")),
         "timings (s)": ", ".join(f"{k} {v:.1f}" for k, v in stack.timings.items()) or None,
         "device / precision": f"{stack.device} / {stack.precision}" if stack.device else None,
         "model hash": stack.model_hash or None,

@@ -17,6 +17,8 @@ class SynthesisConfig:
     ngf: int = 64  # generator width at full resolution; the latent x0 has 2*ngf channels
     ndf: int = 64  # discriminator width of its first layer (doubles per layer, PatchGAN)
     n_res_blocks: int = 5  # residual blocks after the encoder (paper: l = 5)
+    upsample: str = "transposed"  # decoder x2 steps: "transposed" (stride-2 3x3, the paper) or "resize"
+    #                               (nearest x2 + 3x3 conv: no checkerboard, 4x the FLOPs of those layers)
     init_std: float = 0.02  # N(0, 0.02) weight init, standard for pix2pix-style GANs
 
     # --- training ---
@@ -35,6 +37,9 @@ class SynthesisConfig:
     style_seed: int = 1234  # random extractor filters are fixed by this seed, independent of the training seed
     seam_training_prob: float = 0.0  # beyond the paper: fraction of G steps fed a 2x2-tiled latent (off by default)
     batch: int = 1  # crops per optimiser step (paper: 1); the loss is the mean of the per-crop losses
+    d_every: int = 1  # beyond the paper: D is updated on every d_every-th step only, G on every step (paper: 1)
+    seeds: int = 1  # beyond the paper: independent trainings of the stack (seeds seed, seed+1, ...), run side by
+    #                 side on the CPU's cores; the tile whose fidelity figures are best is kept (synthesis.seeds)
 
     # --- run control ---
     checkpoint_every: int = 500  # iterations between checkpoints (one is always written at the end)
@@ -64,6 +69,8 @@ class SynthesisConfig:
             f"style_features must be 'random' or 'vgg19', got {self.style_features!r}")
         assert 0.0 <= self.seam_training_prob <= 1.0, "seam_training_prob is a probability"
         assert self.batch >= 1 and self.workers >= 0, "batch must be >= 1 and workers >= 0"
+        assert self.d_every >= 1 and self.seeds >= 1, "d_every and seeds must be >= 1"
+        assert self.upsample in ("transposed", "resize"), f"upsample must be 'transposed' or 'resize', got {self.upsample!r}"
         assert self.compile in ("auto", "on", "off"), f"compile must be 'auto', 'on' or 'off', got {self.compile!r}"
 
     def replace(self, **changes) -> "SynthesisConfig":
@@ -81,10 +88,17 @@ class SynthesisConfig:
         return cls(**{k: v for k, v in data.items() if k in known})
 
     def training_fields(self) -> dict:
-        """The fields that change the trained weights (run control and sampling excluded)."""
+        """The fields that change the trained weights (run control and sampling excluded).
+
+        Fields added after models were first saved enter only when set away from their default, so the
+        hashes (and checkpoints) of runs that do not use them stay valid.
+        """
         skip = {"checkpoint_every", "progress_every", "tiling", "c_min", "crop_step", "crops_per_size",
-                "max_candidates", "gamma", "band_fraction", "chunk_pixels", "vgg_weights", "workers", "compile"}
-        return {k: v for k, v in dataclasses.asdict(self).items() if k not in skip}
+                "max_candidates", "gamma", "band_fraction", "chunk_pixels", "vgg_weights", "workers", "compile",
+                "seeds"}
+        later = {"d_every": 1, "upsample": "transposed"}
+        return {k: v for k, v in dataclasses.asdict(self).items()
+                if k not in skip and not (k in later and v == later[k])}
 
 
 PRESETS: dict[str, SynthesisConfig] = {
@@ -94,8 +108,11 @@ PRESETS: dict[str, SynthesisConfig] = {
     # host a default step on a three-map stack runs at 7-8 it/s, so 2400 iterations train in about 5.5 min.
     # Doubling 1200 -> 2400 iterations took the maps inside both fidelity targets from 6 to 8 of 12 and the
     # patch-distance median from 1.02 to 0.93 (benchmarks/results/quality.md); draft stays a quick look.
+    # Two seeds train side by side, one per core, for 1.09x the wall time of one: the best of the two took
+    # the stacks whose tile passes Q from 1 to 3 of 6 and the maps inside every target from 3 to 4 of 12,
+    # the medians within noise (benchmarks/results/seeds.md).
     "default": SynthesisConfig(k=64, ngf=16, ndf=16, n_res_blocks=4, style_channels=16, iterations=2400,
-                               crop_step=32, max_candidates=12, checkpoint_every=200),
+                               seeds=2, crop_step=32, max_candidates=12, checkpoint_every=200),
     "draft": SynthesisConfig(k=32, ngf=16, ndf=16, n_res_blocks=3, style_channels=16, iterations=350,
                              crop_step=64, max_candidates=4, checkpoint_every=100),
     # For tests: trains in about a second.

@@ -9,7 +9,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-__all__ = ["Generator", "Discriminator", "init_weights"]
+__all__ = ["Generator", "Discriminator", "ResizeConv", "init_weights"]
 
 
 class Padded(nn.Module):
@@ -39,6 +39,25 @@ class Padded(nn.Module):
         return y
 
 
+class ResizeConv(Padded):
+    """Nearest-neighbour x2, then a 3x3 convolution (Odena et al. 2016, "Deconvolution and Checkerboard
+    Artifacts"): every output pixel sees the same number of inputs, so no checkerboard. 4x the FLOPs of
+    the stride-2 transposed convolution it replaces.
+
+    With ``pad_h`` off (chunked sampling) the rows are padded by replication: those rows sit in the
+    halo that the chunking throws away.
+    """
+
+    def __init__(self, cin: int, cout: int):
+        super().__init__(nn.Conv2d(cin, cout, 3, bias=False), 1, "reflect")
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:  # (N, Cin, H, W) -> (N, Cout, 2H, 2W)
+        x = F.interpolate(x, scale_factor=2, mode="nearest")
+        x = F.pad(x, (1, 1, 0, 0), mode=self.mode)
+        x = F.pad(x, (0, 0, 1, 1), mode=self.mode if self.pad_h else "replicate")
+        return self.conv(x)
+
+
 def _in(ch: int) -> nn.InstanceNorm2d:
     return nn.InstanceNorm2d(ch, affine=False, track_running_stats=False)
 
@@ -47,7 +66,9 @@ def conv_in_relu(cin: int, cout: int, k: int, stride: int = 1) -> list[nn.Module
     return [Padded(nn.Conv2d(cin, cout, k, stride=stride, bias=False), k // 2, "reflect"), _in(cout), nn.ReLU(True)]
 
 
-def up_in_relu(cin: int, cout: int) -> list[nn.Module]:
+def up_in_relu(cin: int, cout: int, upsample: str = "transposed") -> list[nn.Module]:
+    if upsample == "resize":
+        return [ResizeConv(cin, cout), _in(cout), nn.ReLU(True)]
     return [Padded(nn.ConvTranspose2d(cin, cout, 3, stride=2, bias=False), 1, "zeros"), _in(cout), nn.ReLU(True)]
 
 
@@ -64,11 +85,11 @@ class ResBlock(nn.Module):
 class Decoder(nn.Module):
     """Latent (N, 2ngf, h, w) -> map (N, C, 4h, 4w) in [-1, 1]."""
 
-    def __init__(self, ngf: int, out_ch: int):
+    def __init__(self, ngf: int, out_ch: int, upsample: str = "transposed"):
         super().__init__()
         half = max(ngf // 2, 4)
-        self.up1 = nn.Sequential(*up_in_relu(2 * ngf, ngf))
-        self.up2 = nn.Sequential(*up_in_relu(ngf, half))
+        self.up1 = nn.Sequential(*up_in_relu(2 * ngf, ngf, upsample))
+        self.up2 = nn.Sequential(*up_in_relu(ngf, half, upsample))
         self.out = Padded(nn.Conv2d(half, out_ch, 7, bias=True), 3, "reflect")
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
@@ -78,12 +99,13 @@ class Decoder(nn.Module):
 class Generator(nn.Module):
     """G2 of the paper: E (7x7 conv, stride-2 conv) -> x0 -> l residual blocks -> one decoder per map."""
 
-    def __init__(self, in_ch: int, out_channels: list[int], ngf: int, n_res_blocks: int):
+    def __init__(self, in_ch: int, out_channels: list[int], ngf: int, n_res_blocks: int,
+                 upsample: str = "transposed"):
         super().__init__()
         self.out_channels = list(out_channels)
         self.encoder = nn.Sequential(*conv_in_relu(in_ch, ngf, 7), *conv_in_relu(ngf, 2 * ngf, 3, stride=2))
         self.res = nn.Sequential(*[ResBlock(2 * ngf) for _ in range(n_res_blocks)])
-        self.decoders = nn.ModuleList([Decoder(ngf, c) for c in out_channels])
+        self.decoders = nn.ModuleList([Decoder(ngf, c, upsample) for c in out_channels])
 
     def encode(self, x: torch.Tensor) -> torch.Tensor:  # (N, Cin, H, W) -> (N, 2ngf, H/2, W/2)
         return self.encoder(x)

@@ -1,5 +1,7 @@
 """One adversarial-expansion training step: losses for D and G, and the update.
 
+D is updated on every ``config.d_every``-th step only (beyond the paper; 1, every step, is the paper's).
+
 Forward passes run under ``precision.autocast``; every loss is reduced in fp32. A step may hold several
 crops; its loss is the mean of the per-crop losses. On the GPU the crops go through the networks as one
 batch; on the CPU each crop is a micro-batch of its own, computed on a ``CropWorkers`` thread, and the
@@ -84,20 +86,25 @@ class StepFunctions:
 def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, opt_d: torch.optim.Optimizer,
                   extractor: nn.Module, batch: Batch, channels: list[int], config: SynthesisConfig,
                   device: torch.device, precision: str, scaler=None, workers: CropWorkers | None = None,
-                  stacked: bool = False, fns: StepFunctions | None = None) -> dict[str, float]:
-    """Update D once, then G once (pix2pix order), on every crop of ``batch``. Returns the mean losses as floats.
+                  stacked: bool = False, fns: StepFunctions | None = None, update_d: bool = True
+                  ) -> dict[str, float]:
+    """Update D once (unless ``update_d`` is false), then G once (pix2pix order), on every crop of ``batch``.
 
+    Returns the mean losses as floats; ``"d"`` only when D was updated.
     ``stacked`` runs the crops as one batch (the GPU path, and the only one with an fp16 ``scaler``);
     otherwise each crop is a micro-batch, run on ``workers`` threads when given.
     """
     fns = fns or StepFunctions()
     if stacked or scaler is not None:
-        return _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device, precision, scaler, fns)
+        return _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device, precision, scaler, fns,
+                             update_d)
     crops = batch.crops()
     n = len(crops)
     run = workers.map if workers is not None else (lambda fn, *xs: list(map(fn, *xs)))  # serial without a pool
     d_params = list(D.parameters())
     g_params = list(G.parameters())
+    mean = lambda xs: sum(xs) / n  # noqa: E731
+    out: dict[str, float] = {}
 
     def d_part(crop: Batch):
         with autocast(device, precision):
@@ -105,23 +112,29 @@ def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, 
         loss = fns.d_loss(D, fake, crop.target, device, precision)
         return fake, float(loss.detach()), torch.autograd.grad(loss / n, d_params, allow_unused=True)
 
-    D.requires_grad_(True)
-    d_out = run(d_part, crops)
-    _set_grads(d_params, [g for _, _, g in d_out])
-    opt_d.step()
+    fakes: list[torch.Tensor | None] = [None] * n
+    if update_d:
+        D.requires_grad_(True)
+        d_out = run(d_part, crops)
+        _set_grads(d_params, [g for _, _, g in d_out])
+        opt_d.step()
+        fakes = [f for f, _, _ in d_out]
+        out["d"] = mean([d for _, d, _ in d_out])
 
-    def g_part(crop: Batch, fake: torch.Tensor):
+    def g_part(crop: Batch, fake: torch.Tensor | None):
+        if fake is None:  # no D step: the fake is made here, on this crop's worker
+            with autocast(device, precision):
+                fake = fns.generate(G, crop)
         loss, parts = fns.g_loss(D, extractor, fake, crop, channels, config, device, precision)
         return float(loss.detach()), parts, torch.autograd.grad(loss / n, g_params, allow_unused=True)
 
     D.requires_grad_(False)  # G's backward goes through D without computing D weight gradients
-    g_out = run(g_part, crops, [f for f, _, _ in d_out])
+    g_out = run(g_part, crops, fakes)
     D.requires_grad_(True)
     _set_grads(g_params, [g for _, _, g in g_out])
     opt_g.step()
-    mean = lambda xs: sum(xs) / n  # noqa: E731
     parts = {k: mean([p[k] for _, p, _ in g_out]) for k in g_out[0][1]}
-    return {"d": mean([d for _, d, _ in d_out]), "g": mean([g for g, _, _ in g_out]), **parts}
+    return {**out, "g": mean([g for g, _, _ in g_out]), **parts}
 
 
 def _set_grads(params: list[torch.Tensor], per_crop: list[tuple]) -> None:
@@ -136,14 +149,17 @@ def _set_grads(params: list[torch.Tensor], per_crop: list[tuple]) -> None:
 
 
 def _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device, precision, scaler,
-                  fns: StepFunctions) -> dict[str, float]:
+                  fns: StepFunctions, update_d: bool = True) -> dict[str, float]:
     with autocast(device, precision):
         fake = fns.generate(G, batch)  # (N, Ctot, 2k, 2k)
 
-    D.requires_grad_(True)
-    loss_d = fns.d_loss(D, fake, batch.target, device, precision)
-    opt_d.zero_grad(set_to_none=True)
-    _backward_step(loss_d, opt_d, scaler)
+    out: dict[str, float] = {}
+    if update_d:
+        D.requires_grad_(True)
+        loss_d = fns.d_loss(D, fake, batch.target, device, precision)
+        opt_d.zero_grad(set_to_none=True)
+        _backward_step(loss_d, opt_d, scaler)
+        out["d"] = float(loss_d.detach())
 
     D.requires_grad_(False)  # G's backward goes through D without accumulating D weight gradients
     loss_g, parts = fns.g_loss(D, extractor, fake, batch, channels, config, device, precision)
@@ -152,7 +168,7 @@ def _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device
     D.requires_grad_(True)
     if scaler is not None:
         scaler.update()
-    return {"d": float(loss_d.detach()), "g": float(loss_g.detach()), **parts}
+    return {**out, "g": float(loss_g.detach()), **parts}
 
 
 def _backward_step(loss: torch.Tensor, opt: torch.optim.Optimizer, scaler) -> None:

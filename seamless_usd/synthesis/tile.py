@@ -25,7 +25,7 @@ from .data import effective_k
 from .refine import RefineConfig, refine
 from .sample import sample
 from .scale import structure_size, working_factor
-from .train import train
+from .seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
 from .types import MapInput, TileResult, stack_shape
 
 __all__ = ["MadeTile", "make_tile", "downsample_maps", "TILE_SIZES", "LAYOUT_SCALE_RANGE"]
@@ -56,6 +56,7 @@ class MadeTile:
     layout_used: bool = False  # whether the GAN tile seeded the refinement
     refine_levels: list[dict] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
+    seeds: list[dict] = field(default_factory=list)  # with config.seeds > 1: each seed's figures and which won
 
 
 def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInput]:
@@ -79,9 +80,11 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
               progress: Callable[[str, Any], None] | None = None) -> MadeTile:
     """Make a tileable stack from ``maps`` (full resolution, network domain).
 
-    1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there.
+    1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there,
+       ``config.seeds`` seeds side by side (:mod:`.seeds`).
     2. Sample: the crop search with the discriminator's Q (``tile_size="source"``: crops of half the
-       working stack, so the tile has the stack's size; ``"paper"``: from the whole stack down).
+       working stack, so the tile has the stack's size; ``"paper"``: from the whole stack down). With
+       several seeds, the tile whose fidelity and seam figures are best is kept.
     3. With ``refine_config``, refine the GAN tile (when its feature scale is plausible, see
        :data:`LAYOUT_SCALE_RANGE`; else a random start) into a tile of source texels at full resolution,
        ``tile_size`` deciding its pixel size (the source's, or the paper's 2c brought to full
@@ -101,18 +104,25 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     timings["scale"] = time.perf_counter() - t0
 
     t1 = time.perf_counter()
-    model = train(working, config, seed=seed, device=device, checkpoint_dir=checkpoint_dir,
-                  progress=lambda p: emit("train", p))
+    models = train_seeds(working, config, seed, device=device, checkpoint_dir=checkpoint_dir,
+                         progress=lambda p: emit("train", p))
     timings["train"] = time.perf_counter() - t1
     t2 = time.perf_counter()
-    gan = sample(model, working, seed=seed, tile_size=tile_size, progress=lambda p: emit("sample", p))
+    runs = []
+    for s, model in zip(seed_list(seed, config.seeds), models):
+        run = SeedRun(s, sample(model, working, seed=s, tile_size=tile_size, progress=lambda p: emit("sample", p)))
+        if len(models) > 1:
+            run.score, run.scale, run.patch = fidelity_score(run.tile.maps, working)
+        runs.append(run)
+    gan = choose_seed(runs).tile
+    seeds = [r.summary() for r in runs] if len(runs) > 1 else []
     timings["sample"] = time.perf_counter() - t2
     gan_hw = next(iter(gan.maps.values())).shape[:2]
 
     if refine_config is None:
         uv = (work_hw[1] / gan_hw[1], work_hw[0] / gan_hw[0])
         return MadeTile(dict(gan.maps), tuple(gan_hw), work_hw, uv, structure, f, work_hw, gan, False,
-                        timings=timings)
+                        timings=timings, seeds=seeds)
     if tile_size == "source":
         out_hw = (H, W)
     else:  # the paper's 2c x 2c, at the source's resolution
@@ -128,4 +138,4 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     tiles = {m.name: np.ascontiguousarray(t, dtype=np.float32) for m, t in zip(maps, result.maps)}
     uv = (W / out_hw[1], H / out_hw[0])
     return MadeTile(tiles, out_hw, (H, W), uv, structure, f, work_hw, gan, True, layout_scale, use_layout,
-                    result.levels, timings)
+                    result.levels, timings, seeds)

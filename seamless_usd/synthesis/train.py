@@ -73,7 +73,7 @@ class TrainedModel:
 def build_networks(config: SynthesisConfig, channels: list[int], seed: int) -> tuple[Generator, Discriminator]:
     """G and D with N(0, init_std) weights drawn from ``seed`` (CPU generator, so every device agrees)."""
     total = sum(channels)
-    G = Generator(total, channels, config.ngf, config.n_res_blocks)
+    G = Generator(total, channels, config.ngf, config.n_res_blocks, config.upsample)
     D = Discriminator(total, config.ndf)
     g = torch.Generator().manual_seed(seed)
     init_weights(G, config.init_std, g)
@@ -151,6 +151,7 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
 
     x = stack_tensor(maps, dev)  # (1, Ctot, H, W)
     t0 = time.perf_counter()
+    losses: dict[str, float] = {}  # the latest of each loss (D's from its latest update)
     with CropWorkers(plan) as workers:
         for step in range(start, total):
             lr = learning_rate(step, total, config.lr, config.lr_milestones, config.lr_decay)
@@ -158,8 +159,9 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
                 for group in opt.param_groups:
                     group["lr"] = lr
             batch = _step_batch(x, seed, step, k, config)
-            losses = training_step(G, D, opt_g, opt_d, extractor, batch, channels, config, dev, precision, scaler,
-                                   workers, plan.stacked, fns)
+            update_d = step % config.d_every == 0
+            losses = {**losses, **training_step(G, D, opt_g, opt_d, extractor, batch, channels, config, dev,
+                                                precision, scaler, workers, plan.stacked, fns, update_d)}
             done = step + 1
             if done % config.checkpoint_every == 0 or done == total:
                 save(done)

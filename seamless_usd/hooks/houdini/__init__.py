@@ -51,6 +51,7 @@ PARMS: tuple[ParmSpec, ...] = (
     ParmSpec("seed", "Seed", "int", "Random seed"),
     ParmSpec("max_size", "Max Size", "int", "Working resolution cap in pixels, longest side; 0: native"),
     ParmSpec("iterations", "Iterations", "int", "Training iterations; 0: the preset's"),
+    ParmSpec("seeds", "Seeds", "int", "Seeds trained side by side, the best tile kept; 0: the preset's"),
     ParmSpec("report", "Report", "file", "HTML report path; empty: none"),
     ParmSpec("cache_dir", "Cache Folder", "directory", "Trained models; empty: the user's cache folder"),
     ParmSpec("dry_run", "Dry Run", "toggle", "Plan only; write nothing"),
