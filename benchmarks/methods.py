@@ -55,22 +55,21 @@ def img2texture_tile(pixels: np.ndarray, is_normal: bool = False, overlap: float
     return np.ascontiguousarray(out, dtype=np.float32)
 
 
-def preset_config(preset: str, iterations: int | None = None, batch: int | None = None, seeds: int | None = None):
-    """The preset, with the benchmark's overrides of its iterations, crops per step and seeds."""
+def preset_config(preset: str, overrides: dict | None = None):
+    """The preset, with the benchmark's overrides of its fields (``{"iterations": 1200}``; None: the preset's)."""
     from seamless_usd.synthesis import get_preset
 
     config = get_preset(preset)
-    overrides = {k: v for k, v in (("iterations", iterations), ("batch", batch), ("seeds", seeds)) if v is not None}
-    return config.replace(**overrides) if overrides else config
+    changes = {k: v for k, v in (overrides or {}).items() if v is not None}
+    return config.replace(**changes) if changes else config
 
 
 def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str], preset: str, seed: int,
-                  log: Callable[[str], None], iterations: int | None = None, batch: int | None = None,
-                  seeds: int | None = None) -> dict[str, MethodResult]:
+                  log: Callable[[str], None], overrides: dict | None = None) -> dict[str, MethodResult]:
     """The synthesis methods asked for, training SeamlessGAN once for both GAN rows."""
     from seamless_usd import synthesis as syn
 
-    config = preset_config(preset, iterations, batch, seeds)
+    config = preset_config(preset, overrides)
     maps = [syn.MapInput(k, np.ascontiguousarray(px, dtype=np.float32), n) for k, (px, n) in stack.items()]
     out: dict[str, MethodResult] = {}
     if "refine-random" in methods:

@@ -173,9 +173,7 @@ def run(
     *,
     preset: str = "default",
     seed: int = 0,
-    iterations: int | None = None,
-    batch: int | None = None,
-    seeds: int | None = None,
+    overrides: dict | None = None,
     out: Path = DEFAULT_OUT,
     textures_dir: Path = SHARED_DIR,
     max_size: int | None = None,
@@ -219,7 +217,7 @@ def run(
         "complete": False,
     }
     if set(methods) & set(SYNTHESIS_METHODS):  # presets are tuned over time: keep what this run used
-        config = preset_config(preset, iterations, batch, seeds)
+        config = preset_config(preset, overrides)
         result["settings"]["preset_config"] = json.loads(config.to_json())
     kept: list[dict] = []
     if update and (out / "quality.json").exists():
@@ -243,8 +241,7 @@ def run(
         synthesis = [m for m in methods if m in SYNTHESIS_METHODS]
         if synthesis:
             log(f"{stack_name}: {', '.join(synthesis)} ...")
-            made = run_synthesis(stack, synthesis, preset, seed, log, iterations=iterations, batch=batch,
-                                 seeds=seeds)
+            made = run_synthesis(stack, synthesis, preset, seed, log, overrides)
         for method in methods:
             log(f"{stack_name}: {method} ...")
             if method in SYNTHESIS_METHODS:
@@ -315,6 +312,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="override the preset's training iterations (quality-vs-time curves)")
     p.add_argument("--batch", type=int, default=None, help="override the preset's crops per training step")
     p.add_argument("--seeds", type=int, default=None, help="override the preset's seeds trained side by side")
+    p.add_argument("--upsample", choices=("transposed", "resize"), default=None,
+                   help="override the preset's decoder upsampling")
+    p.add_argument("--style-every", type=int, default=None, help="override the preset's steps per style-loss step")
+    p.add_argument("--d-every", type=int, default=None, help="override the preset's steps per discriminator step")
     p.add_argument("--update", action="store_true",
                    help="keep the other methods' rows of the quality.json already in --out (re-run some methods only)")
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: benchmarks/results)")
@@ -356,9 +357,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             methods,
             preset=a.preset,
             seed=a.seed,
-            iterations=a.iterations,
-            batch=a.batch,
-            seeds=a.seeds,
+            overrides={"iterations": a.iterations, "batch": a.batch, "seeds": a.seeds, "upsample": a.upsample,
+                       "style_every": a.style_every, "d_every": a.d_every},
             out=a.out,
             textures_dir=a.textures_dir,
             max_size=a.max_size,

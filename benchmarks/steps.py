@@ -64,19 +64,20 @@ class StepRunner:
         self.steps = 0  # steps run, for the D period (cfg.d_every)
 
     def step(self, workers: CropWorkers | None) -> None:
-        update_d = self.steps % self.cfg.d_every == 0
+        update_d, use_style = self.steps % self.cfg.d_every == 0, self.steps % self.cfg.style_every == 0
         self.steps += 1
         training_step(self.G, self.D, self.opt_g, self.opt_d, self.ext, self.batch, CHANNELS, self.cfg, self.dev,
-                      self.plan.precision, None, workers, self.plan.stacked, self.fns, update_d)
+                      self.plan.precision, None, workers, self.plan.stacked, self.fns, update_d, use_style)
 
     def flops(self) -> int:
-        """FLOPs of one step (the mean over a D period), counted on this thread (not on worker threads)."""
+        """FLOPs of one step (the mean over the D and style periods), counted on this thread (not on workers)."""
         from torch.utils.flop_counter import FlopCounterMode
         self.steps = 0
+        period = self.cfg.d_every * self.cfg.style_every
         with FlopCounterMode(display=False) as fc:
-            for _ in range(self.cfg.d_every):
+            for _ in range(period):
                 self.step(None)
-        return fc.get_total_flops() // self.cfg.d_every
+        return fc.get_total_flops() // period
 
     def rate(self, steps: int) -> float:
         with CropWorkers(self.plan) as workers:
@@ -99,6 +100,8 @@ def step_variants() -> dict[str, tuple[SynthesisConfig, int]]:
         "default, D every 2nd step (auto)": (default.replace(d_every=2), 2),
         "default, D every 3rd step (auto)": (default.replace(d_every=3), 2),
         "default, resize-conv upsampling (auto)": (default.replace(upsample="resize"), 2),
+        "default, style loss every 2nd step (auto)": (default.replace(style_every=2), 2),
+        "default, D and style every 2nd step (auto)": (default.replace(d_every=2, style_every=2), 2),
         "draft (auto: 1 thread)": (draft, 2),
         "draft, 2 intra-op threads": (draft.replace(workers=1), 2),
         "paper (2 intra-op threads)": (get_preset("paper"), 2),

@@ -1,4 +1,4 @@
-"""Several seeds trained side by side and the tile their figures choose; D updated every n-th step."""
+"""Several seeds trained side by side and the tile their figures choose; D and the style loss every n-th step."""
 import numpy as np
 import pytest
 import torch
@@ -7,7 +7,7 @@ from seamless_usd.synthesis import MapInput, get_preset, make_tile, train
 from seamless_usd.synthesis.checkpoint import CHECKPOINT_NAME, load_checkpoint
 from seamless_usd.synthesis.features import build_feature_extractor
 from seamless_usd.synthesis.seeds import SeedRun, choose_seed, fidelity_score, seed_checkpoint_dir, train_seeds
-from seamless_usd.synthesis.step import Batch, training_step
+from seamless_usd.synthesis.step import Batch, g_loss, generate, training_step
 from seamless_usd.synthesis.train import build_networks
 from seamless_usd.synthesis.types import QResult, TileResult
 
@@ -132,3 +132,23 @@ def test_d_every_is_part_of_the_training_only_when_set():
     every2 = train(maps, TINY.replace(d_every=2), seed=0)
     assert "d_every" not in TINY.training_fields()  # hashes of runs made before the field existed stay valid
     assert every2.hash != base.hash and not torch.equal(_weights(every2), _weights(base))
+
+
+def test_style_every_skips_the_style_loss_and_weights_it_when_computed():
+    cfg = get_preset("tiny").replace(k=16, style_every=3)
+    channels = [3, 1]
+    G, D = build_networks(cfg, channels, seed=2)
+    g = torch.Generator().manual_seed(0)
+    target = torch.rand(1, 4, 32, 32, generator=g) * 2 - 1  # (N, C, 2k, 2k)
+    batch = Batch(target[:, :, 8:24, 8:24], target)
+    ext = build_feature_extractor(cfg)
+    with torch.no_grad():
+        fake = generate(G, batch)
+        with_style, parts = g_loss(D, ext, fake, batch, channels, cfg, torch.device("cpu"), "fp32", True)
+        without, skipped = g_loss(D, ext, fake, batch, channels, cfg, torch.device("cpu"), "fp32", False)
+    assert "style" in parts and "style" not in skipped and parts["style"] > 0
+    expect = float(without) + cfg.lambda_style * 3 * parts["style"]  # weighted by the period
+    assert float(with_style) == pytest.approx(expect, rel=1e-5)
+    maps = _maps()
+    assert "style_every" not in TINY.training_fields()
+    assert train(maps, TINY.replace(style_every=2), seed=0).hash != train(maps, TINY, seed=0).hash

@@ -38,6 +38,8 @@ class SynthesisConfig:
     seam_training_prob: float = 0.0  # beyond the paper: fraction of G steps fed a 2x2-tiled latent (off by default)
     batch: int = 1  # crops per optimiser step (paper: 1); the loss is the mean of the per-crop losses
     d_every: int = 1  # beyond the paper: D is updated on every d_every-th step only, G on every step (paper: 1)
+    style_every: int = 1  # beyond the paper: the style loss on every style_every-th G step only, weighted that
+    #                       many times (the same expected gradient for a cheaper step; paper: 1)
     seeds: int = 1  # beyond the paper: independent trainings of the stack (seeds seed, seed+1, ...), run side by
     #                 side on the CPU's cores; the tile whose fidelity figures are best is kept (synthesis.seeds)
 
@@ -69,7 +71,7 @@ class SynthesisConfig:
             f"style_features must be 'random' or 'vgg19', got {self.style_features!r}")
         assert 0.0 <= self.seam_training_prob <= 1.0, "seam_training_prob is a probability"
         assert self.batch >= 1 and self.workers >= 0, "batch must be >= 1 and workers >= 0"
-        assert self.d_every >= 1 and self.seeds >= 1, "d_every and seeds must be >= 1"
+        assert min(self.d_every, self.style_every, self.seeds) >= 1, "d_every, style_every and seeds must be >= 1"
         assert self.upsample in ("transposed", "resize"), f"upsample must be 'transposed' or 'resize', got {self.upsample!r}"
         assert self.compile in ("auto", "on", "off"), f"compile must be 'auto', 'on' or 'off', got {self.compile!r}"
 
@@ -96,7 +98,7 @@ class SynthesisConfig:
         skip = {"checkpoint_every", "progress_every", "tiling", "c_min", "crop_step", "crops_per_size",
                 "max_candidates", "gamma", "band_fraction", "chunk_pixels", "vgg_weights", "workers", "compile",
                 "seeds"}
-        later = {"d_every": 1, "upsample": "transposed"}
+        later = {"d_every": 1, "style_every": 1, "upsample": "transposed"}
         return {k: v for k, v in dataclasses.asdict(self).items()
                 if k not in skip and not (k in later and v == later[k])}
 

@@ -1,6 +1,7 @@
 """One adversarial-expansion training step: losses for D and G, and the update.
 
-D is updated on every ``config.d_every``-th step only (beyond the paper; 1, every step, is the paper's).
+D is updated on every ``config.d_every``-th step only, and the style loss computed on every
+``config.style_every``-th (beyond the paper; 1, every step, is the paper's).
 
 Forward passes run under ``precision.autocast``; every loss is reduced in fp32. A step may hold several
 crops; its loss is the mean of the per-crop losses. On the GPU the crops go through the networks as one
@@ -58,7 +59,10 @@ def d_loss(D: Discriminator, fake: torch.Tensor, target: torch.Tensor, device, p
 
 
 def g_loss(D: Discriminator, extractor: nn.Module, fake: torch.Tensor, batch: Batch, channels: list[int],
-           config: SynthesisConfig, device, precision: str) -> tuple[torch.Tensor, dict[str, float]]:
+           config: SynthesisConfig, device, precision: str, use_style: bool = True
+           ) -> tuple[torch.Tensor, dict[str, float]]:
+    """Adversarial + L1 + style. With ``config.style_every = n`` the style term is computed on every n-th
+    step only (``use_style``), weighted n times, so its expected gradient is unchanged."""
     with autocast(device, precision):
         adv = _bce(D.logits(fake), True)
     fakes = torch.split(fake.float(), channels, 1)
@@ -67,11 +71,14 @@ def g_loss(D: Discriminator, extractor: nn.Module, fake: torch.Tensor, batch: Ba
     if not batch.seam:  # a tiled latent has no pixel-aligned target; adversarial + style only
         l1 = sum(F.l1_loss(f, r) for f, r in zip(fakes, reals))
     sty = fake.new_zeros((), dtype=torch.float32)
-    if config.lambda_style:
+    if config.lambda_style and use_style:
         with autocast(device, precision):
             sty = sum(style_loss(extractor, f, r) for f, r in zip(fakes, reals))
-    total = config.lambda_adv * adv + config.lambda_l1 * l1 + config.lambda_style * sty
-    return total, {"g_adv": float(adv.detach()), "l1": float(l1.detach()), "style": float(sty.detach())}
+    total = config.lambda_adv * adv + config.lambda_l1 * l1 + config.lambda_style * config.style_every * sty
+    parts = {"g_adv": float(adv.detach()), "l1": float(l1.detach())}
+    if use_style:  # a step without it keeps the latest figure in the run's losses
+        parts["style"] = float(sty.detach())
+    return total, parts
 
 
 @dataclass
@@ -86,8 +93,8 @@ class StepFunctions:
 def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, opt_d: torch.optim.Optimizer,
                   extractor: nn.Module, batch: Batch, channels: list[int], config: SynthesisConfig,
                   device: torch.device, precision: str, scaler=None, workers: CropWorkers | None = None,
-                  stacked: bool = False, fns: StepFunctions | None = None, update_d: bool = True
-                  ) -> dict[str, float]:
+                  stacked: bool = False, fns: StepFunctions | None = None, update_d: bool = True,
+                  use_style: bool = True) -> dict[str, float]:
     """Update D once (unless ``update_d`` is false), then G once (pix2pix order), on every crop of ``batch``.
 
     Returns the mean losses as floats; ``"d"`` only when D was updated.
@@ -97,7 +104,7 @@ def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, 
     fns = fns or StepFunctions()
     if stacked or scaler is not None:
         return _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device, precision, scaler, fns,
-                             update_d)
+                             update_d, use_style)
     crops = batch.crops()
     n = len(crops)
     run = workers.map if workers is not None else (lambda fn, *xs: list(map(fn, *xs)))  # serial without a pool
@@ -125,7 +132,7 @@ def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, 
         if fake is None:  # no D step: the fake is made here, on this crop's worker
             with autocast(device, precision):
                 fake = fns.generate(G, crop)
-        loss, parts = fns.g_loss(D, extractor, fake, crop, channels, config, device, precision)
+        loss, parts = fns.g_loss(D, extractor, fake, crop, channels, config, device, precision, use_style)
         return float(loss.detach()), parts, torch.autograd.grad(loss / n, g_params, allow_unused=True)
 
     D.requires_grad_(False)  # G's backward goes through D without computing D weight gradients
@@ -149,7 +156,7 @@ def _set_grads(params: list[torch.Tensor], per_crop: list[tuple]) -> None:
 
 
 def _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device, precision, scaler,
-                  fns: StepFunctions, update_d: bool = True) -> dict[str, float]:
+                  fns: StepFunctions, update_d: bool = True, use_style: bool = True) -> dict[str, float]:
     with autocast(device, precision):
         fake = fns.generate(G, batch)  # (N, Ctot, 2k, 2k)
 
@@ -162,7 +169,7 @@ def _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device
         out["d"] = float(loss_d.detach())
 
     D.requires_grad_(False)  # G's backward goes through D without accumulating D weight gradients
-    loss_g, parts = fns.g_loss(D, extractor, fake, batch, channels, config, device, precision)
+    loss_g, parts = fns.g_loss(D, extractor, fake, batch, channels, config, device, precision, use_style)
     opt_g.zero_grad(set_to_none=True)
     _backward_step(loss_g, opt_g, scaler)
     D.requires_grad_(True)

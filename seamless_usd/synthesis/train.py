@@ -159,9 +159,9 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
                 for group in opt.param_groups:
                     group["lr"] = lr
             batch = _step_batch(x, seed, step, k, config)
-            update_d = step % config.d_every == 0
+            update_d, use_style = step % config.d_every == 0, step % config.style_every == 0
             losses = {**losses, **training_step(G, D, opt_g, opt_d, extractor, batch, channels, config, dev,
-                                                precision, scaler, workers, plan.stacked, fns, update_d)}
+                                                precision, scaler, workers, plan.stacked, fns, update_d, use_style)}
             done = step + 1
             if done % config.checkpoint_every == 0 or done == total:
                 save(done)
