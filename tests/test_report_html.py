@@ -110,6 +110,18 @@ def test_verdicts_are_in_words_next_to_the_numbers():
     assert page.count('class="v bad"') == 2 and "0.9–1.1" in page and "≤ 1.15" in page
 
 
+def test_run_details_list_each_seed_and_the_one_kept():
+    seeds = [{"seed": 0, "q_passed": False, "score": 1.28, "chosen": False},
+             {"seed": 1, "q_passed": True, "score": 2.29, "chosen": True}]
+    stack = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.PASSED,
+                        resampled={"gan": {"seeds": seeds}})
+    page = render_html(Report(sources=["s.usda"], stacks=[stack]))
+    assert "GAN seeds" in page and "seed 0: 1.28, seed 1: 2.29 (Q passed) — kept" in page
+    one = StackReport(id="M-2", material="</M2>", source="s.usda", status=StackStatus.PASSED,
+                      resampled={"gan": {"seeds": []}})
+    assert "GAN seeds" not in render_html(Report(sources=["s.usda"], stacks=[one]))
+
+
 def test_left_alone_and_failed_stacks_say_why():
     left = StackReport(id="D-1", material="</Decal>", source="s.usda", status=StackStatus.LEFT_ALONE,
                        intent="uv-atlas", intent_reason="UVs 0.11-0.89, 37 islands")

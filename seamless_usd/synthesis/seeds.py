@@ -1,11 +1,13 @@
 """Several seeds of one stack trained side by side, and the GAN tile the fidelity figures choose.
 
-One short GAN run depends on its seed: one seed lays bricks in a bond, another breaks it. A stack's
-training runs on one CPU thread (faster than two on these small convolutions), so on a machine with
-two cores a second seed trains in the idle core's time. ``config.seeds`` seeds (``seed, seed + 1, ...``)
-train in parallel, one thread each, and the tile kept is the one whose figures against the working
-source (feature scale, patch distance, border and centre seams) are furthest inside the targets. Each run is the same as a
-one-seed run of its seed, weight for weight.
+One short GAN run depends on its seed: on the quality benchmark one seed's tile passes Q where
+another's fails, or repeats a band along its centre line where the other does not
+(``benchmarks/results/seeds.md``). A stack's training runs on one CPU thread (faster than two on
+these small convolutions), so on a machine with two cores a second seed trains in the idle core's
+time. ``config.seeds`` seeds (``seed, seed + 1, ...``) train in parallel, one thread each, and the
+tile kept is the one whose figures against the working source (feature scale, patch distance,
+border and centre seams) are furthest inside the targets. Each run is the same as a one-seed run of
+its seed, weight for weight.
 
 The discriminator's Q cannot rank the seeds: each run has its own discriminator, and their outputs are
 not on one scale. Q still counts: a tile that passes Q is preferred to one that does not.
