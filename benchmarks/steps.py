@@ -61,7 +61,7 @@ class StepRunner:
         g = torch.Generator().manual_seed(0)
         target = torch.rand(cfg.batch, sum(CHANNELS), 2 * k, 2 * k, generator=g) * 2 - 1  # (N, C, 2k, 2k)
         self.batch = Batch(target[:, :, k // 2: k // 2 + k, k // 2: k // 2 + k], target)
-        self.steps = 0  # steps run, for the D period (cfg.d_every)
+        self.steps = 0  # steps run, for the D and style periods (cfg.d_every, cfg.style_every)
 
     def step(self, workers: CropWorkers | None) -> None:
         update_d, use_style = self.steps % self.cfg.d_every == 0, self.steps % self.cfg.style_every == 0
