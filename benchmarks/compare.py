@@ -24,16 +24,13 @@ ROOT = HERE.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from seamless_usd.metrics import TARGETS  # noqa: E402
+from seamless_usd.metrics import FIDELITY_KEYS, TARGETS, outside_target  # noqa: E402
 
 __all__ = ["summarise", "to_markdown", "main"]
 
-FIDELITY = ("scale_ratio", "patch_distance")
-
 
 def _inside(key: str, value) -> bool:
-    low, high = TARGETS[key]
-    return value is not None and (low is None or value >= low) and (high is None or value <= high)
+    return value is not None and not outside_target(key, value)
 
 
 def summarise(rows: list[dict], method: str) -> dict:
@@ -44,7 +41,7 @@ def summarise(rows: list[dict], method: str) -> dict:
         values = [r.get(key) for r in mine if r.get(key) is not None]
         out["figures"][key] = (float(np.median(values)) if values else None,
                                sum(_inside(key, r.get(key)) for r in mine))
-    out["fidelity_inside"] = sum(all(_inside(k, r.get(k)) for k in FIDELITY) for r in mine)
+    out["fidelity_inside"] = sum(all(_inside(k, r.get(k)) for k in FIDELITY_KEYS) for r in mine)
     out["all_inside"] = sum(all(_inside(k, r.get(k)) for k in TARGETS) for r in mine)
     per_stack = {r["stack"]: r for r in mine}
     out["train_seconds"] = sum(float(r.get("train_seconds") or 0.0) for r in per_stack.values())

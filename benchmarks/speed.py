@@ -14,10 +14,10 @@ Measures, in one run and interleaved (the machine is shared and its speed drifts
   maps, and write the 2x2 tiling of each output map beside the naive 2x2 tiling of its input.
 
     .venv/bin/python benchmarks/speed.py                  # steps + sampling, about 10 minutes
+    .venv/bin/python benchmarks/speed.py --e2e draft      # end-to-end run of one preset
 
 It refuses to run when the 1-minute load average is above 1.5 (``--allow-load`` records flagged
 figures), and it records the load average beside every figure.
-    .venv/bin/python benchmarks/speed.py --e2e draft      # end-to-end run of one preset
 """
 from __future__ import annotations
 

@@ -25,7 +25,7 @@ from seamless_usd.synthesis.config import SynthesisConfig  # noqa: E402
 from seamless_usd.synthesis.engine import CropWorkers, maybe_compile, plan_engine  # noqa: E402
 from seamless_usd.synthesis.features import build_feature_extractor  # noqa: E402
 from seamless_usd.synthesis.precision import cpu_supports_bf16  # noqa: E402
-from seamless_usd.synthesis.step import Batch, StepFunctions, d_loss, g_loss, generate, training_step  # noqa: E402
+from seamless_usd.synthesis.step import Batch, StepFunctions, d_loss, g_loss, generate, step_parts, training_step  # noqa: E402
 from seamless_usd.synthesis.train import build_networks  # noqa: E402
 
 CHANNELS = [3, 3, 1]  # albedo, normal, roughness
@@ -64,7 +64,7 @@ class StepRunner:
         self.steps = 0  # steps run, for the D and style periods (cfg.d_every, cfg.style_every)
 
     def step(self, workers: CropWorkers | None) -> None:
-        update_d, use_style = self.steps % self.cfg.d_every == 0, self.steps % self.cfg.style_every == 0
+        update_d, use_style = step_parts(self.cfg, self.steps)
         self.steps += 1
         training_step(self.G, self.D, self.opt_g, self.opt_d, self.ext, self.batch, CHANNELS, self.cfg, self.dev,
                       self.plan.precision, None, workers, self.plan.stacked, self.fns, update_d, use_style)

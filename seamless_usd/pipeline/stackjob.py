@@ -177,7 +177,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     with entry.lock():
         cached = entry.load()
         if cached is None:
-            _drop_unusable_checkpoint(entry.checkpoint_dir)
+            _drop_unusable_checkpoint(entry.checkpoint_dir, config.seeds)
             made = synthesis.make_tile(
                 inputs, config, refine_config=refine_config, tile_size=settings.tile_size, seed=settings.seed,
                 device=settings.device, checkpoint_dir=entry.checkpoint_dir, progress=emit,
@@ -260,16 +260,17 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     )
 
 
-def _drop_unusable_checkpoint(checkpoint_dir: Path) -> None:
+def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:
     """Remove a checkpoint that is not a safetensors file of ours (torn, planted, foreign).
 
     Training resumes from a checkpoint it can load; one it refuses would fail the stack on every
     run, so it is removed (never unpickled) and training starts over.
     """
     from seamless_usd.synthesis.checkpoint import CHECKPOINT_NAME, load_checkpoint
+    from seamless_usd.synthesis.seeds import seed_checkpoint_dir
 
-    root = Path(checkpoint_dir)
-    for path in [root / CHECKPOINT_NAME, *sorted(root.glob(f"seed-*/{CHECKPOINT_NAME}"))]:  # one per seed
+    for i in range(seeds):  # one checkpoint per seed
+        path = seed_checkpoint_dir(checkpoint_dir, i) / CHECKPOINT_NAME
         if not path.exists():
             continue
         try:

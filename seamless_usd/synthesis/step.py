@@ -23,7 +23,7 @@ from .features import style_loss
 from .networks import Discriminator, Generator
 from .precision import autocast
 
-__all__ = ["Batch", "generate", "d_loss", "g_loss", "training_step", "StepFunctions"]
+__all__ = ["Batch", "generate", "d_loss", "g_loss", "training_step", "step_parts", "StepFunctions"]
 
 
 @dataclass
@@ -79,6 +79,15 @@ def g_loss(D: Discriminator, extractor: nn.Module, fake: torch.Tensor, batch: Ba
     if use_style:  # a step without it keeps the latest figure in the run's losses
         parts["style"] = float(sty.detach())
     return total, parts
+
+
+def step_parts(config: SynthesisConfig, step: int) -> tuple[bool, bool]:
+    """(update D, compute the style loss) at ``step``: every ``d_every``-th / ``style_every``-th step.
+
+    >>> step_parts(SynthesisConfig(d_every=2, style_every=3), 3)
+    (False, True)
+    """
+    return step % config.d_every == 0, step % config.style_every == 0
 
 
 @dataclass

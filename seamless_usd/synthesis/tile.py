@@ -114,7 +114,8 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
         if len(models) > 1:
             run.score, run.scale, run.patch = fidelity_score(run.tile.maps, working)
         runs.append(run)
-    gan = choose_seed(runs).tile
+    chosen = choose_seed(runs)
+    gan = chosen.tile
     seeds = [r.summary() for r in runs] if len(runs) > 1 else []
     timings["sample"] = time.perf_counter() - t2
     gan_hw = next(iter(gan.maps.values())).shape[:2]
@@ -128,7 +129,8 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     else:  # the paper's 2c x 2c, at the source's resolution
         out_hw = (round(gan_hw[0] / f_y), round(gan_hw[1] / f_x))
     t3 = time.perf_counter()
-    layout_scale = {w.name: round(scale_ratio(gan.maps[w.name], w.pixels, w.is_normal), 3) for w in working}
+    layout_scale = chosen.scale or {  # the seed choice measured it already
+        w.name: round(scale_ratio(gan.maps[w.name], w.pixels, w.is_normal), 3) for w in working}
     low, high = LAYOUT_SCALE_RANGE
     use_layout = all(low <= v <= high for v in layout_scale.values())
     layout = [gan.maps[m.name] for m in maps] if use_layout else None

@@ -20,7 +20,7 @@ from .features import build_feature_extractor
 from .networks import Discriminator, Generator, init_weights
 from .precision import pick_device, resolve_precision
 from .schedule import learning_rate
-from .step import Batch, StepFunctions, d_loss, g_loss, generate, training_step
+from .step import Batch, StepFunctions, d_loss, g_loss, generate, step_parts, training_step
 from .types import MapInput, TrainingProgress, stack_shape
 
 __all__ = ["TrainedModel", "train", "training_hash", "build_networks"]
@@ -159,7 +159,7 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
                 for group in opt.param_groups:
                     group["lr"] = lr
             batch = _step_batch(x, seed, step, k, config)
-            update_d, use_style = step % config.d_every == 0, step % config.style_every == 0
+            update_d, use_style = step_parts(config, step)
             losses = {**losses, **training_step(G, D, opt_g, opt_d, extractor, batch, channels, config, dev,
                                                 precision, scaler, workers, plan.stacked, fns, update_d, use_style)}
             done = step + 1
