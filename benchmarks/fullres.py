@@ -25,6 +25,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 TEXTURES = HERE.parent.parent / "shared" / "textures"
+NOTES = "## Notes"  # fullres.md keeps everything from this heading on when the table is rewritten
 MAPS = (("brick_base_gray.jpg", False), ("brick_normal.jpg", True), ("brick_roughness.jpg", False))
 
 
@@ -66,7 +67,8 @@ def child(size: int, preset: str, iterations: int | None, textures: Path) -> dic
         "total_s": round(total, 1), "total_at_preset_iterations_s": round(scaled, 1),
         "peak_rss_gib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024 ** 2, 2),
         "working_size": list(made.working_size), "structure_px": round(made.structure_px, 1),
-        "tile_size": list(made.tile_size), "layout_used": made.layout_used,
+        "tile_size": list(made.tile_size), "layout_used": made.layout_used, "layout": made.layout_kind,
+        "lattice": made.lattice,
         "levels": [(lv["tile"][0], lv["seconds"]) for lv in made.refine_levels],
         "threads": int(os.environ.get("OMP_NUM_THREADS", "0")) or None,
     }
@@ -106,13 +108,17 @@ def main(argv=None) -> int:
     a.out.mkdir(parents=True, exist_ok=True)
     (a.out / "fullres.json").write_text(json.dumps(rows, indent=1) + "\n")
     lines = ["# Full-resolution benchmark", "", f"Command: `benchmarks/fullres.py {' '.join(argv or sys.argv[1:])}`", "",
-             "| size | working | train s | sample s | refine s | total s | total at preset iterations s | peak RSS GiB | load |",
-             "|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
+             "| size | working | train s | sample s | refine s | lattice s | total s | total at preset iterations s "
+             "| peak RSS GiB | tile | layout | load |",
+             "|---:|---|---:|---:|---:|---:|---:|---:|---:|---|---|---:|"]
     for r in rows:
         lines.append(f"| {r['size']} | {'x'.join(map(str, r['working_size']))} | {r.get('train_s', 0):.0f} | "
-                     f"{r.get('sample_s', 0):.1f} | {r.get('refine_s', 0):.1f} | {r['total_s']:.0f} | "
-                     f"{r['total_at_preset_iterations_s']:.0f} | {r['peak_rss_gib']:.2f} | {r['load_average_at_start']:.2f} |")
-    (a.out / "fullres.md").write_text("\n".join(lines) + "\n")
+                     f"{r.get('sample_s', 0):.1f} | {r.get('refine_s', 0):.1f} | {r.get('lattice_s', 0):.1f} | "
+                     f"{r['total_s']:.0f} | {r['total_at_preset_iterations_s']:.0f} | {r['peak_rss_gib']:.2f} | "
+                     f"{'x'.join(map(str, r['tile_size']))} | {r.get('layout', '')} | {r['load_average_at_start']:.2f} |")
+    page = a.out / "fullres.md"
+    notes = page.read_text().partition(NOTES)[2] if page.exists() else ""  # kept: written by hand
+    page.write_text("\n".join(lines) + "\n" + (f"\n{NOTES}{notes}" if notes else ""))
     return 0
 
 

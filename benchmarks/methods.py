@@ -7,8 +7,14 @@
 ``refine-random``
     The toroidal exemplar refinement alone, from a block-random start, at the source's resolution.
 ``seamlessgan+refine``
-    The product's default: the GAN's tile seeds the refinement (the same trained model as
-    ``seamlessgan``, so the two rows differ only by the refinement).
+    The GAN's tile seeds the refinement (``--refine gan``; the same trained model as ``seamlessgan``,
+    so the two rows differ only by the refinement).
+``lattice-cut``
+    Only for stacks that repeat on a lattice: a tile of whole periods cut from the source, joined
+    across its wraps along minimum-error boundary cuts (``seamless_usd.synthesis.lattice``).
+``seamless-usd``
+    The product's default (``--refine on``): of the two rows above, the one that passes Q,
+    then the lower fidelity score; the same as ``seamlessgan+refine`` where there is no lattice.
 ``img2texture``
     The ``img2texture`` package from PyPI (overlap-and-blend of opposite borders through PIL, 8-bit),
     the tool many users reach for today. Normal maps are renormalised afterwards.
@@ -23,7 +29,8 @@ import numpy as np
 
 __all__ = ["MethodResult", "SYNTHESIS_METHODS", "run_synthesis", "img2texture_tile", "to_source_grid"]
 
-SYNTHESIS_METHODS = ("seamlessgan", "refine-random", "seamlessgan+refine")
+SYNTHESIS_METHODS = ("seamlessgan", "refine-random", "seamlessgan+refine", "lattice-cut", "seamless-usd")
+_REFINED = ("seamlessgan+refine", "lattice-cut", "seamless-usd")
 
 
 @dataclass
@@ -66,7 +73,8 @@ def preset_config(preset: str, overrides: dict | None = None):
 
 def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str], preset: str, seed: int,
                   log: Callable[[str], None], overrides: dict | None = None) -> dict[str, MethodResult]:
-    """The synthesis methods asked for, training SeamlessGAN once for both GAN rows."""
+    """The synthesis methods asked for, training SeamlessGAN once for all GAN rows (``lattice-cut`` is
+    missing from the result for a stack without a lattice)."""
     from seamless_usd import synthesis as syn
 
     config = preset_config(preset, overrides)
@@ -77,7 +85,7 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
         res = syn.refine([m.pixels for m in maps], None, maps[0].pixels.shape[:2], seed=seed)
         out["refine-random"] = MethodResult({m.name: t for m, t in zip(maps, res.maps)}, time.perf_counter() - t0,
                                             {"levels": len(res.levels)})
-    if not {"seamlessgan", "seamlessgan+refine"} & set(methods):
+    if not {"seamlessgan", *_REFINED} & set(methods):
         return out
     step = max(1, config.iterations // 10)
 
@@ -86,7 +94,7 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
             log(f"    train {p.iteration}/{p.total}  {p.it_per_s:.1f} it/s  eta {p.eta_s / 60:.1f} min")
 
     t0 = time.perf_counter()
-    made = syn.make_tile(maps, config, seed=seed, progress=progress)
+    made = syn.make_tile(maps, config, seed=seed, progress=progress, keep_alternatives=True)
     total = time.perf_counter() - t0
     gan = made.gan
     info = {
@@ -97,14 +105,23 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
     }
     if made.seeds:
         info["seeds"] = made.seeds
-    gan_seconds = total - made.timings.get("refine", 0.0)
+    lattice_s = made.timings.get("lattice", 0.0)
+    gan_seconds = total - made.timings.get("refine", 0.0) - lattice_s
     if "seamlessgan" in methods:
         working = {w.name: w.pixels for w in syn.downsample_maps(maps, made.working_size)}
         out["seamlessgan"] = MethodResult(dict(gan.maps), gan_seconds, dict(info), references=working)
-    if "seamlessgan+refine" in methods:
-        out["seamlessgan+refine"] = MethodResult(
-            dict(made.maps), total,
-            {**info, "layout_used": made.layout_used, "refine_seconds": round(made.timings.get("refine", 0.0), 2)})
+    refined = {"seamless-usd": made.maps, made.layout_kind: made.maps, **made.alternatives}
+    refined["seamlessgan+refine"] = refined.get("gan", refined.get("random"))
+    refined["lattice-cut"] = refined.get("lattice")
+    seconds = {"seamless-usd": total, "seamlessgan+refine": total - lattice_s,
+               "lattice-cut": gan_seconds + lattice_s}
+    details = {**info, "layout_used": made.layout_used, "refine_seconds": round(made.timings.get("refine", 0.0), 2),
+               "layout": made.layout_kind, "lattice": made.lattice}
+    passed = {"seamless-usd": made.passed, "seamlessgan+refine": bool(gan.passed),
+              "lattice-cut": bool(made.lattice.get("q_passed"))}  # Q of each row's own tile
+    for method in _REFINED:
+        if method in methods and refined[method] is not None:
+            out[method] = MethodResult(dict(refined[method]), seconds[method], {**details, "passed": passed[method]})
     return out
 
 

@@ -44,6 +44,7 @@ from quality_md import TARGETS, fmt, to_markdown  # noqa: E402,F401 (re-exported
 from stacks import SHARED_DIR, STACKS, MapFile, StackSpec, load_stack  # noqa: E402,F401 (re-exported)
 
 from seamless_usd import metrics as M  # noqa: E402
+from seamless_usd.synthesis.lattice import find_lattice, lattice_ratio  # noqa: E402
 
 __all__ = [
     "MapFile",
@@ -222,11 +223,11 @@ def run(
     kept: list[dict] = []
     if update and (out / "quality.json").exists():
         previous = json.loads((out / "quality.json").read_text())
-        kept = [r for r in previous["results"] if r["method"] not in methods]
+        kept = [r for r in previous["results"] if r["method"] not in methods or r["stack"] not in stacks]
         others = {r["method"] for r in kept}
         result["settings"]["methods"] = [m for m in METHODS if m in others or m in methods]
-        result["settings"]["command"] = (f"{command} (rows of {', '.join(methods)}; the other rows from "
-                                         f"{previous['settings'].get('command')})")
+        result["settings"]["command"] = (f"{command} (rows of {', '.join(methods)} on {', '.join(stacks)}; "
+                                         f"the other rows from {previous['settings'].get('command')})")
         for key in ("preset", "preset_config"):
             result["settings"].setdefault(key, previous["settings"].get(key))
         result["settings"]["stacks"] = dict(previous["settings"].get("stacks", {}))
@@ -244,6 +245,9 @@ def run(
             made = run_synthesis(stack, synthesis, preset, seed, log, overrides)
         for method in methods:
             log(f"{stack_name}: {method} ...")
+            if method in SYNTHESIS_METHODS and method not in made:
+                log(f"  {method}: not applicable to {stack_name}")
+                continue
             if method in SYNTHESIS_METHODS:
                 res = made[method]
             elif method == "img2texture":
@@ -251,6 +255,8 @@ def run(
                 res = MethodResult({k: img2texture_tile(px, n) for k, (px, n) in stack.items()}, time.perf_counter() - t0)
             else:
                 res = run_baseline(method, stack)
+            refs = [res.references[k] if res.references else px for k, (px, _) in stack.items()]  # same grid
+            ratio = lattice_ratio([res.tiles[k] for k in stack], refs, find_lattice(refs))
             for map_name, (src_full, is_normal) in stack.items():
                 tile = res.tiles[map_name]
                 src = res.references[map_name] if res.references else src_full  # same texel scale
@@ -264,6 +270,7 @@ def run(
                     "tile_size": list(tile.shape[:2]),
                     **{k: _round(v) for k, v in m.items()},
                     "seconds": round(res.seconds, 2),
+                    "lattice_ratio": _round(ratio),  # the stack's, on every map's row
                     **res.info,
                 }
                 rows.append(row)
@@ -317,7 +324,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--style-every", type=int, default=None, help="override the preset's steps per style-loss step")
     p.add_argument("--d-every", type=int, default=None, help="override the preset's steps per discriminator step")
     p.add_argument("--update", action="store_true",
-                   help="keep the other methods' rows of the quality.json already in --out (re-run some methods only)")
+                   help="keep the rows of other methods and other stacks of the quality.json already in --out "
+                        "(re-run some methods or stacks only)")
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: benchmarks/results)")
     p.add_argument("--textures-dir", type=Path, default=SHARED_DIR, help="MaterialX images for the mx_* stacks (default: ../shared/textures from the repository root)")
     p.add_argument("--max-size", type=int, default=None, help="downscale inputs to at most this many px (quick runs)")

@@ -89,9 +89,11 @@ def to_markdown(result: dict) -> str:
         for r in (r for r in rows if r["stack"] == stack):
             tile = "x".join(str(n) for n in r["tile_size"])
             extra = ""
-            if r["method"].startswith(SEAMLESSGAN) and r.get("passed") is not None:
+            if r.get("passed") is not None:  # the SeamlessGAN rows: Q of the row's layout
                 extra = "" if r["passed"] else " (Q failed)"
-            if r.get("layout_used") is False:
+            if r["method"] == "seamless-usd" and r.get("layout") == "lattice":
+                extra += " (lattice cut)"
+            elif r.get("layout_used") is False and r["method"] != "lattice-cut":
                 extra += " (GAN layout rejected: random start)"
             lines.append(
                 f"| {r['map']}{' (normal)' if r['is_normal'] else ''} | {r['method']}{extra} | {tile} | "
@@ -102,6 +104,12 @@ def to_markdown(result: dict) -> str:
                 + f" | {fmt(r['seconds'], 1)} |"
             )
         lines += [""]
+        ratios = {r["method"]: r["lattice_ratio"] for r in rows
+                  if r["stack"] == stack and r.get("lattice_ratio") is not None}
+        if ratios:
+            lines += ["Lattice ratio (the tile's autocorrelation at the source's lattice periods over the source's; "
+                      "about 1 when the repeat is kept, target >= 0.9): "
+                      + ", ".join(f"{m} {fmt(v, 2)}" for m, v in ratios.items()), ""]
     lines += ["## Medians per method", "", "| method | maps | " + " | ".join(M.METRIC_KEYS) + " |"]
     lines += ["|---|---:|" + "---:|" * len(M.METRIC_KEYS)]
     for method in s["methods"]:

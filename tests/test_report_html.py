@@ -122,6 +122,23 @@ def test_run_details_list_each_seed_and_the_one_kept():
     assert "GAN seeds" not in render_html(Report(sources=["s.usda"], stacks=[one]))
 
 
+def test_run_details_say_what_seeded_the_refinement():
+    lattice = {"period_px": [107.49, 106.51], "strength": [0.51, 0.56], "tile": [215, 213], "band": [27, 27],
+               "offset": [14, 16], "q_passed": True, "lattice_ratio": 0.97, "passes": True, "score": 0.98,
+               "score_gan": 1.94, "q_passed_gan": False, "lattice_ratio_gan": 0.45, "passes_gan": False,
+               "chosen": True}
+    stack = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.PASSED,
+                        resampled={"gan": {"layout": "lattice", "lattice": lattice}})
+    page = render_html(Report(sources=["s.usda"], stacks=[stack]))
+    assert "a cut of whole lattice periods from the source; repeats every 107.49 x 106.51 px" in page
+    assert ("lattice cut 215x213 px scored 0.98 (Q passed, lattice ratio 0.97, passes) against 1.94 from gan "
+            "(Q not passed, lattice ratio 0.45)") in page
+    plain = StackReport(id="M-2", material="</M2>", source="s.usda", status=StackStatus.PASSED,
+                        resampled={"gan": {"layout": "gan", "lattice": {"period_px": [None, None]}}})
+    page = render_html(Report(sources=["s.usda"], stacks=[plain]))
+    assert "refinement started from" in page and "the SeamlessGAN tile" in page and "repeats every" not in page
+
+
 def test_left_alone_and_failed_stacks_say_why():
     left = StackReport(id="D-1", material="</Decal>", source="s.usda", status=StackStatus.LEFT_ALONE,
                        intent="uv-atlas", intent_reason="UVs 0.11-0.89, 37 islands")

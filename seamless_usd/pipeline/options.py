@@ -20,6 +20,10 @@ class ProgressEvent:
     detail: Any = None  # synthesis progress record for "train"/"sample"; a StackReport for "stack-done"
 
 
+REFINE_MODES = ("on", "gan", "off")
+TILE_SIZES = ("source", "paper")
+
+
 @dataclass(frozen=True)
 class Options:
     """How to process: everything the CLI can say, as one value.
@@ -45,11 +49,18 @@ class Options:
     seeds: int | None = None  # override the preset's seeds trained side by side (the best tile is kept)
     scheduler: str | None = None  # None: in this process; "local:N": N local Dask workers; "tcp://host:port"
     jobs: int | None = None  # stacks trained at once (local workers); None: 1 in process, N for local:N
-    refine: str = "on"  # "on": exemplar refinement to the source's resolution; "off": the pure SeamlessGAN tile
+    refine: str = "on"  # "on": exemplar refinement to the source's resolution, from the GAN tile or, for stacks
+    #                     that repeat on a lattice, a cut of whole periods when that scores better; "gan": from
+    #                     the GAN tile only; "off": the pure SeamlessGAN tile
     tile_size: str = "source"  # "source": tile has the source's pixel size; "paper": the paper's 2c x 2c tile
     force: bool = False  # process every stack whatever its tiling intent (uv-atlas, already-tileable, other)
     force_materials: tuple[str, ...] = ()  # fnmatch patterns of materials processed whatever their intent
     progress: Callable[[ProgressEvent], None] | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        for name, valid in (("refine", REFINE_MODES), ("tile_size", TILE_SIZES)):
+            if getattr(self, name) not in valid:
+                raise ValueError(f"Options.{name} must be one of {', '.join(valid)}; got {getattr(self, name)!r}")
 
     def with_(self, **changes: Any) -> "Options":
         return replace(self, **changes)

@@ -211,7 +211,7 @@ def _planned_result(stack: TextureStack, out_dir: Path, options: Options):
 
     sizes = [(m.image.width, m.image.height) for m in stack.maps if m.image is not None]
     working = WorkingResolution(max_size=options.max_size).working_size(sizes) if sizes else (1, 1)
-    if options.tile_size == "source" and options.refine == "on":
+    if options.tile_size == "source" and options.refine != "off":
         uv, crop = (1.0, 1.0), (working[0] // 2, working[1] // 2)
     else:
         uv, crop = uv_scale_for(working, working), working

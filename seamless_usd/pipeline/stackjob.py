@@ -37,7 +37,7 @@ class JobSettings:
     max_size: int | None = None
     cache_dir: Path | None = None
     max_pixels: int | None = DEFAULT_MAX_PIXELS  # header limit per image file (width * height)
-    refine: str = "on"  # exemplar refinement to the source's resolution ("off": pure SeamlessGAN tile)
+    refine: str = "on"  # refinement to the source's resolution ("gan": no lattice cut; "off": the pure GAN tile)
     tile_size: str = "source"  # "source" (same pixel size as the source) or "paper" (2c x 2c)
 
     @classmethod
@@ -163,7 +163,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         config = dataclasses.replace(config, iterations=settings.iterations)
     if settings.seeds is not None:
         config = dataclasses.replace(config, seeds=settings.seeds)
-    refine_config = synthesis.RefineConfig() if settings.refine == "on" else None
+    refine_config = None if settings.refine == "off" else synthesis.RefineConfig(lattice=settings.refine == "on")
     key = stack_key(
         (
             (n, p.pixels, f"{m.channels_used}|{m.color_space.value}|{m.is_normal}|{sorted(r.role for r in m.roles)}")
@@ -185,7 +185,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             tile = made.gan
             meta = {
                 "crop_size": list(tile.crop_size),
-                "q": _q_dict(tile),
+                "q": _q_dict(made),  # of the written tile's layout
                 "candidates": len(tile.candidates),
                 "model_hash": tile.model_hash,
                 "device": tile.device,
@@ -198,12 +198,14 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                     "gan_working_size": [made.working_size[1], made.working_size[0]],
                     "refined": made.refined,
                     "layout_used": made.layout_used,
+                    "layout": made.layout_kind,  # "gan", "random" or "lattice"
+                    "lattice": made.lattice,
                     "layout_scale": {m.asset: made.layout_scale.get(n) for n, m in zip(names, stack.maps)},
                     "refine_levels": made.refine_levels,
                     "seeds": made.seeds,  # with several seeds: each one's figures, and the one kept
                 },
             }
-            discriminator = _discriminator_preview(tile)
+            discriminator = _discriminator_preview(made)
             tiles = dict(made.maps)
             if discriminator is not None:
                 tiles["__discriminator__"] = discriminator.astype(np.float32)
@@ -236,6 +238,9 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     uv_scale = tuple(float(v) for v in meta["uv_scale"])
     failing = [f"{m.asset}: {figure}" for m in stack.maps
                for figure in metrics.failing_figures(outcomes[map_identity(m)].metrics)]
+    ratio = _written_lattice_ratio(dict(meta["scale"]))
+    if ratio is not None and ratio < synthesis.LATTICE_TARGET:  # the source repeats and the tile breaks it
+        failing.append(f"all maps: lattice_ratio {ratio:.3g}")
     previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator)
     return StackOutcome(
         stack_id=stack.id,
@@ -258,6 +263,13 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         previews=previews,
         findings=list(pixels.findings),
     )
+
+
+def _written_lattice_ratio(gan: dict) -> float | None:
+    """The lattice ratio of the tile that was written, when the stack repeats (``synthesis.lattice``)."""
+    lattice = gan.get("lattice") or {}
+    kind = gan.get("layout")
+    return lattice.get("lattice_ratio") if kind == "lattice" else lattice.get(f"lattice_ratio_{kind}")
 
 
 def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:

@@ -61,6 +61,36 @@ def _seeds_text(seeds: list[dict] | None) -> str | None:
                      + (" — kept" if s.get("chosen") else "") for s in seeds) + " (worst figure / its target)"
 
 
+_LAYOUTS = {"gan": "the SeamlessGAN tile", "random": "a random start (the GAN tile's feature scale was implausible)",
+            "lattice": "a cut of whole lattice periods from the source"}
+
+
+def _layout_text(gan: dict) -> str | None:
+    """What seeded the refinement, and the lattice the stack repeats on (with both candidates' scores)."""
+    kind = gan.get("layout")
+    if kind is None:
+        return None
+    text = _LAYOUTS.get(kind, kind)
+    lattice = gan.get("lattice") or {}
+    periods = lattice.get("period_px") or [None, None]
+    if any(p is not None for p in periods):
+        axes = " x ".join("none" if p is None else f"{p:g}" for p in periods)
+        text += f"; repeats every {axes} px (y x x)"
+        if "score" in lattice:
+            def verdict(suffix: str) -> str:
+                q = "Q passed" if lattice.get("q_passed" + suffix) else "Q not passed"
+                ratio = lattice.get("lattice_ratio" + suffix)
+                return (q + (f", lattice ratio {ratio:.2f}" if ratio is not None else "")
+                        + (", passes" if lattice.get("passes" + suffix) else ""))
+            rival = next((k[len("score_"):] for k in lattice if k.startswith("score_")), None)
+            text += (f"; lattice cut {lattice['tile'][0]}x{lattice['tile'][1]} px scored {lattice['score']:.2f}"
+                     f" ({verdict('')})")
+            if rival is not None:
+                text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)});"
+                         " worst figure / its target")
+    return text
+
+
 def _map_name(m: MapReport) -> str:
     return ", ".join(m.roles) or Path(m.asset).name
 
@@ -183,6 +213,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
         "working resolution": _policy_text(stack.resampled),
         "candidates tried": stack.candidates or None,
         "GAN seeds": _seeds_text(stack.resampled.get("gan", {}).get("seeds")),
+        "refinement started from": _layout_text(stack.resampled.get("gan", {})),
         "timings (s)": ", ".join(f"{k} {v:.1f}" for k, v in stack.timings.items()) or None,
         "device / precision": f"{stack.device} / {stack.precision}" if stack.device else None,
         "model hash": stack.model_hash or None,

@@ -13,6 +13,7 @@ import os
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from .config import PRESETS, SynthesisConfig, get_preset
+from .lattice import LATTICE_TARGET
 from .refine import RefineConfig, RefineResult, refine
 from .sample import SamplingProgress, sample
 from .tile import MadeTile, downsample_maps, make_tile
@@ -21,4 +22,4 @@ from .types import Candidate, MapInput, QResult, TileResult, TrainingProgress
 
 __all__ = ["SynthesisConfig", "PRESETS", "get_preset", "MapInput", "train", "sample", "TrainedModel",
            "TileResult", "QResult", "Candidate", "TrainingProgress", "SamplingProgress",
-           "RefineConfig", "RefineResult", "refine", "MadeTile", "make_tile", "downsample_maps"]
+           "RefineConfig", "RefineResult", "refine", "MadeTile", "make_tile", "downsample_maps", "LATTICE_TARGET"]

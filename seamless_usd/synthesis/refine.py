@@ -31,7 +31,7 @@ import torch.nn.functional as F
 from .patches import PatchSpace, clamp_field, gather, occurrence_bias, patch_cost, patchmatch, vote
 from .precision import pick_device
 
-__all__ = ["RefineConfig", "RefineResult", "refine", "joint_features", "level_scales"]
+__all__ = ["RefineConfig", "RefineResult", "refine", "joint_features", "level_scales", "resize_periodic", "spread"]
 
 
 @dataclass(frozen=True)
@@ -54,6 +54,8 @@ class RefineConfig:
     #                          default) against the copied texels themselves. On a 512 px wood window the vote's
     #                          averaging made the search pick smooth patches: patch distance 4.9 against 1.2
     #                          without it, and the grain washed out.
+    lattice: bool = True  # stacks that repeat on a lattice (bricks, weaves) also get a tile cut to whole periods
+    #                       from the source (see .lattice); Q and the fidelity figures choose between the two
 
 
 @dataclass
@@ -64,7 +66,7 @@ class RefineResult:
     seconds: float = 0.0
 
 
-def _spread(m: np.ndarray) -> float:
+def spread(m: np.ndarray) -> float:
     """RMS distance of a map's pixels to its mean colour (at least 1e-3, for flat maps)."""
     m = np.asarray(m, dtype=np.float32)
     return max(float(np.sqrt(((m - m.mean(axis=(0, 1))) ** 2).sum(axis=-1).mean())), 1e-3)
@@ -73,7 +75,7 @@ def _spread(m: np.ndarray) -> float:
 def joint_features(maps: list[np.ndarray], like: list[np.ndarray] | None = None) -> np.ndarray:
     """(H, W, sum C_i) float32: every map divided by its spread (that of ``like``'s map when given),
     so that each contributes equally to patch distances."""
-    parts = [np.asarray(m, dtype=np.float32) / _spread(ref) for m, ref in zip(maps, like or maps)]
+    parts = [np.asarray(m, dtype=np.float32) / spread(ref) for m, ref in zip(maps, like or maps)]
     return np.concatenate(parts, axis=2)
 
 
@@ -93,7 +95,7 @@ def _resize(x: torch.Tensor, hw: tuple[int, int]) -> torch.Tensor:
     return F.interpolate(x[None], size=hw, mode="bilinear", align_corners=False)[0]
 
 
-def _resize_periodic(x: torch.Tensor, hw: tuple[int, int]) -> torch.Tensor:
+def resize_periodic(x: torch.Tensor, hw: tuple[int, int]) -> torch.Tensor:
     """Resize a periodic tile: pad circularly first so the borders see their wrapped neighbours."""
     if tuple(x.shape[1:]) == tuple(hw):
         return x
@@ -188,7 +190,7 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
             # (PatchMatch with the coherence and occurrence terms: an exact per-pixel search collapses
             # onto the few source patches nearest to a smooth layout and carries a texel grid upward)
             fld = _random_field(t_hw, space.valid, r, max(4, config.patch), gen, dev)
-            guide = space.describe(_resize_periodic(lay, t_hw), periodic=True) if layout is not None else None
+            guide = space.describe(resize_periodic(lay, t_hw), periodic=True) if layout is not None else None
             radius = None
         else:
             ratio = (t_hw[0] / prev_tile[0], t_hw[1] / prev_tile[1])

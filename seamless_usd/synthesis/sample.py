@@ -13,9 +13,9 @@ from .precision import autocast
 from .quality import quality
 from .tiling import tile_generate
 from .train import TrainedModel
-from .types import Candidate, MapInput, TileResult, stack_shape
+from .types import Candidate, MapInput, QResult, TileResult, stack_shape
 
-__all__ = ["sample", "crop_plan", "SamplingProgress"]
+__all__ = ["sample", "judge", "crop_plan", "SamplingProgress"]
 
 
 @dataclass
@@ -131,3 +131,19 @@ def sample(model: TrainedModel, maps: list[MapInput], *, seed: int = 0, tile_siz
     return TileResult(maps=maps_out, crop_size=cand.crop_size, passed=cand.q.passed, q=cand.q,
                       candidates=candidates, timings=timings, model_hash=model.hash, device=str(dev),
                       precision=precision, offset=cand.offset)
+
+
+@torch.no_grad()
+def judge(model: TrainedModel, tile: dict[str, np.ndarray]) -> QResult:
+    """Q of a periodic tile that G did not make (one cut from the source, say), at the working resolution.
+
+    The discriminator sees the tile rolled by half its size, so the tile's own wrap-around seams lie
+    in the centre bands that Q reads, where the latent copies of a GAN tile meet.
+    """
+    x = stack_tensor([MapInput(n, np.ascontiguousarray(tile[n], dtype=np.float32)) for n in model.names],
+                     model.device)
+    x = torch.roll(x, (x.shape[2] // 2, x.shape[3] // 2), dims=(2, 3))
+    D = model.D.eval()
+    with autocast(model.device, model.precision):
+        d_map = D(x)
+    return quality(d_map.float()[0, 0].cpu().numpy(), model.config.gamma, model.config.band_fraction)

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["structure_size", "working_factor", "STRUCTURE_CORRELATION", "CROP_PER_STRUCTURE"]
+__all__ = ["structure_size", "working_factor", "autocorrelation", "box_downsample", "STRUCTURE_CORRELATION",
+           "CROP_PER_STRUCTURE"]
 
 #: The structure size is the radius where the radially averaged autocorrelation first falls below
 #: this value (fine grain decorrelates within a few pixels; the larger arrangement much later).
@@ -24,9 +25,10 @@ CROP_PER_STRUCTURE = 4.7
 _MAX_ANALYSIS = 1024  # larger maps are box-downsampled for the autocorrelation (lengths scaled back)
 
 
-def _correlation_length(u: np.ndarray, threshold: float) -> float:
-    """Radius (px) where the radial mean of the normalised autocorrelation of ``u`` (H, W, C) drops below
-    ``threshold``; computed with zero padding, so the image is not treated as periodic."""
+def autocorrelation(u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Normalised autocorrelation of ``u`` (H, W, C), summed over channels, with zero padding (the
+    image is not treated as periodic) and each lag divided by its overlap: ``(acf (2H, 2W), lag_y
+    (2H,), lag_x (2W,))``, ``acf[0, 0] == 1``. A constant map gives all zeros."""
     u = u.astype(np.float64)
     u = u - u.mean(axis=(0, 1))
     h, w = u.shape[:2]
@@ -37,8 +39,27 @@ def _correlation_length(u: np.ndarray, threshold: float) -> float:
     overlap = np.maximum(np.outer(h - np.abs(ly), w - np.abs(lx)), 1.0)
     acf = acf / overlap
     if acf[0, 0] <= 0:
+        return np.zeros_like(acf), ly, lx
+    return acf / acf[0, 0], ly, lx
+
+
+def box_downsample(u: np.ndarray, max_side: int) -> tuple[np.ndarray, int]:
+    """``u`` (H, W, C) halved by 2x2 box means until its longest side is at most ``max_side``; with the factor."""
+    factor = 1
+    while max(u.shape[:2]) > max_side:
+        h, w = u.shape[0] // 2 * 2, u.shape[1] // 2 * 2
+        u = u[:h, :w].reshape(h // 2, 2, w // 2, 2, -1).mean(axis=(1, 3))
+        factor *= 2
+    return u, factor
+
+
+def _correlation_length(u: np.ndarray, threshold: float) -> float:
+    """Radius (px) where the radial mean of the normalised autocorrelation of ``u`` (H, W, C) drops below
+    ``threshold``."""
+    acf, ly, lx = autocorrelation(u)
+    if acf[0, 0] <= 0:
         return 0.0  # a constant map has no structure
-    acf = acf / acf[0, 0]
+    h, w = u.shape[:2]
     radius = np.rint(np.sqrt(ly[:, None] ** 2 + lx[None, :] ** 2)).astype(np.int64)
     limit = min(h, w) // 2
     keep = radius < limit
@@ -60,11 +81,7 @@ def structure_size(maps: list[np.ndarray], threshold: float = STRUCTURE_CORRELAT
     for m in maps:
         u = np.asarray(m, dtype=np.float32)
         u = u[..., None] if u.ndim == 2 else u
-        factor = 1
-        while max(u.shape[:2]) > _MAX_ANALYSIS:
-            h, w = u.shape[0] // 2 * 2, u.shape[1] // 2 * 2
-            u = u[:h, :w].reshape(h // 2, 2, w // 2, 2, -1).mean(axis=(1, 3))
-            factor *= 2
+        u, factor = box_downsample(u, _MAX_ANALYSIS)
         sizes.append(_correlation_length(u, threshold) * factor)
     return max(sizes) if sizes else 0.0
 

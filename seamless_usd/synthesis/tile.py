@@ -9,6 +9,8 @@
 """
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,15 +20,16 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from seamless_usd.metrics import scale_ratio
+from seamless_usd.metrics import outside_target, scale_ratio
 
 from .config import SynthesisConfig
 from .data import effective_k
-from .refine import RefineConfig, refine
-from .sample import sample
+from .lattice import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
+from .refine import RefineConfig, refine, resize_periodic
+from .sample import judge, sample
 from .scale import structure_size, working_factor
 from .seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
-from .types import MapInput, TileResult, stack_shape
+from .types import MapInput, QResult, TileResult, stack_shape
 
 __all__ = ["MadeTile", "make_tile", "downsample_maps", "TILE_SIZES", "LAYOUT_SCALE_RANGE"]
 
@@ -37,6 +40,9 @@ TILE_SIZES = ("source", "paper")
 #: test preset) would only be copied faithfully into nonsense, and the refinement starts from a
 #: random field instead. The default preset's brick tile scores 1.0-1.3.
 LAYOUT_SCALE_RANGE = (0.5, 2.0)
+
+#: Layout candidates are compared on the source's grid, halved until its longest side is at most this (px).
+SCORE_SIDE = 1024
 
 
 @dataclass
@@ -57,6 +63,19 @@ class MadeTile:
     refine_levels: list[dict] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     seeds: list[dict] = field(default_factory=list)  # with config.seeds > 1: each seed's figures and which won
+    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice": a cut (see .lattice)
+    lattice: dict = field(default_factory=dict)  # the stack's lattice, and each layout candidate's figures
+    q: QResult | None = None  # Q of the written tile: the GAN sample's, else D's verdict on the tile itself
+    alternatives: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)  # the candidate not written
+
+    def __post_init__(self) -> None:
+        if self.q is None:
+            self.q = self.gan.q
+
+    @property
+    def passed(self) -> bool:
+        """Whether the discriminator's Q passes on the written tile (through its layout for a refined GAN tile)."""
+        return bool(self.q.passed)
 
 
 def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInput]:
@@ -76,8 +95,8 @@ def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInpu
 
 def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: RefineConfig | None = RefineConfig(),
               tile_size: str = "source", seed: int = 0, device: str | torch.device | None = None,
-              checkpoint_dir: str | Path | None = None,
-              progress: Callable[[str, Any], None] | None = None) -> MadeTile:
+              checkpoint_dir: str | Path | None = None, progress: Callable[[str, Any], None] | None = None,
+              keep_alternatives: bool = False) -> MadeTile:
     """Make a tileable stack from ``maps`` (full resolution, network domain).
 
     1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there,
@@ -89,6 +108,12 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
        :data:`LAYOUT_SCALE_RANGE`; else a random start) into a tile of source texels at full resolution,
        ``tile_size`` deciding its pixel size (the source's, or the paper's 2c brought to full
        resolution). Without it, the GAN tile at the working resolution is the result.
+    4. For a stack that repeats on a lattice, the tile's lattice ratio is measured; with
+       ``refine_config.lattice`` and source-sized tiles, the stack also gets a tile cut to whole
+       periods of the source (:mod:`.lattice`), and the written tile is the one that
+       passes (Q, D's verdict on the cut's wrap seams; the scale and patch targets; the lattice ratio,
+       which sees a broken bond), then the one with the lower score.
+       ``keep_alternatives`` keeps the candidate not written in ``MadeTile.alternatives``.
     """
     assert tile_size in TILE_SIZES, f"tile_size must be one of {TILE_SIZES}, got {tile_size!r}"
     emit = progress or (lambda kind, detail: None)
@@ -138,6 +163,83 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
                     seed=seed, device=device, progress=lambda info: emit("refine", info))
     timings["refine"] = time.perf_counter() - t3
     tiles = {m.name: np.ascontiguousarray(t, dtype=np.float32) for m, t in zip(maps, result.maps)}
-    uv = (W / out_hw[1], H / out_hw[0])
-    return MadeTile(tiles, out_hw, (H, W), uv, structure, f, work_hw, gan, True, layout_scale, use_layout,
-                    result.levels, timings, seeds)
+    model = models[runs.index(chosen)]
+    # the refinement follows the GAN tile, so it inherits the sample's Q; from a random start it does
+    # not, and the discriminator judges the refined tile itself
+    q = None if use_layout else judge(model, _on_grid(tiles, maps, (f_y, f_x)))
+    made = MadeTile(tiles, out_hw, (H, W), (W / out_hw[1], H / out_hw[0]), structure, f, work_hw, gan, True,
+                    layout_scale, use_layout, result.levels, timings, seeds, "gan" if use_layout else "random", q=q)
+    t4 = time.perf_counter()
+    _try_lattice(made, maps, model, refine_config.lattice and tile_size == "source", keep_alternatives)
+    timings["lattice"] = time.perf_counter() - t4
+    return made
+
+
+def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[float, float]) -> dict[str, np.ndarray]:
+    """Periodic tiles resized by ``factor`` per axis (working / source size: onto the working grid)."""
+    out = {}
+    for m in maps:
+        t = torch.from_numpy(np.ascontiguousarray(tiles[m.name].transpose(2, 0, 1)))
+        hw = (max(8, round(t.shape[1] * factor[0])), max(8, round(t.shape[2] * factor[1])))
+        r = resize_periodic(t, hw)
+        if m.is_normal and r.shape[0] >= 3:
+            r = torch.cat([F.normalize(r[:3], dim=0, eps=1e-6), r[3:]], 0)
+        out[m.name] = np.ascontiguousarray(r.clamp(-1, 1).permute(1, 2, 0).numpy())
+    return out
+
+
+def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], q_passed: bool, lattice: Lattice
+            ) -> tuple[float, bool, float]:
+    """(score, passes, lattice ratio) of a candidate tile.
+
+    The score is :func:`.seeds.fidelity_score`, and the lattice ratio in the same units ((1 - r) over
+    (1 - LATTICE_TARGET)): none of the fidelity and seam figures sees a broken bond, the lattice ratio
+    does. The tile passes as a stack would (Q, the scale and patch targets) and keeps the repeat."""
+    score, scale, patch = fidelity_score(tiles, maps)
+    ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
+    score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
+    faithful = not any(outside_target("scale_ratio", scale[m.name]) or outside_target("patch_distance", patch[m.name])
+                       for m in maps)
+    return score, bool(q_passed and faithful and ratio >= LATTICE_TARGET), ratio
+
+
+def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_alternatives: bool) -> None:
+    """For a stack that repeats on a lattice, measure the written tile's lattice ratio and, with ``cut``,
+    cut a tile of whole periods (:func:`.lattice.lattice_cut`), kept in ``made`` when it wins: the
+    candidate that passes (Q, where the discriminator judges the cut's wrap on the working grid; the
+    scale and patch targets; the lattice ratio) before one that does not, then the lower score (see
+    :func:`_judged`). The figures are taken on the source's grid, halved down to SCORE_SIDE."""
+    H, W = made.grid_size
+    lattice = find_lattice([m.pixels for m in maps])
+    made.lattice = lattice.as_dict()
+    if not lattice.found:
+        return
+    halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
+    grid = downsample_maps(maps, (H // halve, W // halve)) if halve > 1 else maps
+    grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
+    current, current_passes, current_ratio = _judged(_on_grid(made.maps, maps, (1 / halve, 1 / halve)), grid,
+                                                     made.passed, grid_lattice)
+    kind = made.layout_kind
+    made.lattice.update({f"q_passed_{kind}": made.passed, f"lattice_ratio_{kind}": round(current_ratio, 3),
+                         f"passes_{kind}": current_passes, f"score_{kind}": round(current, 3)})
+    sizes = lattice_tile_size((H, W), lattice) if cut else None
+    if sizes is None:
+        return
+    tile_hw, band = sizes
+    field_, offset = lattice_cut([m.pixels for m in maps], tile_hw, band)
+    tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
+    q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
+    score, passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, q.passed, grid_lattice)
+    wins = (not passes, score) < (not current_passes, current)
+    made.lattice.update({"tile": list(tile_hw), "band": list(band), "offset": list(offset),
+                         "q_passed": bool(q.passed), "lattice_ratio": round(ratio, 3), "passes": passes,
+                         "score": round(score, 3), "chosen": wins})
+    if wins:
+        loser_kind, loser = made.layout_kind, dict(made.maps)
+        made.maps, made.tile_size, made.q = tiles, tuple(tile_hw), q
+        made.uv_scale = (W / tile_hw[1], H / tile_hw[0])
+        made.layout_kind, made.refine_levels = "lattice", []  # copied through the cut's field, not refined
+    else:
+        loser_kind, loser = "lattice", tiles
+    if keep_alternatives:
+        made.alternatives[loser_kind] = loser

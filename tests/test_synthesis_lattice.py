@@ -1,0 +1,175 @@
+"""Lattice periods, tiles cut to whole periods, and the lattice layout candidate of make_tile."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from seamless_usd.synthesis import MapInput, RefineConfig, get_preset, make_tile
+from seamless_usd.synthesis.lattice import (LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio,
+                                            lattice_tile_size)
+
+TEXTURES = Path(__file__).resolve().parent.parent / "sample_assets" / "textures"
+
+
+def _bricks(h: int, w: int, seed: int = 0, brick: tuple[int, int] = (12, 32), mortar: int = 2) -> np.ndarray:
+    """(h, w, 1) running-bond bricks in [-1, 1]: rows of ``brick`` px, every other row shifted by half a
+    brick, a random tone per brick and fine noise. Axis periods: 2 rows along y, one brick along x."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[:h, :w]
+    row = y // brick[0]
+    shifted = x + (row % 2) * (brick[1] // 2)
+    joint = (y % brick[0] < mortar) | (shifted % brick[1] < mortar)
+    tone = rng.uniform(-0.6, 0.2, (row.max() + 1, shifted.max() // brick[1] + 1))[row, shifted // brick[1]]
+    img = np.where(joint, 0.8, tone) + rng.normal(0.0, 0.05, (h, w))
+    return np.clip(img, -1, 1).astype(np.float32)[..., None]
+
+
+def _height_normals(height: np.ndarray) -> np.ndarray:
+    """Unit normals (h, w, 3) of a height field (h, w, 1)."""
+    gy, gx = np.gradient(height[..., 0] * 4.0)
+    n = np.stack([-gx, -gy, np.ones_like(gx)], axis=-1)
+    return (n / np.linalg.norm(n, axis=-1, keepdims=True)).astype(np.float32)
+
+
+def _phase_seam(tile: np.ndarray, period: float, axis: int) -> float:
+    """Mean step across the wrap over the mean step at the same lattice phase inside the tile (whole
+    periods long): about 1 when the wrap continues the pattern. Unlike ``seam_ratios`` it does not
+    depend on where the pattern's own edges (mortar lines) fall."""
+    t = np.moveaxis(tile, axis, 0)
+    count = round(t.shape[0] / period)
+    step = t.shape[0] / count
+    inner = np.mean([np.abs(t[round(i * step)] - t[round(i * step) - 1]).mean() for i in range(1, count)])
+    return float(np.abs(t[0] - t[-1]).mean() / inner)
+
+
+def _read(name: str) -> np.ndarray:
+    return np.asarray(oiio.ImageBuf(str(TEXTURES / name)).get_pixels(oiio.FLOAT), dtype=np.float32) * 2 - 1
+
+
+def test_a_running_bond_repeats_every_two_rows_and_every_brick():
+    lattice = find_lattice([_bricks(120, 160)])
+    py, px = lattice.period
+    assert py == pytest.approx(24, rel=0.02) and px == pytest.approx(32, rel=0.02), lattice
+    assert all(s >= 0.4 for s in lattice.strength)
+
+
+def test_noise_and_wood_planks_do_not_repeat():
+    rng = np.random.default_rng(1)
+    white = rng.normal(size=(128, 128, 1))
+    f = np.fft.fftfreq(128)
+    blur = np.exp(-(f[:, None] ** 2 + f[None, :] ** 2) / (2 * 0.03 ** 2))[..., None]
+    smooth = np.real(np.fft.ifft2(np.fft.fft2(white, axes=(0, 1)) * blur, axes=(0, 1)))
+    assert not find_lattice([white]).found
+    assert not find_lattice([smooth]).found
+    assert not find_lattice([_read("wood_color.png"), _read("wood_roughness.png")]).found
+
+
+def test_the_bundled_brick_repeats_on_its_own_lattice():
+    """The MaterialX brick the sample is cut from repeats every 2048/7 px: 107 px in the 256 px sample."""
+    maps = [_read("brick_albedo.png"), _read("brick_normal.png"), _read("brick_roughness.png")]
+    py, px = find_lattice(maps).period
+    assert py == pytest.approx(107, rel=0.03) and px == pytest.approx(107, rel=0.03)
+
+
+def test_the_tile_holds_whole_periods_and_room_for_its_blend_band():
+    (th, tw), (bh, bw) = lattice_tile_size((120, 160), Lattice((24.0, 32.0), (0.9, 0.9)))
+    assert (th, tw) == (96, 128)
+    assert 4 <= bh <= 120 - th and 4 <= bw <= 160 - tw
+    # an axis that does not repeat is crossfaded over an eighth of its side
+    (th, tw), (bh, bw) = lattice_tile_size((120, 160), Lattice((None, 32.0), (None, 0.9)))
+    assert (th, bh) == (105, 15) and tw == 128
+    # a period too long to fit once beside a band, or whole periods under half the side: no lattice tile
+    assert lattice_tile_size((120, 160), Lattice((115.0, 32.0), (0.9, 0.9))) is None
+    assert lattice_tile_size((120, 160), Lattice((None, None), (None, None))) is None
+
+
+def test_an_exactly_periodic_texture_gives_the_texture_itself():
+    block = np.random.default_rng(2).uniform(-1, 1, (20, 30, 3)).astype(np.float32)
+    src = np.tile(block, (6, 6, 1))[:118, :178]  # room beside the 100 x 150 tile for its bands
+    lattice = find_lattice([src])
+    assert lattice.period == pytest.approx((20, 30), abs=0.2)
+    tile_hw, band = lattice_tile_size(src.shape[:2], lattice)
+    assert tile_hw == (100, 150)
+    field, (y, x) = lattice_cut([src], tile_hw, band)
+    assert field.shape == (100, 150, 2)
+    tile = src[field[..., 0], field[..., 1]]
+    # whatever the cut, texels one tile on are the same here: the tile is the periodic texture, shifted,
+    # so it wraps exactly
+    periodic = np.tile(block, (12, 12, 1))[y % 20: y % 20 + 200, x % 30: x % 30 + 300]
+    assert np.array_equal(np.tile(tile, (2, 2, 1)), periodic)
+
+
+def test_the_cut_wraps_bricks_without_a_seam_and_copies_real_normals():
+    height = _bricks(120, 160, seed=3)
+    normals = _height_normals(height)
+    maps = [height, normals]
+    lattice = find_lattice(maps)
+    tile_hw, band = lattice_tile_size(height.shape[:2], lattice)
+    field, _ = lattice_cut(maps, tile_hw, band)
+    assert (field >= 0).all() and (field[..., 0] < 120).all() and (field[..., 1] < 160).all()
+    tile_h, tile_n = (m[field[..., 0], field[..., 1]] for m in maps)
+    assert np.allclose(np.linalg.norm(tile_n, axis=-1), 1.0, atol=1e-6)  # source normals, not blends
+    raw = height[6: 6 + tile_hw[0], 8: 8 + tile_hw[1]]  # a plain crop whose wrap cuts through bricks
+    for axis, period in ((0, 24), (1, 32)):
+        cut, plain = _phase_seam(tile_h, period, axis), _phase_seam(raw, period, axis)
+        assert cut < 1.3 and plain > 2.0, (axis, cut, plain)
+
+
+def test_the_lattice_ratio_sees_a_broken_bond():
+    height = _bricks(120, 160, seed=6)
+    lattice = find_lattice([height])
+    tile_hw, band = lattice_tile_size(height.shape[:2], lattice)
+    field, _ = lattice_cut([height], tile_hw, band)
+    cut = height[field[..., 0], field[..., 1]]
+    assert lattice_ratio([cut], [height], lattice) > LATTICE_TARGET
+    # a crop that is not whole periods breaks the bond across its wrap
+    assert lattice_ratio([height[:110, :150]], [height], lattice) < 0.8
+    # and a tile whose upper half is shifted by a quarter brick, though its texels are all bricks and
+    # every row still repeats along x, falls below the target (about 0.85: the mortar rows still agree)
+    broken = cut.copy()
+    broken[: tile_hw[0] // 2] = np.roll(broken[: tile_hw[0] // 2], 8, axis=1)
+    assert lattice_ratio([broken], [height], lattice) < LATTICE_TARGET
+    assert lattice_ratio([height], [height], Lattice((None, None), (None, None))) is None
+
+
+@pytest.fixture(scope="module")
+def brick_stack() -> list[MapInput]:
+    height = _bricks(96, 128, seed=4)
+    return [MapInput("albedo", np.repeat(height, 3, axis=2) * 0.8), MapInput("normal", _height_normals(height), True)]
+
+
+def test_make_tile_keeps_the_better_layout_and_the_other_one(brick_stack):
+    config = get_preset("tiny").replace(iterations=20, seeds=1)
+    made = make_tile(brick_stack, config, keep_alternatives=True)
+    lat = made.lattice
+    assert lat["period_px"][0] == pytest.approx(24, rel=0.03) and lat["period_px"][1] == pytest.approx(32, rel=0.03)
+    other_kind = "gan" if made.layout_used else "random"
+    # passing as a stack would (Q and the scale and patch targets) first, then the lower score
+    rival = (not lat[f"passes_{other_kind}"], lat[f"score_{other_kind}"])
+    assert lat["chosen"] == ((not lat["passes"], lat["score"]) < rival)
+    assert not lat["passes"] or (lat["q_passed"] and lat["lattice_ratio"] >= LATTICE_TARGET)
+    assert lat["lattice_ratio"] > lat[f"lattice_ratio_{other_kind}"]  # the cut keeps the bond better
+    if lat["chosen"]:
+        assert made.layout_kind == "lattice" and made.tile_size == tuple(lat["tile"])
+        assert set(made.alternatives) == {other_kind} and made.q.passed == lat["q_passed"]
+    else:
+        assert made.layout_kind == other_kind and set(made.alternatives) == {"lattice"}
+    th, tw = made.tile_size
+    assert made.uv_scale == pytest.approx((128 / tw, 96 / th))
+    for name, tile in made.maps.items():
+        assert tile.shape[:2] == made.tile_size
+    assert np.allclose(np.linalg.norm(made.maps["normal"], axis=-1), 1.0, atol=1e-4)  # real source normals
+    if lat["chosen"]:  # texels copied from the source
+        assert made.refine_levels == [] and set(np.unique(made.maps["albedo"])) <= set(np.unique(brick_stack[0].pixels))
+
+
+def test_the_lattice_candidate_can_be_turned_off(brick_stack):
+    config = get_preset("tiny").replace(iterations=20, seeds=1)
+    made = make_tile(brick_stack, config, refine_config=RefineConfig(lattice=False), keep_alternatives=True)
+    assert made.layout_kind in ("gan", "random") and made.tile_size == (96, 128)
+    assert "tile" not in made.lattice and made.alternatives == {}  # measured, not cut
+    assert made.lattice["period_px"][1] == pytest.approx(32, rel=0.03)
+    assert made.lattice[f"lattice_ratio_{made.layout_kind}"] < LATTICE_TARGET  # the tiny GAN breaks the bond
