@@ -247,12 +247,18 @@ def lattice_cut(maps: list[np.ndarray], tile: tuple[int, int], band: tuple[int, 
     return field.astype(np.int64), (int(y0), int(x0))
 
 
+def _joint_centred(maps: list[np.ndarray], sources: list[np.ndarray]) -> np.ndarray:
+    u = np.concatenate([np.asarray(m, dtype=np.float32) / spread(s) for m, s in zip(maps, sources)], axis=-1)
+    return u - u.mean(axis=(0, 1))
+
+
 def lattice_ratio(tiles: list[np.ndarray], sources: list[np.ndarray], lattice: Lattice) -> float | None:
     """How much of the source's repeat a periodic tile keeps: along each repeating axis, the tile's
-    circular autocorrelation at the lattice period over the source's (``lattice.strength``), the lower
-    of the two axes; None when the stack does not repeat. About 1 when every period of the tile lines
-    up with the next across the wrap, lower where a bond breaks (the tile's side not a whole number of
-    periods, or a layout that lost the lattice). Periods are in px at the tiles' resolution.
+    circular autocorrelation at the lattice period over the source's own at that lag (on the same
+    grid, so pass tiles and sources at one resolution, with the periods in px there), the lower of
+    the two axes; None when the stack does not repeat. About 1 when every period of the tile lines
+    up with the next across the wrap, lower where a bond breaks (the tile's side not a whole number
+    of periods, or a layout that lost the lattice).
 
     >>> x = np.arange(96)
     >>> bars = np.sin(2 * np.pi * x / 16)[None, :, None].repeat(64, 0).astype(np.float32)
@@ -262,13 +268,16 @@ def lattice_ratio(tiles: list[np.ndarray], sources: list[np.ndarray], lattice: L
     """
     if not lattice.found:
         return None
-    u = np.concatenate([np.asarray(t, dtype=np.float32) / spread(s) for t, s in zip(tiles, sources)], axis=-1)
-    u = u - u.mean(axis=(0, 1))
-    energy = float((u * u).sum(-1).mean())
+    u, v = _joint_centred(tiles, sources), _joint_centred(sources, sources)
+    tile_energy, source_energy = float((u * u).sum(-1).mean()), float((v * v).sum(-1).mean())
     ratios = []
-    for axis, (period, strength) in enumerate(zip(lattice.period, lattice.strength)):
+    for axis, period in enumerate(lattice.period):
         if period is None:
             continue
-        moved = np.roll(u, -int(round(period)), axis=axis)
-        ratios.append(float((u * moved).sum(-1).mean()) / max(energy, 1e-12) / strength)
+        lag = int(round(period))
+        tile_corr = float((u * np.roll(u, -lag, axis=axis)).sum(-1).mean()) / max(tile_energy, 1e-12)
+        n = v.shape[axis]
+        ahead = np.take(v, range(lag, n), axis=axis) * np.take(v, range(0, n - lag), axis=axis)
+        source_corr = float(ahead.sum(-1).mean()) / max(source_energy, 1e-12)
+        ratios.append(tile_corr / max(source_corr, 1e-6))
     return min(ratios)

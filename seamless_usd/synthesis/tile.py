@@ -215,7 +215,9 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     if not lattice.found:
         return
     halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
-    grid = downsample_maps(maps, (H // halve, W // halve)) if halve > 1 else maps
+    # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
+    grid = [MapInput(m.name, _on_grid({m.name: m.pixels}, [m], (1 / halve, 1 / halve))[m.name], m.is_normal)
+            for m in maps] if halve > 1 else maps
     grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
     current, current_passes, current_ratio = _judged(_on_grid(made.maps, maps, (1 / halve, 1 / halve)), grid,
                                                      made.passed, grid_lattice)
