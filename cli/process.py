@@ -51,10 +51,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run stacks on Dask: local:N (a local cluster of N workers) or tcp://host:8786")
     p.add_argument("--refine", choices=("on", "gan", "off"), default="on",
-                   help="exemplar refinement to the source's resolution with real source texels, from the "
-                        "SeamlessGAN tile or, for textures that repeat on a lattice (bricks, weaves), from a cut "
-                        "of whole periods when Q and the fidelity figures prefer it; gan: from the GAN tile "
-                        "only; off: the pure SeamlessGAN tile (default: %(default)s)")
+                   help="exemplar refinement of the SeamlessGAN tile to the source's resolution with real "
+                        "source texels; for textures that repeat on a lattice (bricks, weaves), a cut of whole "
+                        "periods of the source instead when Q and the fidelity figures prefer it. gan: the "
+                        "refined GAN tile only; off: the pure SeamlessGAN tile (default: %(default)s)")
     p.add_argument("--tile-size", choices=("source", "paper"), default="source",
                    help="source: the tile has the source's pixel size (same texture memory); "
                         "paper: the paper's 2c x 2c tile (default: %(default)s)")

@@ -136,7 +136,7 @@ def test_run_details_say_what_seeded_the_refinement():
     plain = StackReport(id="M-2", material="</M2>", source="s.usda", status=StackStatus.PASSED,
                         resampled={"gan": {"layout": "gan", "lattice": {"period_px": [None, None]}}})
     page = render_html(Report(sources=["s.usda"], stacks=[plain]))
-    assert "refinement started from" in page and "the SeamlessGAN tile" in page and "repeats every" not in page
+    assert "tile made from" in page and "the SeamlessGAN tile, refined" in page and "repeats every" not in page
 
 
 def test_left_alone_and_failed_stacks_say_why():

@@ -37,7 +37,7 @@ class JobSettings:
     max_size: int | None = None
     cache_dir: Path | None = None
     max_pixels: int | None = DEFAULT_MAX_PIXELS  # header limit per image file (width * height)
-    refine: str = "on"  # refinement to the source's resolution ("gan": no lattice cut; "off": the pure GAN tile)
+    refine: str = "on"  # refinement or lattice cut ("gan": no lattice cut; "off": the pure GAN tile)
     tile_size: str = "source"  # "source" (same pixel size as the source) or "paper" (2c x 2c)
 
     @classmethod
@@ -185,7 +185,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             tile = made.gan
             meta = {
                 "crop_size": list(tile.crop_size),
-                "q": _q_dict(made),  # of the written tile's layout
+                "q": _q_dict(made),  # of the written tile
                 "candidates": len(tile.candidates),
                 "model_hash": tile.model_hash,
                 "device": tile.device,

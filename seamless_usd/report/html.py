@@ -61,12 +61,13 @@ def _seeds_text(seeds: list[dict] | None) -> str | None:
                      + (" — kept" if s.get("chosen") else "") for s in seeds) + " (worst figure / its target)"
 
 
-_LAYOUTS = {"gan": "the SeamlessGAN tile", "random": "a random start (the GAN tile's feature scale was implausible)",
+_LAYOUTS = {"gan": "the SeamlessGAN tile, refined",
+            "random": "a random start, refined (the GAN tile's feature scale was implausible)",
             "lattice": "a cut of whole lattice periods from the source"}
 
 
 def _layout_text(gan: dict) -> str | None:
-    """What seeded the refinement, and the lattice the stack repeats on (with both candidates' scores)."""
+    """What the tile was made from, and the lattice the stack repeats on (with both candidates' figures)."""
     kind = gan.get("layout")
     if kind is None:
         return None
@@ -213,7 +214,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
         "working resolution": _policy_text(stack.resampled),
         "candidates tried": stack.candidates or None,
         "GAN seeds": _seeds_text(stack.resampled.get("gan", {}).get("seeds")),
-        "refinement started from": _layout_text(stack.resampled.get("gan", {})),
+        "tile made from": _layout_text(stack.resampled.get("gan", {})),
         "timings (s)": ", ".join(f"{k} {v:.1f}" for k, v in stack.timings.items()) or None,
         "device / precision": f"{stack.device} / {stack.precision}" if stack.device else None,
         "model hash": stack.model_hash or None,
