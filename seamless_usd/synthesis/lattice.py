@@ -39,9 +39,9 @@ PERIOD_DIP = 0.15
 #: (a grid's first peak, not its second); a running bond's half-period row peak is well below this.
 _SAME_PEAK = 0.05
 #: A tile keeps the source's repeat when its autocorrelation at each lattice period is at least this
-#: share of the source's (:func:`lattice_ratio`). On the bundled 256 px brick window a cut of whole
-#: periods scores 0.95-0.98, the source repeated as it is 0.52-0.80, the refined GAN tile with its
-#: broken bond about 0.4-0.6 and a refinement from a random start about 0.
+#: share of the source's (:func:`lattice_ratio`). On the two 256 px brick windows of the quality
+#: benchmark a cut of whole periods scores 0.95-0.99, the source repeated as it is 0.51-0.52, the
+#: refined GAN tile with its broken bond 0.16-0.31 and a refinement from a random start about 0.
 LATTICE_TARGET = 0.9
 _MIN_LAG = 4  # px: shorter repeats are grain, not layout
 _ANALYSIS = 1024  # longest side (px) the autocorrelation is computed at
@@ -130,12 +130,12 @@ def find_lattice(maps: list[np.ndarray], strength: float = PERIOD_STRENGTH, dip:
 
 
 def _axis_size(n: int, period: float | None, curve: np.ndarray | None = None, factor: int = 1) -> tuple[int, int]:
-    """(tile side, blend band) along one axis of ``n`` px.
+    """(tile side, band across the wrap) along one axis of ``n`` px.
 
     The side is ``count`` periods; with the axis's autocorrelation ``curve``, it is snapped to the
     lag within 3 % where the curve peaks, the lag at which the texture best matches itself (one
     period's error grows ``count`` times, and a few px break a bond across the wrap)."""
-    if period is None:  # no repeat: a plain crossfade over an eighth of the side
+    if period is None:  # no repeat: a band of an eighth of the side
         band = max(4, round(n / 8))
         return n - band, band
     min_band = max(4, math.ceil(period / 8))
@@ -154,7 +154,7 @@ def _axis_size(n: int, period: float | None, curve: np.ndarray | None = None, fa
 
 def lattice_tile_size(hw: tuple[int, int], lattice: Lattice) -> tuple[tuple[int, int], tuple[int, int]] | None:
     """((tile_h, tile_w), (band_h, band_w)): whole periods along each repeating axis with room for a
-    blend band, or None when the periods do not fit (fewer than half the side in whole periods)."""
+    band across each wrap, or None when the periods do not fit (fewer than half the side in whole periods)."""
     sizes = [_axis_size(n, p, c, lattice.factor) for n, p, c in zip(hw, lattice.period, lattice.curves)]
     if not lattice.found or any(side == 0 for side, _ in sizes):
         return None
