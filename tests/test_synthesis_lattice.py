@@ -147,7 +147,7 @@ def test_make_tile_keeps_the_better_layout_and_the_other_one(brick_stack):
     lat = made.lattice
     assert lat["period_px"][0] == pytest.approx(24, rel=0.03) and lat["period_px"][1] == pytest.approx(32, rel=0.03)
     other_kind = "gan" if made.layout_used else "random"
-    # passing as a stack would (Q and the scale and patch targets) first, then the lower score
+    # passing (Q, the scale and patch targets, the lattice ratio) first, then the lower score
     rival = (not lat[f"passes_{other_kind}"], lat[f"score_{other_kind}"])
     assert lat["chosen"] == ((not lat["passes"], lat["score"]) < rival)
     assert not lat["passes"] or (lat["q_passed"] and lat["lattice_ratio"] >= LATTICE_TARGET)
