@@ -243,6 +243,7 @@ def run(
         if synthesis:
             log(f"{stack_name}: {', '.join(synthesis)} ...")
             made = run_synthesis(stack, synthesis, preset, seed, log, overrides)
+        source_lattice = find_lattice([px for px, _ in stack.values()])
         for method in methods:
             log(f"{stack_name}: {method} ...")
             if method in SYNTHESIS_METHODS and method not in made:
@@ -256,7 +257,8 @@ def run(
             else:
                 res = run_baseline(method, stack)
             refs = [res.references[k] if res.references else px for k, (px, _) in stack.items()]  # same grid
-            ratio = lattice_ratio([res.tiles[k] for k in stack], refs, find_lattice(refs))
+            ratio = lattice_ratio([res.tiles[k] for k in stack], refs,
+                                  find_lattice(refs) if res.references else source_lattice)
             for map_name, (src_full, is_normal) in stack.items():
                 tile = res.tiles[map_name]
                 src = res.references[map_name] if res.references else src_full  # same texel scale

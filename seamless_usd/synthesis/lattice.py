@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .refine import spread
+from .refine import joint_features, spread
 from .scale import autocorrelation, box_downsample
 
 __all__ = ["Lattice", "find_lattice", "lattice_tile_size", "lattice_cut", "lattice_ratio", "PERIOD_STRENGTH",
@@ -100,6 +100,14 @@ def _axis_period(curve: np.ndarray, strength: float, dip: float) -> tuple[float,
     return period, float(curve[best])
 
 
+def _joint_small(maps: list[np.ndarray], spreads: list[float], max_side: int) -> tuple[np.ndarray, int]:
+    """Joint features (each map over its spread, as :func:`.refine.joint_features`) box-downsampled
+    to at most ``max_side`` px, with the factor; each map is shrunk before they are joined, so a 4K
+    stack never holds its full-resolution joint features."""
+    parts = [box_downsample(np.asarray(m, dtype=np.float32) / s, max_side) for m, s in zip(maps, spreads)]
+    return np.concatenate([p for p, _ in parts], axis=-1), parts[0][1]
+
+
 def _peak(curve: np.ndarray, i: int) -> float:
     """Sub-pixel lag of the local maximum at ``i``: the vertex of the parabola through its neighbours."""
     a, b, c = curve[i - 1], curve[i], curve[i + 1]
@@ -116,8 +124,7 @@ def find_lattice(maps: list[np.ndarray], strength: float = PERIOD_STRENGTH, dip:
     >>> round(find_lattice([bars]).period[1])
     16
     """
-    parts = [box_downsample(np.asarray(m, dtype=np.float32) / spread(m), _ANALYSIS) for m in maps]
-    u, factor = np.concatenate([p for p, _ in parts], axis=-1), parts[0][1]
+    u, factor = _joint_small(maps, [spread(m) for m in maps], _ANALYSIS)
     acf, _, _ = autocorrelation(u)
     h, w = u.shape[:2]
     found = []
@@ -168,9 +175,7 @@ def _best_offset(maps: list[np.ndarray], spreads: list[float], tile: tuple[int, 
     least ``margin`` px inside the maps along each axis where they fit."""
     H, W = np.asarray(maps[0]).shape[:2]
     m = [margin if n - t - b >= 2 * margin else 0 for n, t, b in zip((H, W), tile, band)]
-    parts = [box_downsample(np.asarray(px, dtype=np.float32)[m[0]: H - m[0], m[1]: W - m[1]] / s, _OFFSET_ANALYSIS)
-             for px, s in zip(maps, spreads)]
-    u, factor = np.concatenate([p for p, _ in parts], axis=-1), parts[0][1]
+    u, factor = _joint_small([np.asarray(px)[m[0]: H - m[0], m[1]: W - m[1]] for px in maps], spreads, _OFFSET_ANALYSIS)
     h, w = u.shape[:2]
     th, tw = (max(1, round(t / factor)) for t in tile)
     bh, bw = (max(1, round(b / factor)) for b in band)
@@ -247,11 +252,6 @@ def lattice_cut(maps: list[np.ndarray], tile: tuple[int, int], band: tuple[int, 
     return field.astype(np.int64), (int(y0), int(x0))
 
 
-def _joint_centred(maps: list[np.ndarray], sources: list[np.ndarray]) -> np.ndarray:
-    u = np.concatenate([np.asarray(m, dtype=np.float32) / spread(s) for m, s in zip(maps, sources)], axis=-1)
-    return u - u.mean(axis=(0, 1))
-
-
 def lattice_ratio(tiles: list[np.ndarray], sources: list[np.ndarray], lattice: Lattice) -> float | None:
     """How much of the source's repeat a periodic tile keeps: along each repeating axis, the tile's
     circular autocorrelation at the lattice period over the source's own at that lag (on the same
@@ -268,7 +268,8 @@ def lattice_ratio(tiles: list[np.ndarray], sources: list[np.ndarray], lattice: L
     """
     if not lattice.found:
         return None
-    u, v = _joint_centred(tiles, sources), _joint_centred(sources, sources)
+    u, v = joint_features(tiles, like=sources), joint_features(sources)
+    u, v = u - u.mean(axis=(0, 1)), v - v.mean(axis=(0, 1))
     tile_energy, source_energy = float((u * u).sum(-1).mean()), float((v * v).sum(-1).mean())
     ratios = []
     for axis, period in enumerate(lattice.period):

@@ -80,17 +80,21 @@ class MadeTile:
 
 def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInput]:
     """Maps resized to ``size = (h, w)`` (bilinear, antialiased when shrinking; normals renormalised)."""
-    out = []
-    for m in maps:
-        if m.pixels.shape[:2] == tuple(size):
-            out.append(m)
-            continue
-        t = torch.from_numpy(np.ascontiguousarray(m.pixels.transpose(2, 0, 1)))[None]
-        r = F.interpolate(t, size=size, mode="bilinear", antialias=True, align_corners=False)[0]
-        if m.is_normal and r.shape[0] >= 3:
-            r = torch.cat([F.normalize(r[:3], dim=0, eps=1e-6), r[3:]], 0)
-        out.append(MapInput(m.name, np.ascontiguousarray(r.clamp(-1, 1).permute(1, 2, 0).numpy()), m.is_normal))
-    return out
+    return [m if m.pixels.shape[:2] == tuple(size) else
+            MapInput(m.name, _resized(m.pixels, size, m.is_normal), m.is_normal) for m in maps]
+
+
+def _resized(pixels: np.ndarray, size: tuple[int, int], is_normal: bool, periodic: bool = False) -> np.ndarray:
+    """(H, W, C) pixels resized to ``size``: bilinear with antialiasing, or, for a periodic tile, area
+    averaging with wrap-around (:func:`.refine.resize_periodic`); normals renormalised, values clamped."""
+    t = torch.from_numpy(np.ascontiguousarray(pixels.transpose(2, 0, 1)))
+    if periodic:
+        r = resize_periodic(t, size)
+    else:
+        r = F.interpolate(t[None], size=size, mode="bilinear", antialias=True, align_corners=False)[0]
+    if is_normal and r.shape[0] >= 3:
+        r = torch.cat([F.normalize(r[:3], dim=0, eps=1e-6), r[3:]], 0)
+    return np.ascontiguousarray(r.clamp(-1, 1).permute(1, 2, 0).numpy())
 
 
 def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: RefineConfig | None = RefineConfig(),
@@ -179,12 +183,9 @@ def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[f
     """Periodic tiles resized by ``factor`` per axis (working / source size: onto the working grid)."""
     out = {}
     for m in maps:
-        t = torch.from_numpy(np.ascontiguousarray(tiles[m.name].transpose(2, 0, 1)))
-        hw = (max(8, round(t.shape[1] * factor[0])), max(8, round(t.shape[2] * factor[1])))
-        r = resize_periodic(t, hw)
-        if m.is_normal and r.shape[0] >= 3:
-            r = torch.cat([F.normalize(r[:3], dim=0, eps=1e-6), r[3:]], 0)
-        out[m.name] = np.ascontiguousarray(r.clamp(-1, 1).permute(1, 2, 0).numpy())
+        h, w = tiles[m.name].shape[:2]
+        hw = (max(8, round(h * factor[0])), max(8, round(w * factor[1])))
+        out[m.name] = _resized(tiles[m.name], hw, m.is_normal, periodic=True)
     return out
 
 
@@ -216,7 +217,8 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
         return
     halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
     # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
-    grid = [MapInput(m.name, _on_grid({m.name: m.pixels}, [m], (1 / halve, 1 / halve))[m.name], m.is_normal)
+    half = (max(8, round(H / halve)), max(8, round(W / halve)))
+    grid = [MapInput(m.name, _resized(m.pixels, half, m.is_normal, periodic=True), m.is_normal)
             for m in maps] if halve > 1 else maps
     grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
     current, current_passes, current_ratio = _judged(_on_grid(made.maps, maps, (1 / halve, 1 / halve)), grid,
