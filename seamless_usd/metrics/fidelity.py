@@ -213,20 +213,36 @@ def _sliced_wasserstein(a: np.ndarray, b: np.ndarray, directions: np.ndarray) ->
     return float(np.sqrt(np.mean((_quantiles(pa, count) - _quantiles(pb, count)) ** 2)))
 
 
-def _band_levels(u: np.ndarray, scales: tuple[int, ...]) -> list[np.ndarray]:
-    """Laplacian-pyramid style levels of ``u``: for each scale ``s`` but the last, the detail of the
-    ``s``-downsampled image (minus its 2x2 box average brought back up); the last is the low-pass image.
-    Detail levels carry fine structure (what blur removes and checkerboards add) without being
+def _band_level(u: np.ndarray, scales: tuple[int, ...], level: int) -> np.ndarray:
+    """One Laplacian-pyramid style level of ``u``: for each scale ``s`` but the last, the detail of
+    the ``s``-downsampled image (minus its 2x2 box average brought back up); the last is the low-pass
+    image. Detail levels carry fine structure (what blur removes and checkerboards add) without being
     drowned by the colour variation the low-pass level measures."""
+    d = _downsample(u, scales[level])
+    if level < len(scales) - 1:
+        coarse = _downsample(d, 2)
+        up = np.repeat(np.repeat(coarse, 2, 0), 2, 1)
+        d = d[: up.shape[0], : up.shape[1]] - up
+    return d
+
+
+def _phase_patches(u: np.ndarray, scales: tuple[int, ...], level: int, samples: int,
+                   rng: np.random.Generator) -> np.ndarray | None:
+    """About ``samples`` random patches of one pyramid level (:func:`_band_level`), drawn evenly from
+    the level computed on every phase of its box grid (``u`` shifted by 0 .. m - 1 px along each axis,
+    m the grid's period in px): the box filters of a single grid see a sharp edge differently at each
+    offset, so a plain crop of a periodic source read 2-3x its own half-vs-half figure at some offsets
+    and under 1 at others. None when the level is too small for patches."""
+    period = scales[level] * (2 if level < len(scales) - 1 else 1)
+    per_phase = -(-samples // period ** 2)
     out = []
-    for i, s in enumerate(scales):
-        d = _downsample(u, s)
-        if i < len(scales) - 1:
-            coarse = _downsample(d, 2)
-            up = np.repeat(np.repeat(coarse, 2, 0), 2, 1)
-            d = d[: up.shape[0], : up.shape[1]] - up
-        out.append(d)
-    return out
+    for py in range(period):
+        for px in range(period):
+            d = _band_level(u[py:, px:], scales, level)
+            if min(d.shape[:2]) < 2 * PATCH_SIZE:
+                return None
+            out.append(_patches(d, per_phase, rng))
+    return np.concatenate(out)
 
 
 def _level_distances(a: np.ndarray, b: np.ndarray, is_normal: bool, samples: int, directions: int,
@@ -235,22 +251,21 @@ def _level_distances(a: np.ndarray, b: np.ndarray, is_normal: bool, samples: int
     if ua.shape[-1] != ub.shape[-1]:
         raise ValueError(f"channel counts differ: {ua.shape[-1]} vs {ub.shape[-1]}")
     out: list[float | None] = []
-    for level, (la, lb) in enumerate(zip(_band_levels(ua, scales), _band_levels(ub, scales))):
-        if min(la.shape[:2] + lb.shape[:2]) < 2 * PATCH_SIZE:
-            out.append(None)
-            continue
+    for level in range(len(scales)):
         rng = np.random.default_rng([seed, level])  # same directions for every pair at this level
-        dirs = rng.normal(size=(PATCH_SIZE * PATCH_SIZE * la.shape[-1], directions))
+        dirs = rng.normal(size=(PATCH_SIZE * PATCH_SIZE * ua.shape[-1], directions))
         dirs /= np.linalg.norm(dirs, axis=0, keepdims=True)
-        pa, pb = _patches(la, samples, rng), _patches(lb, samples, rng)
-        out.append(_sliced_wasserstein(pa, pb, dirs))
+        pa = _phase_patches(ua, scales, level, samples, rng)
+        pb = None if pa is None else _phase_patches(ub, scales, level, samples, rng)
+        out.append(None if pb is None else _sliced_wasserstein(pa, pb, dirs))
     return out
 
 
 def patch_sw(a: np.ndarray, b: np.ndarray, is_normal: bool = False, *, samples: int = 4096,
              directions: int = 64, scales: tuple[int, ...] = PATCH_SCALES, seed: int = 0) -> list[float | None]:
     """Sliced Wasserstein distances between the 7x7 patch distributions of ``a`` and ``b``, one per
-    pyramid level (:func:`_band_levels`; None where a level is too small for patches)."""
+    pyramid level (:func:`_band_level`, pooled over the phases of its box grid; None where a level is
+    too small for patches)."""
     return _level_distances(a, b, is_normal, samples, directions, scales, seed)
 
 
