@@ -118,6 +118,21 @@ def test_the_cut_wraps_bricks_without_a_seam_and_copies_real_normals():
         assert cut < 1.3 and plain > 2.0, (axis, cut, plain)
 
 
+def test_the_cut_across_the_y_wrap_closes_across_the_x_wrap():
+    """The y wrap's cut runs along the whole tile width; where its ends part, the rows between them
+    meet rows one tile down across the x wrap. On the bundled weave the free path ended 4 rows apart."""
+    from seamless_usd.synthesis.lattice import _closed_path
+
+    cost = np.ones((40, 9))
+    cost[:20, 1] = cost[20:, 7] = 0.0  # the cheapest free path starts at column 1 and ends at column 7
+    path = _closed_path(cost)
+    assert abs(int(path[0]) - int(path[-1])) <= 1 and np.abs(np.diff(path)).max() <= 1
+    cloth = _read("cloth.png")
+    tile_hw, band = lattice_tile_size(cloth.shape[:2], find_lattice([cloth]))
+    field, _ = lattice_cut([cloth], tile_hw, band)
+    assert (field[:, -1, 0] != field[:, 0, 0]).sum() <= 1  # the texels across the x wrap share their source row
+
+
 def test_the_lattice_ratio_sees_a_broken_bond():
     height = _bricks(120, 160, seed=6)
     lattice = find_lattice([height])

@@ -195,11 +195,14 @@ def _best_offset(maps: list[np.ndarray], spreads: list[float], tile: tuple[int, 
             m[1] + min(int(x) * factor, W - 2 * m[1] - tile[1] - band[1]))
 
 
-def _min_path(cost: np.ndarray) -> np.ndarray:
+def _min_path(cost: np.ndarray, start: int | None = None) -> tuple[np.ndarray, float]:
     """For a cost (n, b), the column j(i) of each row on the cheapest path from the first row to the last
-    that moves at most one column per row (dynamic programming, as in image quilting)."""
+    that moves at most one column per row (dynamic programming, as in image quilting), and its cost.
+    With ``start``, the path starts at that column and ends within one column of it."""
     n, b = cost.shape
     acc = cost[0].astype(np.float64)
+    if start is not None:
+        acc = np.where(np.arange(b) == start, acc, np.inf)
     back = np.zeros((n, b), dtype=np.int64)
     cols = np.arange(b)
     for i in range(1, n):
@@ -207,11 +210,25 @@ def _min_path(cost: np.ndarray) -> np.ndarray:
         k = np.argmin(choices, axis=0)
         acc = choices[k, cols] + cost[i]
         back[i] = cols + k - 1
+    if start is not None:
+        acc = np.where(np.abs(cols - start) <= 1, acc, np.inf)
     path = np.empty(n, dtype=np.int64)
     path[-1] = int(np.argmin(acc))
     for i in range(n - 1, 0, -1):
         path[i - 1] = back[i, path[i]]
-    return path
+    return path, float(acc[path[-1]])
+
+
+def _closed_path(cost: np.ndarray) -> np.ndarray:
+    """:func:`_min_path` whose ends meet: the path of a cut that itself crosses a wrap (the y wrap's cut
+    runs along the whole tile width, so its last column is the first's neighbour across the x wrap).
+    When the free path's ends are more than a column apart, the cheapest of the paths closed at its
+    first column, its last, or half-way between them."""
+    path, _ = _min_path(cost)
+    if abs(int(path[0]) - int(path[-1])) <= 1:
+        return path
+    starts = {int(path[0]), int(path[-1]), (int(path[0]) + int(path[-1])) // 2}
+    return min((_min_path(cost, s) for s in sorted(starts)), key=lambda pc: pc[1])[0]
 
 
 def _sample(maps: list[np.ndarray], spreads: list[float], y: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -239,13 +256,13 @@ def lattice_cut(maps: list[np.ndarray], tile: tuple[int, int], band: tuple[int, 
     # across the x wrap: columns j < cut(y) copy from one tile on, the others are the crop's own
     ys, js = np.meshgrid(rows, np.arange(bw), indexing="ij")
     diff = _sample(maps, spreads, ys, x0 + tw + js) - _sample(maps, spreads, ys, x0 + js)
-    cut = _min_path((diff ** 2).sum(-1))  # (th + bh,)
+    cut, _ = _min_path((diff ** 2).sum(-1))  # (th + bh,)
     cols = np.arange(tw)
     fx = x0 + cols[None, :] + tw * (cols[None, :] < cut[:, None])  # (th + bh, tw)
     fy = np.repeat(rows[:, None], tw, axis=1)
     # across the y wrap, on the columns just chosen: rows i < cut(x) copy from one tile down
     diff = _sample(maps, spreads, fy[th:], fx[th:]) - _sample(maps, spreads, fy[:bh], fx[:bh])
-    cut = _min_path((diff ** 2).sum(-1).T)  # (tw,)
+    cut = _closed_path((diff ** 2).sum(-1).T)  # (tw,): column tw - 1 meets column 0 across the x wrap
     down = np.arange(th)[:, None] < cut[None, :]  # (th, tw)
     index = np.arange(th)[:, None] + th * down
     field = np.stack([np.take_along_axis(fy, index, 0), np.take_along_axis(fx, index, 0)], axis=-1)
