@@ -173,13 +173,6 @@ def scale_ratio(tile: np.ndarray, source: np.ndarray, is_normal: bool = False) -
     return float(np.exp(mean_log_frequency(tile, is_normal) - mean_log_frequency(source, is_normal)))
 
 
-def _downsample(u: np.ndarray, factor: int) -> np.ndarray:
-    if factor == 1:
-        return u
-    h, w = (u.shape[0] // factor) * factor, (u.shape[1] // factor) * factor
-    return u[:h, :w].reshape(h // factor, factor, w // factor, factor, -1).mean(axis=(1, 3))
-
-
 def _patches(u: np.ndarray, count: int, rng: np.random.Generator, size: int = PATCH_SIZE) -> np.ndarray:
     """Up to ``count`` random ``size`` x ``size`` patches of ``u`` (H, W, C), flattened: (N, size*size*C)."""
     h, w = u.shape[:2]
@@ -213,24 +206,36 @@ def _sliced_wasserstein(a: np.ndarray, b: np.ndarray, directions: np.ndarray) ->
     return float(np.sqrt(np.mean((_quantiles(pa, count) - _quantiles(pb, count)) ** 2)))
 
 
-def _band_level(u: np.ndarray, scales: tuple[int, ...], level: int) -> np.ndarray:
-    """One Laplacian-pyramid style level of ``u``: for each scale ``s`` but the last, the detail of
-    the ``s``-downsampled image (minus its 2x2 box average brought back up); the last is the low-pass
+def _box_means(u: np.ndarray, sides: set[int]) -> dict[int, np.ndarray]:
+    """``{s: m}``: the mean of every ``s`` x ``s`` window of ``u``, ``m[i, j]`` over the window whose
+    top-left texel is ``(i, j)`` (from summed-area tables). Any grid's box-downsampled image is a
+    strided slice of one of them: ``m[py::s, px::s]`` is ``u[py:, px:]`` downsampled ``s`` times."""
+    table = np.pad(u.cumsum(0).cumsum(1), ((1, 0), (1, 0), (0, 0)))
+    return {s: (table[s:, s:] - table[:-s, s:] - table[s:, :-s] + table[:-s, :-s]) / (s * s) for s in sides}
+
+
+def _band_level(boxes: dict[int, np.ndarray], scales: tuple[int, ...], level: int, phase: tuple[int, int]
+                ) -> np.ndarray:
+    """One Laplacian-pyramid style level of an image, on its box grid shifted by ``phase`` px
+    (``boxes``: its :func:`_box_means`): for each scale ``s`` but the last, the detail of the
+    ``s``-downsampled image (minus its 2x2 box average brought back up); the last is the low-pass
     image. Detail levels carry fine structure (what blur removes and checkerboards add) without being
     drowned by the colour variation the low-pass level measures."""
-    d = _downsample(u, scales[level])
+    py, px = phase
+    s = scales[level]
+    d = boxes[s][py::s, px::s]
     if level < len(scales) - 1:
-        coarse = _downsample(d, 2)
+        coarse = boxes[2 * s][py::2 * s, px::2 * s]
         up = np.repeat(np.repeat(coarse, 2, 0), 2, 1)
         d = d[: up.shape[0], : up.shape[1]] - up
     return d
 
 
-def _phase_patches(u: np.ndarray, scales: tuple[int, ...], level: int, samples: int,
+def _phase_patches(boxes: dict[int, np.ndarray], scales: tuple[int, ...], level: int, samples: int,
                    rng: np.random.Generator) -> np.ndarray | None:
     """About ``samples`` random patches of one pyramid level (:func:`_band_level`), drawn evenly from
-    the level computed on every phase of its box grid (``u`` shifted by 0 .. m - 1 px along each axis,
-    m the grid's period in px): the box filters of a single grid see a sharp edge differently at each
+    the level computed on every phase of its box grid (shifted by 0 .. m - 1 px along each axis, m
+    the grid's period in px): the box filters of a single grid see a sharp edge differently at each
     offset, so a plain crop of a periodic source read 2-3x its own half-vs-half figure at some offsets
     and under 1 at others. None when the level is too small for patches."""
     period = scales[level] * (2 if level < len(scales) - 1 else 1)
@@ -238,7 +243,7 @@ def _phase_patches(u: np.ndarray, scales: tuple[int, ...], level: int, samples: 
     out = []
     for py in range(period):
         for px in range(period):
-            d = _band_level(u[py:, px:], scales, level)
+            d = _band_level(boxes, scales, level, (py, px))
             if min(d.shape[:2]) < 2 * PATCH_SIZE:
                 return None
             out.append(_patches(d, per_phase, rng))
@@ -250,13 +255,17 @@ def _level_distances(a: np.ndarray, b: np.ndarray, is_normal: bool, samples: int
     ua, ub = _signal(a, is_normal), _signal(b, is_normal)
     if ua.shape[-1] != ub.shape[-1]:
         raise ValueError(f"channel counts differ: {ua.shape[-1]} vs {ub.shape[-1]}")
+    sides = {s for s in scales} | {2 * s for s in scales[:-1]}
+    if min(ua.shape[:2] + ub.shape[:2]) < max(sides):
+        return [None] * len(scales)
+    boxes_a, boxes_b = _box_means(ua, sides), _box_means(ub, sides)
     out: list[float | None] = []
     for level in range(len(scales)):
         rng = np.random.default_rng([seed, level])  # same directions for every pair at this level
         dirs = rng.normal(size=(PATCH_SIZE * PATCH_SIZE * ua.shape[-1], directions))
         dirs /= np.linalg.norm(dirs, axis=0, keepdims=True)
-        pa = _phase_patches(ua, scales, level, samples, rng)
-        pb = None if pa is None else _phase_patches(ub, scales, level, samples, rng)
+        pa = _phase_patches(boxes_a, scales, level, samples, rng)
+        pb = None if pa is None else _phase_patches(boxes_b, scales, level, samples, rng)
         out.append(None if pb is None else _sliced_wasserstein(pa, pb, dirs))
     return out
 

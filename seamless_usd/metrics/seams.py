@@ -282,11 +282,12 @@ def centre_seam_ratios(tile: np.ndarray, is_normal: bool = False) -> dict[str, f
     figures compare with the border ratios; about 1 when the centre lines are not seams.
 
     >>> ramp = np.tile(np.arange(10.0), (4, 1))  # a jump at the border, none at the centre
-    >>> round(centre_seam_ratios(ramp)["centre_seam_x"], 1)
-    1.0
+    >>> round(centre_seam_ratios(ramp)["centre_seam_x"], 1), round(centre_seam_ratios(np.roll(ramp, 5, 1))["centre_seam_x"], 1)
+    (0.5, 9.0)
     """
     u = _prepare(tile, is_normal)
     rolled = np.roll(u, (u.shape[0] // 2, u.shape[1] // 2), axis=(0, 1))
     r = seam_ratios(rolled, is_normal)
     return {"centre_seam_x": r["seam_ratio_x"], "centre_seam_y": r["seam_ratio_y"]}
+
 
