@@ -281,13 +281,15 @@ def centre_seam_ratios(tile: np.ndarray, is_normal: bool = False) -> dict[str, f
     stays continuous. Computed as :func:`seam_ratios` of the tile rolled by half its size, so the
     figures compare with the border ratios; about 1 when the centre lines are not seams.
 
-    >>> ramp = np.tile(np.arange(10.0), (4, 1))  # a jump at the border, none at the centre
-    >>> round(centre_seam_ratios(ramp)["centre_seam_x"], 1), round(centre_seam_ratios(np.roll(ramp, 5, 1))["centre_seam_x"], 1)
-    (0.5, 9.0)
+    A ramp jumps back at its border; rolled by half, at its centre:
+
+    >>> ramp = np.tile(np.arange(10.0), (4, 1))
+    >>> round(centre_seam_ratios(np.roll(ramp, 5, axis=1))["centre_seam_x"], 1)
+    9.0
+    >>> round(centre_seam_ratios(ramp)["centre_seam_x"], 1)  # its one jump is now inside the tile
+    0.5
     """
     u = _prepare(tile, is_normal)
     rolled = np.roll(u, (u.shape[0] // 2, u.shape[1] // 2), axis=(0, 1))
     r = seam_ratios(rolled, is_normal)
     return {"centre_seam_x": r["seam_ratio_x"], "centre_seam_y": r["seam_ratio_y"]}
-
-

@@ -146,7 +146,7 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
                     f"train and sample {where} ({len(stack.maps)} maps: "
                     f"{', '.join(Path(m.asset).name for m in stack.maps)}) and write tiles to {out_dir} "
                     f"(UV scale {planned.uv_scale[0]:g} x {planned.uv_scale[1]:g} if the whole texture passes Q; "
-                    "a smaller crop gives a larger scale)"
+                    "a smaller crop, or a cut of whole lattice periods on a repeating texture, gives a larger scale)"
                 )
             results.append(planned)
         else:
@@ -205,7 +205,8 @@ def _check_written(run: Run, handed, edit, failure: str | None = None) -> None:
 def _planned_result(stack: TextureStack, out_dir: Path, options: Options):
     """What a dry run shows authoring: the tile paths that would be written, and the UV scale if the
     first candidate passes Q: a source-sized refined tile keeps the UVs (scale 1); the paper's tile
-    of the whole texture (c = working size) halves them."""
+    of the whole texture (c = working size) halves them. A dry run reads no pixels, so it cannot
+    tell a repeating stack whose written tile will be a lattice cut (smaller, with a larger scale)."""
     from seamless_usd.authoring import MapResult, Provenance, StackResult, uv_scale_for
     from seamless_usd.imaging import WorkingResolution, output_extension
 
