@@ -18,7 +18,7 @@ from rich.table import Table
 
 from seamless_usd.api import Options, process_paths
 from seamless_usd.authoring import WriteMode
-from seamless_usd.pipeline.options import ProgressEvent
+from seamless_usd.pipeline.options import REFINE_MODES, TILE_SIZES, ProgressEvent
 from seamless_usd.report import Report, StackStatus
 
 __all__ = ["add_arguments", "run"]
@@ -50,12 +50,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", "-j", type=int, help="stacks trained at once in local worker processes (default 1)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run stacks on Dask: local:N (a local cluster of N workers) or tcp://host:8786")
-    p.add_argument("--refine", choices=("on", "gan", "off"), default="on",
+    p.add_argument("--refine", choices=REFINE_MODES, default="on",
                    help="exemplar refinement of the SeamlessGAN tile to the source's resolution with real "
                         "source texels; for textures that repeat on a lattice (bricks, weaves), a cut of whole "
                         "periods of the source instead when Q and the fidelity figures prefer it. gan: the "
                         "refined GAN tile only; off: the pure SeamlessGAN tile (default: %(default)s)")
-    p.add_argument("--tile-size", choices=("source", "paper"), default="source",
+    p.add_argument("--tile-size", choices=TILE_SIZES, default="source",
                    help="source: the tile has the source's pixel size (same texture memory); "
                         "paper: the paper's 2c x 2c tile (default: %(default)s)")
     p.add_argument("--force", action="store_true",

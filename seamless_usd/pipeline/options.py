@@ -6,7 +6,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-__all__ = ["Options", "ProgressEvent"]
+__all__ = ["Options", "ProgressEvent", "REFINE_MODES", "TILE_SIZES"]
 
 
 @dataclass(frozen=True)
@@ -20,6 +20,8 @@ class ProgressEvent:
     detail: Any = None  # synthesis progress record for "train"/"sample"; a StackReport for "stack-done"
 
 
+#: Values of ``Options.refine`` and ``Options.tile_size`` (the CLI's choices); ``TILE_SIZES`` is also
+#: ``synthesis.tile.TILE_SIZES``, kept apart so that options load without torch.
 REFINE_MODES = ("on", "gan", "off")
 TILE_SIZES = ("source", "paper")
 

@@ -238,7 +238,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     uv_scale = tuple(float(v) for v in meta["uv_scale"])
     failing = [f"{m.asset}: {figure}" for m in stack.maps
                for figure in metrics.failing_figures(outcomes[map_identity(m)].metrics)]
-    ratio = _written_lattice_ratio(dict(meta["scale"]))
+    ratio = synthesis.written_lattice_ratio(scale.get("lattice") or {}, scale.get("layout"))
     if ratio is not None and ratio < synthesis.LATTICE_TARGET:  # the source repeats and the tile breaks it
         failing.append(f"all maps: lattice_ratio {ratio:.3g}")
     previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator)
@@ -263,13 +263,6 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         previews=previews,
         findings=list(pixels.findings),
     )
-
-
-def _written_lattice_ratio(gan: dict) -> float | None:
-    """The lattice ratio of the tile that was written, when the stack repeats (``synthesis.lattice``)."""
-    lattice = gan.get("lattice") or {}
-    kind = gan.get("layout")
-    return lattice.get("lattice_ratio") if kind == "lattice" else lattice.get(f"lattice_ratio_{kind}")
 
 
 def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:

@@ -16,10 +16,11 @@ from .config import PRESETS, SynthesisConfig, get_preset
 from .lattice import LATTICE_TARGET
 from .refine import RefineConfig, RefineResult, refine
 from .sample import SamplingProgress, sample
-from .tile import MadeTile, downsample_maps, make_tile
+from .tile import MadeTile, downsample_maps, make_tile, written_lattice_ratio
 from .train import TrainedModel, train
 from .types import Candidate, MapInput, QResult, TileResult, TrainingProgress
 
 __all__ = ["SynthesisConfig", "PRESETS", "get_preset", "MapInput", "train", "sample", "TrainedModel",
            "TileResult", "QResult", "Candidate", "TrainingProgress", "SamplingProgress",
-           "RefineConfig", "RefineResult", "refine", "MadeTile", "make_tile", "downsample_maps", "LATTICE_TARGET"]
+           "RefineConfig", "RefineResult", "refine", "MadeTile", "make_tile", "downsample_maps", "LATTICE_TARGET",
+           "written_lattice_ratio"]

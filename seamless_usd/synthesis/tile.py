@@ -31,7 +31,7 @@ from .scale import structure_size, working_factor
 from .seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
 from .types import MapInput, QResult, TileResult, stack_shape
 
-__all__ = ["MadeTile", "make_tile", "downsample_maps", "TILE_SIZES", "LAYOUT_SCALE_RANGE"]
+__all__ = ["MadeTile", "make_tile", "downsample_maps", "written_lattice_ratio", "TILE_SIZES", "LAYOUT_SCALE_RANGE"]
 
 TILE_SIZES = ("source", "paper")
 
@@ -177,6 +177,12 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     _try_lattice(made, maps, model, refine_config.lattice and tile_size == "source", keep_alternatives)
     timings["lattice"] = time.perf_counter() - t4
     return made
+
+
+def written_lattice_ratio(lattice: dict, layout_kind: str | None) -> float | None:
+    """The lattice ratio of the written tile, from ``MadeTile.lattice`` and ``MadeTile.layout_kind`` (as
+    recorded, e.g. in a cached stack's metadata); None when the stack does not repeat."""
+    return lattice.get("lattice_ratio" if layout_kind == "lattice" else f"lattice_ratio_{layout_kind}")
 
 
 def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[float, float]) -> dict[str, np.ndarray]:
