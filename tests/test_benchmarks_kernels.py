@@ -1,0 +1,36 @@
+"""The convolution benchmark finds the step's layers and counts their work right."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+KERNELS = Path(__file__).resolve().parents[1] / "benchmarks" / "kernels.py"
+
+
+def _kernels():
+    sys.path.insert(0, str(KERNELS.parent))
+    spec = importlib.util.spec_from_file_location("benchmark_kernels", KERNELS)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_every_convolution_of_a_step_is_timed_with_its_work(tmp_path):
+    k = _kernels()
+    assert k.main(["--preset", "tiny", "--seconds", "0.01", "--out", str(tmp_path)]) == 0
+    data = json.loads((tmp_path / "kernels.json").read_text())
+    rows = data["rows"]
+    nets = {r["layer"].split(".")[0] for r in rows}
+    assert nets == {"G", "D", "style"}
+    assert all(r["calls"] >= 1 and r["ms"] > 0 for r in rows)
+    assert any(r["kind"] == "convT" for r in rows)  # the decoders' transposed convolutions
+    for r in rows:
+        m, kk, n = r["gemm_shape"]
+        gemm = 2 * m * kk * n  # the forward's multiply-adds
+        grads = 2 if r["weight_grad"] else 1  # the input gradient, and the weight gradient of trained layers
+        assert abs(r["flops"] - (1 + grads) * gemm) <= 0.02 * (1 + grads) * gemm, r
+    assert not any(r["weight_grad"] for r in rows if r["layer"].startswith("style."))  # frozen random features
+    assert data["conv_ms_per_step"] > 0 and 0 < data["conv_gflops"] < 10 * data["matmul_peak_gflops"]
