@@ -228,3 +228,25 @@ def test_library_index_has_a_card_per_stack_filterable_by_status(brick_512, tmp_
     assert len(re.findall(r'href="library\.files/[^"#]+"', index)) == 2  # the files table: one link per file
     pages = sorted((tmp_path / "library.files").glob("*.html"))
     assert len(pages) == 2 and f'id="{brick_512.id}"' in pages[0].read_text()
+
+
+def test_a_tile_made_on_a_torus_reads_its_seam_figures_as_lines():
+    """A refined or cut tile has no special line: a high border figure is a strong line there (a mortar joint
+    at the wrap of a brick cut), not a place where copies meet, and the report says so."""
+    def page(layout):
+        m = MapReport(node="/M/R", asset="r.png", output=None, roles=["roughness"], channels="r", color_space="raw",
+                      metrics={"scale_ratio": 1.03, "patch_distance": 0.89, "seam_ratio_x": 1.53, "seam_ratio_y": 0.83,
+                               "centre_seam_x": 1.06, "centre_seam_y": 0.92})
+        gan = {"layout": layout} if layout else {}
+        stack = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.PASSED, maps=[m],
+                            resampled={"gan": gan})
+        return render_html(Report(sources=["s.usda"], stacks=[stack]))
+
+    cut = page("lattice")
+    assert "strong line at the border (1.53)" in cut and "no strong line at the centre (1.06)" in cut
+    assert "border seam visible" not in cut and "made on a torus" in cut
+    assert "roughness: border seam, left|right — strong line at the border (1.53)" in cut  # the list outside targets
+    for layout in ("gan", "random"):
+        assert "strong line at the border (1.53)" in page(layout)
+    gan_only = page(None)  # --refine off: the GAN's own tile, whose latent copies meet at its centre lines
+    assert "border seam visible (1.53)" in gan_only and "made on a torus" not in gan_only

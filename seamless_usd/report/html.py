@@ -16,7 +16,7 @@ from seamless_usd.fileio import atomic_write_text
 from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
-from seamless_usd.report.verdicts import LABELS, target_text, targets, verdict
+from seamless_usd.report.verdicts import LABELS, TORUS_NOTE, target_text, targets, verdict
 
 __all__ = ["render_html", "render_index", "write_html", "write_json", "write_library_html",
            "stack_html", "map_verdicts", "failing_figures", "source_report"]
@@ -96,27 +96,39 @@ def _map_name(m: MapReport) -> str:
     return ", ".join(m.roles) or Path(m.asset).name
 
 
-def map_verdicts(m: MapReport) -> list[tuple[str, object, object, str, object]]:
-    """Rows ``(key, source value, tile value, target text, Verdict)`` of a map's figures, in order."""
+_SEAM_KEYS = ("seam_ratio_x", "seam_ratio_y", "seam_ratio2_x", "seam_ratio2_y", "centre_seam_x", "centre_seam_y")
+
+
+def made_on_a_torus(stack: StackReport) -> bool:
+    """Whether the stack's tile was refined or cut from the source (every line of it is a line of the
+    texture), rather than sampled from SeamlessGAN alone (whose latent copies meet at its centre lines)."""
+    return stack.resampled.get("gan", {}).get("layout") in ("gan", "random", "lattice")
+
+
+def map_verdicts(m: MapReport, torus: bool = False) -> list[tuple[str, object, object, str, object]]:
+    """Rows ``(key, source value, tile value, target text, Verdict)`` of a map's figures, in order
+    (``torus``: see :func:`made_on_a_torus`)."""
     bounds = targets()
     present = {k for k, v in [*m.metrics.items(), *m.source_metrics.items()] if v is not None}
     order = _metric_order()
     keys = [k for k in order if k in present] + sorted(present - set(order))
     return [(k, m.source_metrics.get(k), m.metrics.get(k), target_text(bounds.get(k)),
-             verdict(k, m.metrics.get(k), bounds.get(k))) for k in keys]
+             verdict(k, m.metrics.get(k), bounds.get(k), torus)) for k in keys]
 
 
 def failing_figures(stack: StackReport) -> list[str]:
     """``"map: figure"`` for the figures outside their targets: the stack's own list when it has one."""
+    torus = made_on_a_torus(stack)
     if stack.failing:
-        return [_readable_failing(f) for f in stack.failing]
+        return [_readable_failing(f, torus) for f in stack.failing]
     out = []
     for m in stack.maps:
-        out += [f"{_map_name(m)}: {LABELS.get(k, k)} — {v.text}" for k, _, _, _, v in map_verdicts(m) if v.ok is False]
+        out += [f"{_map_name(m)}: {LABELS.get(k, k)} — {v.text}" for k, _, _, _, v in map_verdicts(m, torus)
+                if v.ok is False]
     return out
 
 
-def _readable_failing(item: str) -> str:
+def _readable_failing(item: str, torus: bool = False) -> str:
     """``"albedo: scale_ratio 0.62"`` as ``"albedo: feature scale vs source — magnified or blurred (0.62)"``."""
     where, sep, figure_text = item.rpartition(": ")
     parts = figure_text.split()
@@ -126,12 +138,12 @@ def _readable_failing(item: str) -> str:
         value = float(parts[1])
     except ValueError:
         return item
-    return f"{where}{sep}{LABELS[parts[0]]} — {verdict(parts[0], value).text}"
+    return f"{where}{sep}{LABELS[parts[0]]} — {verdict(parts[0], value, torus=torus).text}"
 
 
-def _metrics_table(m: MapReport) -> str:
+def _metrics_table(m: MapReport, torus: bool = False) -> str:
     main, minor = [], []
-    for key, source, new, target, v in map_verdicts(m):
+    for key, source, new, target, v in map_verdicts(m, torus):
         cls = "" if v.ok is None else ("ok" if v.ok else "bad")
         row = (f'<th title="{esc(key)}">{esc(LABELS.get(key, key))}</th><td>{esc(fmt(source))}</td>'
                f'<td>{esc(fmt(new))}</td><td>{esc(target)}</td><td class="v {cls}">{esc(v.text)}</td>')
@@ -139,11 +151,13 @@ def _metrics_table(m: MapReport) -> str:
     if not main and not minor:
         return ""
     rows = "".join(f"<tr>{r}</tr>" for r in main)
+    lines = torus and any(v.ok is False and k in _SEAM_KEYS for k, _, _, _, v in map_verdicts(m, torus))
+    note = f'<p class="note muted">{esc(TORUS_NOTE)}</p>' if lines else ""
     if minor:
         rows += '<tr class="sep"><td colspan="5">other figures (no target)</td></tr>'
         rows += "".join(f'<tr class="minor">{r}</tr>' for r in minor)
     return ('<div class="figs"><table class="metrics"><tr><th>figure</th><th>source as is</th><th>new tile</th>'
-            f'<th>target</th><th>verdict</th></tr>{rows}</table></div>')
+            f'<th>target</th><th>verdict</th></tr>{rows}</table>{note}</div>')
 
 
 def _geometry(stack: StackReport) -> ViewGeometry | None:
@@ -182,7 +196,9 @@ def _why(stack: StackReport) -> str:
     q_text = q_text.strip()
     if failing:
         items = "".join(f"<li>{esc(f)}</li>" for f in failing)
-        return f'<div class="why bad"><b>Outside their targets</b><ul>{items}</ul>{esc(q_text)}</div>'
+        lines = made_on_a_torus(stack) and any("strong line" in f for f in failing)
+        note = f"<p>{esc(TORUS_NOTE)}</p>" if lines else ""
+        return f'<div class="why bad"><b>Outside their targets</b><ul>{items}</ul>{note}{esc(q_text)}</div>'
     if any(m.metrics for m in stack.maps):
         return f'<div class="why ok"><b>All figures within their targets.</b> {esc(q_text)}</div>'
     return f'<div class="why info">{esc(q_text)}</div>' if q_text else ""
@@ -251,7 +267,7 @@ def stack_html(stack: StackReport) -> str:
         blocks.append(
             f'<div class="block"><h3>{esc(_map_name(m))} <span class="muted">({esc(m.channels)}, '
             f"{esc(m.color_space)}) @{esc(m.asset)}@{out}</span></h3>"
-            f'<div class="row">{pictures}{_metrics_table(m)}</div></div>'
+            f'<div class="row">{pictures}{_metrics_table(m, made_on_a_torus(stack))}</div></div>'
         )
     if p.discriminator is not None:
         blocks.append('<div class="block">' + figure(p.discriminator, "discriminator map; seam bands tinted", lossless=True) + "</div>")

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["FALLBACK_TARGETS", "LABELS", "Verdict", "targets", "verdict", "target_text"]
+__all__ = ["FALLBACK_TARGETS", "LABELS", "TORUS_NOTE", "Verdict", "targets", "verdict", "target_text"]
 
 #: The quality benchmark's targets, used when ``seamless_usd.metrics.TARGETS`` is not there.
 FALLBACK_TARGETS: dict[str, tuple[float | None, float | None]] = {
@@ -53,6 +53,22 @@ _WORDS: dict[str, tuple[str, str, str]] = {
     "detail_ratio_centre": ("detail kept at the centre", "centre blurred", "centre harsher than the rest"),
     "ssim": ("close to the source", "far from the source", "close to the source"),
 }
+
+
+# The seam figures of a tile made on a torus (refined, or cut from the source): its border and centre lines
+# are lines of the texture like any other, so a high figure there reads a strong line, which may be the
+# texture's own (a mortar joint) as much as a join.
+_TORUS_WORDS: dict[str, tuple[str, str, str]] = {
+    **{k: ("no strong line at the border", "no strong line at the border", "strong line at the border")
+       for k in ("seam_ratio_x", "seam_ratio_y", "seam_ratio2_x", "seam_ratio2_y")},
+    **{k: ("no strong line at the centre", "no strong line at the centre", "strong line at the centre")
+       for k in ("centre_seam_x", "centre_seam_y")},
+}
+
+#: What a high seam figure means on a tile made on a torus, for the report beside those figures.
+TORUS_NOTE = ("This tile was made on a torus (refined, or cut from the source): its border and centre lines are "
+              "lines of the texture like any other, so a strong line there may be the texture's own, a mortar "
+              "joint say, as much as a join. Look at the repeats.")
 
 
 @dataclass(frozen=True)
@@ -106,7 +122,8 @@ def target_text(bounds: tuple[float | None, float | None] | None) -> str:
     return ""
 
 
-def verdict(key: str, value: float | None, bounds: tuple[float | None, float | None] | None = None) -> Verdict:
+def verdict(key: str, value: float | None, bounds: tuple[float | None, float | None] | None = None,
+            torus: bool = False) -> Verdict:
     """The verdict on one figure of a new tile.
 
     Parameters
@@ -114,6 +131,8 @@ def verdict(key: str, value: float | None, bounds: tuple[float | None, float | N
     key : the metric's key (``scale_ratio``, ``centre_seam_x``, ...).
     value : its value; None or NaN gives "not measured".
     bounds : ``(low, high)`` target; default from :func:`targets`.
+    torus : the tile was made on a torus (refined, or cut from the source), where the seam figures read
+        a line of the texture, not the place where copies of it meet (see :data:`TORUS_NOTE`).
 
     Examples
     --------
@@ -121,12 +140,15 @@ def verdict(key: str, value: float | None, bounds: tuple[float | None, float | N
     'scale kept (0.98)'
     >>> verdict("centre_seam_x", 1.6).text, verdict("centre_seam_x", 1.6).ok
     ('centre seam visible (1.6)', False)
+    >>> verdict("seam_ratio_x", 1.53, torus=True).text
+    'strong line at the border (1.53)'
     """
     bounds = bounds if bounds is not None else targets().get(key)
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return Verdict(key, None, "not measured", None, bounds)
     value = float(value)
-    within_words, low_words, high_words = _WORDS.get(key, ("within target", "below target", "above target"))
+    words = _TORUS_WORDS if torus and key in _TORUS_WORDS else _WORDS
+    within_words, low_words, high_words = words.get(key, ("within target", "below target", "above target"))
     if not bounds or bounds == (None, None):
         return Verdict(key, value, "", None, None)
     low, high = bounds
