@@ -21,7 +21,7 @@ nothing about the tile's quality changes:
 
 Writes ``<out>/spread.json`` and ``<out>/spread.md``. Run from anywhere::
 
-    .venv/bin/python benchmarks/spread.py                  # sections 1 and 2, about a minute
+    .venv/bin/python benchmarks/spread.py                  # sections 1 and 2, about 20 s
     .venv/bin/python benchmarks/spread.py --q --stacks cloth,brick   # and Q (minutes per stack)
 """
 from __future__ import annotations
@@ -45,21 +45,28 @@ from methods import preset_config  # noqa: E402
 from stacks import SHARED_DIR, STACKS, load_stack  # noqa: E402
 
 from seamless_usd import metrics as M  # noqa: E402
+from seamless_usd.metrics.common import _prepare, _ratio  # noqa: E402
+from seamless_usd.metrics.seams import _angle  # noqa: E402
 
 SEAM_TARGET = M.TARGETS["seam_ratio_x"][1]
 Q_ORIGINS = 6  # origins per axis for the Q section (36 in all)
 
 
 def _worst_lines(tile: np.ndarray, is_normal: bool, axis: int) -> np.ndarray:
-    """For every roll of ``tile`` along ``axis``, the worse of its border and centre seam ratio there."""
-    label = "x" if axis == 1 else "y"
-    out = []
-    for k in range(tile.shape[axis]):
-        rolled = np.roll(tile, k, axis=axis)
-        border = M.seam_ratios(rolled, is_normal)[f"seam_ratio_{label}"]
-        centre = M.centre_seam_ratios(rolled, is_normal)[f"centre_seam_{label}"]
-        out.append(max(border, centre))
-    return np.asarray(out)
+    """For every roll ``k`` of ``tile`` along ``axis`` (``np.roll(tile, k, axis)``), the worse of its
+    border and centre seam ratio there: exactly :func:`seam_ratios` and :func:`centre_seam_ratios` of the
+    rolled tile, read from one profile of the mean neighbour difference across each line (every line
+    holds as many texels, so the interior mean is the mean over the other lines)."""
+    u = _prepare(tile, is_normal)
+    nxt = np.roll(u, -1, axis=axis)  # line j lies between index j and j + 1 (the last across the wrap)
+    d = _angle(u, nxt) if is_normal else np.abs(nxt - u).mean(axis=-1)
+    line = d.mean(axis=1 - axis)
+    n = len(line)
+    others = (line.sum() - line) / (n - 1)
+    ratio = np.array([_ratio(a, b) for a, b in zip(line, others)])
+    k = np.arange(n)
+    border, centre = (n - 1 - k) % n, (n - 1 - k - n // 2) % n  # the line each one reads after the roll
+    return np.maximum(ratio[border], ratio[centre])
 
 
 def origin_spread(tile: np.ndarray, is_normal: bool) -> dict[str, dict[str, float]]:

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 SPREAD = Path(__file__).resolve().parents[1] / "benchmarks" / "spread.py"
 
@@ -30,6 +31,21 @@ def test_origin_spread_reads_every_origin_of_the_same_tile():
     assert x["max"] > 3.0 and x["min"] < 1.2 and x["min"] <= x["at_origin"] <= x["max"]
     assert abs(x["inside"] - (48 - 4) / 48) < 0.05
     assert y["max"] < 1.6 and 0.0 <= y["inside"] <= 1.0
+
+
+def test_the_figure_at_each_origin_is_the_seam_ratio_of_the_rolled_tile():
+    from seamless_usd import metrics as M
+
+    s = _spread()
+    rng = np.random.default_rng(1)
+    for tile, is_normal in ((rng.uniform(size=(30, 37, 3)), False), (rng.normal(size=(26, 33, 3)), True)):
+        for axis, label in ((1, "x"), (0, "y")):
+            worst = s._worst_lines(tile, is_normal, axis)
+            for k in (0, 1, 7, tile.shape[axis] - 1):
+                rolled = np.roll(tile, k, axis=axis)
+                expected = max(M.seam_ratios(rolled, is_normal)[f"seam_ratio_{label}"],
+                               M.centre_seam_ratios(rolled, is_normal)[f"centre_seam_{label}"])
+                assert worst[k] == pytest.approx(expected, rel=1e-9), (axis, k)
 
 
 def test_the_script_writes_its_tables_for_a_real_stack(tmp_path):

@@ -16,7 +16,7 @@ from seamless_usd.fileio import atomic_write_text
 from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
-from seamless_usd.report.verdicts import LABELS, TORUS_NOTE, target_text, targets, verdict
+from seamless_usd.report.verdicts import LABELS, SEAM_KEYS, TORUS_NOTE, target_text, targets, verdict
 
 __all__ = ["render_html", "render_index", "write_html", "write_json", "write_library_html",
            "stack_html", "map_verdicts", "failing_figures", "source_report"]
@@ -96,9 +96,6 @@ def _map_name(m: MapReport) -> str:
     return ", ".join(m.roles) or Path(m.asset).name
 
 
-_SEAM_KEYS = ("seam_ratio_x", "seam_ratio_y", "seam_ratio2_x", "seam_ratio2_y", "centre_seam_x", "centre_seam_y")
-
-
 def made_on_a_torus(stack: StackReport) -> bool:
     """Whether the stack's tile was refined or cut from the source (every line of it is a line of the
     texture), rather than sampled from SeamlessGAN alone (whose latent copies meet at its centre lines)."""
@@ -118,27 +115,33 @@ def map_verdicts(m: MapReport, torus: bool = False) -> list[tuple[str, object, o
 
 def failing_figures(stack: StackReport) -> list[str]:
     """``"map: figure"`` for the figures outside their targets: the stack's own list when it has one."""
+    return [text for _, text in _failing(stack)]
+
+
+def _failing(stack: StackReport) -> list[tuple[str | None, str]]:
+    """``(figure key or None, "map: figure")`` for :func:`failing_figures`."""
     torus = made_on_a_torus(stack)
     if stack.failing:
         return [_readable_failing(f, torus) for f in stack.failing]
     out = []
     for m in stack.maps:
-        out += [f"{_map_name(m)}: {LABELS.get(k, k)} — {v.text}" for k, _, _, _, v in map_verdicts(m, torus)
+        out += [(k, f"{_map_name(m)}: {LABELS.get(k, k)} — {v.text}") for k, _, _, _, v in map_verdicts(m, torus)
                 if v.ok is False]
     return out
 
 
-def _readable_failing(item: str, torus: bool = False) -> str:
-    """``"albedo: scale_ratio 0.62"`` as ``"albedo: feature scale vs source — magnified or blurred (0.62)"``."""
+def _readable_failing(item: str, torus: bool = False) -> tuple[str | None, str]:
+    """``"albedo: scale_ratio 0.62"`` as ``("scale_ratio", "albedo: feature scale vs source — magnified or
+    blurred (0.62)")``; an item that is not ``map: key value`` stays as it is, with no key."""
     where, sep, figure_text = item.rpartition(": ")
     parts = figure_text.split()
     if len(parts) != 2 or parts[0] not in LABELS:
-        return item
+        return None, item
     try:
         value = float(parts[1])
     except ValueError:
-        return item
-    return f"{where}{sep}{LABELS[parts[0]]} — {verdict(parts[0], value, torus=torus).text}"
+        return None, item
+    return parts[0], f"{where}{sep}{LABELS[parts[0]]} — {verdict(parts[0], value, torus=torus).text}"
 
 
 def _metrics_table(m: MapReport, torus: bool = False) -> str:
@@ -151,7 +154,7 @@ def _metrics_table(m: MapReport, torus: bool = False) -> str:
     if not main and not minor:
         return ""
     rows = "".join(f"<tr>{r}</tr>" for r in main)
-    lines = torus and any(v.ok is False and k in _SEAM_KEYS for k, _, _, _, v in map_verdicts(m, torus))
+    lines = torus and any(v.ok is False and k in SEAM_KEYS for k, _, _, _, v in map_verdicts(m, torus))
     note = f'<p class="note muted">{esc(TORUS_NOTE)}</p>' if lines else ""
     if minor:
         rows += '<tr class="sep"><td colspan="5">other figures (no target)</td></tr>'
@@ -188,15 +191,15 @@ def _why(stack: StackReport) -> str:
         return f'<div class="why info"><b>Left alone</b>: {esc(reason)}</div>'
     if stack.status in (StackStatus.FAILED, StackStatus.PLANNED):
         return ""
-    failing = failing_figures(stack)
+    failing = _failing(stack)
     q = stack.q.get("passed") if stack.q else None
     q_text = ("" if q is None else
               " The discriminator finds no seam in the centre bands (Q passed)." if q else
               " The discriminator still sees a seam in the centre bands (Q not passed).")
     q_text = q_text.strip()
     if failing:
-        items = "".join(f"<li>{esc(f)}</li>" for f in failing)
-        lines = made_on_a_torus(stack) and any("strong line" in f for f in failing)
+        items = "".join(f"<li>{esc(text)}</li>" for _, text in failing)
+        lines = made_on_a_torus(stack) and any(k in SEAM_KEYS for k, _ in failing)
         note = f"<p>{esc(TORUS_NOTE)}</p>" if lines else ""
         return f'<div class="why bad"><b>Outside their targets</b><ul>{items}</ul>{note}{esc(q_text)}</div>'
     if any(m.metrics for m in stack.maps):

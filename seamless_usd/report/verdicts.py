@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["FALLBACK_TARGETS", "LABELS", "TORUS_NOTE", "Verdict", "targets", "verdict", "target_text"]
+__all__ = ["FALLBACK_TARGETS", "LABELS", "SEAM_KEYS", "TORUS_NOTE", "Verdict", "targets", "verdict", "target_text"]
 
 #: The quality benchmark's targets, used when ``seamless_usd.metrics.TARGETS`` is not there.
 FALLBACK_TARGETS: dict[str, tuple[float | None, float | None]] = {
@@ -64,6 +64,9 @@ _TORUS_WORDS: dict[str, tuple[str, str, str]] = {
     **{k: ("no strong line at the centre", "no strong line at the centre", "strong line at the centre")
        for k in ("centre_seam_x", "centre_seam_y")},
 }
+
+#: The seam figures, whose words change on a tile made on a torus.
+SEAM_KEYS: tuple[str, ...] = tuple(_TORUS_WORDS)
 
 #: What a high seam figure means on a tile made on a torus, for the report beside those figures.
 TORUS_NOTE = ("This tile was made on a torus (refined, or cut from the source): its border and centre lines are "
