@@ -98,7 +98,7 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
     total = time.perf_counter() - t0
     gan = made.gan
     info = {
-        "preset": preset, "iterations": config.iterations, "crop_size": list(gan.crop_size), "passed": bool(gan.passed),
+        "preset": preset, "iterations": config.iterations, "crop_size": list(gan.crop_size), "passed": bool(gan.q_passed),
         "working_size": list(made.working_size), "structure_px": round(made.structure_px, 1),
         "train_seconds": round(made.timings.get("train", 0.0), 2),
         "sample_seconds": round(made.timings.get("sample", 0.0), 2),
@@ -117,7 +117,7 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
                "lattice-cut": gan_seconds + lattice_s}
     details = {**info, "layout_used": made.layout_used, "refine_seconds": round(made.timings.get("refine", 0.0), 2),
                "layout": made.layout_kind, "lattice": made.lattice}
-    passed = {"seamless-usd": made.passed, "seamlessgan+refine": bool(gan.passed),
+    passed = {"seamless-usd": made.q_passed, "seamlessgan+refine": bool(gan.q_passed),
               "lattice-cut": bool(made.lattice.get("q_passed"))}  # Q of each row's own tile
     for method in _REFINED:
         if method in methods and refined[method] is not None:

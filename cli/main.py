@@ -27,6 +27,7 @@ EXIT_INTERNAL = 3
 COMMANDS: dict[str, str] = {
     "scan": "seamless_usd_cli.scan",
     "process": "seamless_usd_cli.process",
+    "check": "seamless_usd_cli.check",
 }
 
 

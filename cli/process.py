@@ -2,8 +2,10 @@
 
 Trains a SeamlessGAN per texture stack, samples a tileable stack, writes the maps beside the
 stage (tileable/) and, by default, a new layer <scene>.seamless.usda that sublayers the
-original and holds the edits. Exit codes: 0 all stacks passed; 1 some stack failed or did not
-pass (the rest were written); 2 usage error or unreadable input.
+original and holds the edits. A stack *passed* when its written tiles have no seam (at the wrap,
+the centre lines or inside, in any map, judged against the source's own lines) and every fidelity
+figure is inside the tolerance its source sets. Exit codes: 0 all stacks passed; 1 some stack failed
+or did not pass (the rest were written); 2 usage error or unreadable input.
 """
 from __future__ import annotations
 
@@ -161,8 +163,9 @@ def _summary(report: Report, console: Console) -> None:
 def _stack_table(report: Report, console: Console) -> None:
     table = Table(title="seamless-usd process", show_lines=False)
     table.add_column("material", overflow="fold", min_width=16)
-    for col in ("status", "maps", "crop", "tile", "UV scale", "Q", "time"):
+    for col in ("status", "maps", "crop", "tile", "UV scale", "time"):
         table.add_column(col, no_wrap=True)
+    table.add_column("why not passed", overflow="fold")
     for s in report.stacks:
         style = {StackStatus.PASSED: "green", StackStatus.NOT_PASSED: "yellow", StackStatus.FAILED: "red"}.get(s.status, "")
         table.add_row(
@@ -172,8 +175,8 @@ def _stack_table(report: Report, console: Console) -> None:
             "x".join(map(str, s.crop_size)) if s.crop_size else "-",
             "x".join(map(str, s.tile_size)) if s.tile_size else "-",
             ", ".join(f"{v:.3g}" for v in s.uv_scale) if s.uv_scale else "-",
-            "pass" if s.q.get("passed") else ("fail" if s.q else "-"),
             f"{sum(s.timings.values()):.0f}s" if s.timings else "-",
+            s.message if s.status in (StackStatus.NOT_PASSED, StackStatus.FAILED) else "",
         )
     console.print(table)
 

@@ -50,6 +50,8 @@ class MtlxNames:
     SOURCE_ASSET = "seamless_sourceasset"
     CROP_SIZE = "seamless_cropsize"
     UV_SCALE = "seamless_uvscale"
+    PASSED = "seamless_passed"
+    VERDICT = "seamless_verdict"
     Q_PASSED = "seamless_qpassed"
     Q_TAU = "seamless_qtau"
     Q_BAND_MIN = "seamless_qbandmin"
@@ -131,11 +133,13 @@ def read_mtlx_provenance(node: mx.Node) -> Provenance | None:
         source_asset=node.getAttribute(MtlxNames.SOURCE_ASSET),
         crop_size=tuple(int(v) for v in floats(MtlxNames.CROP_SIZE)),
         uv_scale=floats(MtlxNames.UV_SCALE),
-        q_passed=node.getAttribute(MtlxNames.Q_PASSED) == "true",
+        q_passed=(node.getAttribute(MtlxNames.Q_PASSED) == "true") if node.hasAttribute(MtlxNames.Q_PASSED) else None,
         q_tau=floats(MtlxNames.Q_TAU, 1)[0],
         q_band_min=floats(MtlxNames.Q_BAND_MIN),
         model_hash=node.getAttribute(MtlxNames.MODEL_HASH),
         tool_version=node.getAttribute(MtlxNames.TOOL_VERSION),
+        passed=node.getAttribute(MtlxNames.PASSED) == "true",
+        verdict=node.getAttribute(MtlxNames.VERDICT),
     )
 
 
@@ -213,7 +217,12 @@ class _MtlxAuthor:
         self.result.plan.append(f"{line} in {asset_ref(self.out.name)}")
         self.changed = True
 
-    def _set(self, elem: mx.Element, name: str, value: str, label: str) -> None:
+    def _set(self, elem: mx.Element, name: str, value: str | None, label: str) -> None:
+        if value is None:  # not recorded (Q never ran): an older run's value goes
+            if elem.hasAttribute(name):
+                elem.removeAttribute(name)
+                self._plan(f"remove {prim_ref(elem.getNamePath())}.{label}")
+            return
         if elem.getAttribute(name) != value:
             elem.setAttribute(name, value)
             self._plan(f"set {prim_ref(elem.getNamePath())}.{label} = {value}")
@@ -335,9 +344,11 @@ class _MtlxAuthor:
             (MtlxNames.SOURCE_ASSET, source),
             (MtlxNames.CROP_SIZE, _fmt(p.crop_size)),
             (MtlxNames.UV_SCALE, _fmt(total)),
-            (MtlxNames.Q_PASSED, "true" if p.q_passed else "false"),
-            (MtlxNames.Q_TAU, _fmt([float(p.q_tau)])),
-            (MtlxNames.Q_BAND_MIN, _fmt(p.q_band_min)),
+            (MtlxNames.PASSED, "true" if p.passed else "false"),
+            (MtlxNames.VERDICT, p.verdict),
+            (MtlxNames.Q_PASSED, None if p.q_passed is None else "true" if p.q_passed else "false"),
+            (MtlxNames.Q_TAU, None if p.q_passed is None else _fmt([float(p.q_tau)])),
+            (MtlxNames.Q_BAND_MIN, None if p.q_passed is None else _fmt(p.q_band_min)),
             (MtlxNames.MODEL_HASH, p.model_hash),
             (MtlxNames.TOOL_VERSION, p.tool_version),
         ):

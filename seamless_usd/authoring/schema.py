@@ -34,6 +34,8 @@ class Schema:
     SOURCE_ASSET = "seamless:sourceAsset"
     CROP_SIZE = "seamless:cropSize"
     UV_SCALE = "seamless:uvScale"
+    PASSED = "seamless:passed"
+    VERDICT = "seamless:verdict"
     Q_PASSED = "seamless:qPassed"
     Q_TAU = "seamless:qTau"
     Q_BAND_MIN = "seamless:qBandMin"
@@ -46,12 +48,18 @@ PROPERTIES = {
     Schema.SOURCE_ASSET: (Sdf.ValueTypeNames.Asset, lambda p: Sdf.AssetPath(p.source_asset)),
     Schema.CROP_SIZE: (Sdf.ValueTypeNames.Int2, lambda p: Gf.Vec2i(*map(int, p.crop_size))),
     Schema.UV_SCALE: (Sdf.ValueTypeNames.Double2, lambda p: Gf.Vec2d(*p.uv_scale)),
+    Schema.PASSED: (Sdf.ValueTypeNames.Bool, lambda p: bool(p.passed)),
+    Schema.VERDICT: (Sdf.ValueTypeNames.String, lambda p: str(p.verdict)),
     Schema.Q_PASSED: (Sdf.ValueTypeNames.Bool, lambda p: bool(p.q_passed)),
     Schema.Q_TAU: (Sdf.ValueTypeNames.Double, lambda p: float(p.q_tau)),
     Schema.Q_BAND_MIN: (Sdf.ValueTypeNames.Double2, lambda p: Gf.Vec2d(*p.q_band_min)),
     Schema.MODEL_HASH: (Sdf.ValueTypeNames.String, lambda p: str(p.model_hash)),
     Schema.TOOL_VERSION: (Sdf.ValueTypeNames.String, lambda p: str(p.tool_version)),
 }
+
+
+#: The discriminator's figures, recorded only when Q ran on the written tile.
+Q_PROPERTIES = (Schema.Q_PASSED, Schema.Q_TAU, Schema.Q_BAND_MIN)
 
 
 def _plugin_dir() -> Path:
@@ -94,6 +102,11 @@ def write_provenance(prim: Usd.Prim, provenance: Provenance, source_asset: str |
     """
     prim.AddAppliedSchema(Schema.TILE_API)
     for name, (type_name, convert) in PROPERTIES.items():
+        if name in Q_PROPERTIES and provenance.q_passed is None:  # Q never ran: record none of its figures
+            attr = prim.GetAttribute(name)
+            if attr:
+                attr.Block()
+            continue
         value = convert(provenance)
         if name == Schema.SOURCE_ASSET and source_asset is not None:
             value = Sdf.AssetPath(source_asset)
@@ -115,11 +128,13 @@ def read_provenance(prim: Usd.Prim) -> Provenance | None:
         source_asset=source.path if isinstance(source, Sdf.AssetPath) else str(source),
         crop_size=tuple(int(v) for v in get(Schema.CROP_SIZE, (0, 0))),
         uv_scale=tuple(float(v) for v in get(Schema.UV_SCALE, (1.0, 1.0))),
-        q_passed=bool(get(Schema.Q_PASSED, False)),
+        q_passed=None if get(Schema.Q_PASSED, None) is None else bool(get(Schema.Q_PASSED, False)),
         q_tau=float(get(Schema.Q_TAU, 0.0)),
         q_band_min=tuple(float(v) for v in get(Schema.Q_BAND_MIN, (0.0, 0.0))),
         model_hash=str(get(Schema.MODEL_HASH, "")),
         tool_version=str(get(Schema.TOOL_VERSION, "")),
+        passed=bool(get(Schema.PASSED, False)),
+        verdict=str(get(Schema.VERDICT, "")),
     )
 
 

@@ -60,11 +60,13 @@ class Provenance:
     source_asset: str  # the texture file the tile was made from, as authored
     crop_size: tuple[int, int]  # (c_w, c_h) working pixels; the tile is 2c x 2c
     uv_scale: tuple[float, float]  # (W / 2c_w, H / 2c_h)
-    q_passed: bool  # min(D) on each seam band >= tau
+    q_passed: bool | None  # the discriminator's Q on the written tile (min(D) on each band >= tau); None: Q never ran
     q_tau: float
     q_band_min: tuple[float, float]  # (vertical band, horizontal band)
     model_hash: str
     tool_version: str
+    passed: bool = False  # the verdict: seamless at the wrap and inside, and faithful to the source
+    verdict: str = ""  # the verdict in words: "seamless and faithful", or why not
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,9 @@ and some that are already tile. Each stack gets one class, with the measured rea
 - ``uv-atlas``: the bound meshes keep their UVs inside one period, as unwrapped islands;
 - ``already-tileable``: a would-be *tiling* stack whose every map is already seamless across its
   wrap-around, measured on the pixels (decoded at most 512 px, reduced with bins that keep the
-  wrap-around exact).
+  wrap-around exact), *and* has no seam anywhere inside: the verdict (:mod:`seamless_usd.verdict`),
+  judging the maps against themselves, finds no line unlike the texture's own (a spliced strip or
+  a clone-stamped near-tile is processed, its reason naming where the seam is).
 
 Thresholds come from measurements on real files, recorded in ``tests/test_intent_classify.py``:
 periodic-plus-smooth score (Moisan) of the MaterialX example maps that tile (wood colour 0.044,
@@ -103,9 +105,22 @@ def measure_map(m: TextureMap, thresholds: Thresholds = THRESHOLDS) -> tuple[flo
 
 
 def _measure(m: TextureMap, thresholds: Thresholds) -> tuple[float, float] | None:
-    import OpenImageIO as oiio
-
     from seamless_usd.metrics import ps_score, seam_ratios
+
+    pixels = measured_pixels(m, thresholds)
+    if pixels is None:
+        return None
+    if float(np.ptp(pixels)) == 0.0:
+        return 0.0, 1.0  # a constant map repeats seamlessly
+    seams = seam_ratios(pixels)
+    seam = max(seams["seam_ratio_x"], seams["seam_ratio_y"])
+    return float(ps_score(pixels)), float(seam if np.isfinite(seam) else 0.0)
+
+
+def measured_pixels(m: TextureMap, thresholds: Thresholds = THRESHOLDS) -> np.ndarray | None:
+    """The channels ``m`` uses, reduced to at most ``measure_size`` px with bins that keep the wrap exact
+    (file values, float64), or None when the file cannot be decoded or has non-finite texels."""
+    import OpenImageIO as oiio
 
     inp = oiio.ImageInput.open(m.resolved)
     if inp is None:
@@ -125,12 +140,30 @@ def _measure(m: TextureMap, thresholds: Thresholds) -> tuple[float, float] | Non
     if not np.isfinite(pixels).all():
         return None  # NaN / inf texels: no wrap-around measure (imaging reports them)
     channels = [i for i, c in enumerate("rgba") if c in m.channels_used and i < pixels.shape[2]]
-    pixels = _reduce(pixels[..., channels or [0]], thresholds.measure_size)
-    if float(np.ptp(pixels)) == 0.0:
-        return 0.0, 1.0  # a constant map repeats seamlessly
-    seams = seam_ratios(pixels)
-    seam = max(seams["seam_ratio_x"], seams["seam_ratio_y"])
-    return float(ps_score(pixels)), float(seam if np.isfinite(seam) else 0.0)
+    return _reduce(pixels[..., channels or [0]], thresholds.measure_size)
+
+
+def interior_seam(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> str | None:
+    """Where the verdict, judging the stack's maps against themselves, finds a seam (None: none found,
+    or the pixels could not be read, in which case the wrap figures alone decide)."""
+    from seamless_usd.verdict import judge
+
+    maps, shapes = [], set()
+    for m in stack.maps:
+        px = measured_pixels(m, thresholds) if m.resolved and not m.in_package and m.image is not None else None
+        if px is None or min(px.shape[:2]) < 32:
+            return None
+        maps.append(px)
+        shapes.add(px.shape[:2])
+    if len(shapes) > 1:  # maps of different sizes: judge each alone
+        verdicts = [judge([p], None, [False], [m.asset], fidelity=False) for p, m in zip(maps, stack.maps)]
+    else:
+        verdicts = [judge(maps, None, [False] * len(maps), [m.asset for m in stack.maps], fidelity=False)]
+    for v in verdicts:
+        if v.seams:
+            s = v.seams[0]
+            return f"{'@' + s.map + '@' if s.map != 'stack' else 'the maps together'}: {s.where(v.size)}"
+    return None
 
 
 def _geometry_decision(stack: TextureStack, factor, stats, bound: int) -> IntentDecision:
@@ -185,6 +218,10 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, measures: dict) -
         seam = max(f[1] for f in figures)
         measured = f"periodic-plus-smooth {ps:.3f}, seam ratio {seam:.2f}"
         if ps <= THRESHOLDS.ps_max and seam <= THRESHOLDS.seam_max:
+            inside = interior_seam(stack)
+            if inside is not None:
+                return IntentDecision(Intent.TILING, f"{decision.reason}; seamless at the wrap ({measured}) but "
+                                                     f"with a seam inside, {inside}")
             return IntentDecision(Intent.ALREADY_TILEABLE,
                                   f"{measured} (at most {THRESHOLDS.ps_max:g}, {THRESHOLDS.seam_max:g}): "
                                   f"already seamless; {decision.reason}")

@@ -108,8 +108,9 @@ METRIC_KEYS: tuple[str, ...] = (
 )
 
 #: Targets per figure, ``key -> (low, high)`` (None: unbounded). The quality benchmark holds every
-#: map to all of them; a processed stack passes only when Q passes and its :data:`FIDELITY_KEYS`
-#: figures are inside them. Feature scale within 10 % of the source's; patch distribution no
+#: map to all of them. Whether a processed stack *passed* is the verdict's (:mod:`seamless_usd.verdict`):
+#: its seam detector, and tolerances for :data:`FIDELITY_KEYS` that start from these targets and widen
+#: to the source's own spread; the seam ratios below are figures for the benchmark and the report only. Feature scale within 10 % of the source's; patch distribution no
 #: further from the source than 1.2x the source's two halves are from each other; seams across the
 #: border and the centre lines at most 15 % stronger than the tile's own interior edges.
 TARGETS: dict[str, tuple[float | None, float | None]] = {
@@ -127,12 +128,15 @@ FIDELITY_KEYS: tuple[str, ...] = ("scale_ratio", "patch_distance")
 
 def outside_target(key: str, value: float | None) -> bool:
     """Whether ``value`` of figure ``key`` misses its :data:`TARGETS` entry (False without a target).
+    A figure that was not measured (None) confirms nothing, so it misses its target.
 
-    >>> outside_target("scale_ratio", 0.5), outside_target("scale_ratio", 1.0)
-    (True, False)
+    >>> outside_target("scale_ratio", 0.5), outside_target("scale_ratio", 1.0), outside_target("scale_ratio", None)
+    (True, False, True)
     """
-    if key not in TARGETS or value is None:
+    if key not in TARGETS:
         return False
+    if value is None:
+        return True
     low, high = TARGETS[key]
     v = float(value)
     return not np.isfinite(v) or (low is not None and v < low) or (high is not None and v > high)
@@ -140,7 +144,8 @@ def outside_target(key: str, value: float | None) -> bool:
 
 def failing_figures(figures: dict[str, float | None], keys: tuple[str, ...] = FIDELITY_KEYS) -> list[str]:
     """``"key value"`` for every figure of ``keys`` outside its target, e.g. ``["scale_ratio 0.62"]``."""
-    return [f"{k} {figures[k]:.3g}" for k in keys if outside_target(k, figures.get(k))]
+    return [f"{k} {figures[k]:.3g}" if figures.get(k) is not None else f"{k} not measured"
+            for k in keys if outside_target(k, figures.get(k))]
 
 
 # --------------------------------------------------------------------------------------------

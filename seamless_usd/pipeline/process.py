@@ -180,8 +180,9 @@ def _wrap_only_result(stack: TextureStack):
     """Authoring input for an already-tileable stack: its own maps, wrap = repeat, no UV change."""
     from seamless_usd.authoring import MapResult, Provenance, StackResult
 
-    prov = Provenance(source_asset="", crop_size=(0, 0), uv_scale=(1.0, 1.0), q_passed=True, q_tau=0.0,
-                      q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__)
+    prov = Provenance(source_asset="", crop_size=(0, 0), uv_scale=(1.0, 1.0), q_passed=None, q_tau=0.0,
+                      q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__, passed=True,
+                      verdict=f"already seamless, judged against itself ({stack.intent_reason})")
     maps = [MapResult(map=m, output_path=Path(m.resolved)) for m in stack.maps if m.resolved]
     return StackResult(stack=stack, maps=maps, uv_scale=(1.0, 1.0), provenance=prov, wrap_only=True)
 
@@ -222,7 +223,7 @@ def _planned_result(stack: TextureStack, out_dir: Path, options: Options):
         if m.image is not None
     ]
     prov = Provenance(
-        source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=False,
+        source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=None,
         q_tau=0.0, q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__,
     )
     return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov)

@@ -22,8 +22,9 @@ from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.pipeline.naming import tile_filename
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.report.previews import stack_previews
+from seamless_usd.verdict import judge
 
-__all__ = ["JobSettings", "StackJob", "StackOutcome", "MapOutcome", "run_stack", "map_identity"]
+__all__ = ["JobSettings", "StackJob", "StackOutcome", "MapOutcome", "run_stack", "map_identity", "on_tile_grid"]
 
 @dataclass(frozen=True)
 class JobSettings:
@@ -90,12 +91,19 @@ class StackOutcome:
     peak_rss_mb: float = 0.0  # peak resident memory of the process that ran the job
     previews: Previews = field(default_factory=Previews, repr=False)
     findings: list[Finding] = field(default_factory=list)  # warnings while loading (e.g. non-finite pixels)
-    failing: list[str] = field(default_factory=list)  # "asset: figure value" outside the fidelity targets
+    failing: list[str] = field(default_factory=list)  # "asset: figure value (tolerance)" outside the tolerances
+    verdict: dict = field(default_factory=dict)  # seamless_usd.verdict.Verdict.as_dict() of the written tiles
 
     @property
     def passed(self) -> bool:
-        """Q passed and every map's fidelity figures are inside their targets."""
-        return bool(self.q.get("passed")) and not self.failing
+        """The verdict on the written tiles: no seam in any map, every fidelity figure inside its tolerance."""
+        return bool(self.verdict.get("passed"))
+
+    def reasons(self) -> list[str]:
+        """Why the stack did not pass (empty when it passed)."""
+        from seamless_usd.verdict import Verdict
+
+        return Verdict.from_dict(self.verdict).reasons() if self.verdict else ["not judged"]
 
     def fill_report(self, report: StackReport, stack: TextureStack, reused: bool) -> None:
         report.status = (
@@ -106,13 +114,12 @@ class StackOutcome:
         if reused:
             report.duplicate_of = self.stack_id
             report.message = f"identical to stack {self.stack_id}: its result is reused"
-        elif not self.q.get("passed"):
-            report.message = "no candidate passed the quality function Q; the best one was written"
-        elif self.failing:
-            report.message = "not faithful to the source: " + "; ".join(self.failing)
+        elif not self.passed:
+            report.message = "; ".join(self.reasons())
         elif self.cached:
             report.message = "result taken from the cache"
         report.failing = list(self.failing)
+        report.verdict = dict(self.verdict)
         for name in ("crop_size", "tile_size", "working_size", "resampled", "uv_scale", "q", "candidates",
                      "timings", "model_hash", "device", "precision"):
             setattr(report, name, getattr(self, name))
@@ -131,11 +138,13 @@ class StackOutcome:
             source_asset=", ".join(m.asset for m in stack.maps),
             crop_size=(self.crop_size[1], self.crop_size[0]),  # authoring records (c_w, c_h)
             uv_scale=self.uv_scale,
-            q_passed=self.passed,
+            q_passed=None if not self.q else bool(self.q.get("passed")),
             q_tau=float(self.q.get("tau", 0.0)),
             q_band_min=tuple(self.q.get("band_min", (0.0, 0.0))),
             model_hash=self.model_hash,
             tool_version=__version__,
+            passed=self.passed,
+            verdict="seamless and faithful" if self.passed else "; ".join(self.reasons()),
         )
         maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
         return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
@@ -217,30 +226,38 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     t3 = time.perf_counter()
     out_dir = Path(job.output_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    tile_hw = tuple(int(v) for v in next(iter(tiles.values())).shape[:2])
+    uv_scale = tuple(float(v) for v in meta["uv_scale"])
+    # the sources on the tile's texel grid: a GAN tile that was not refined is at the working resolution
+    sources = on_tile_grid(list(pixels.values), [m.is_normal for m in stack.maps], tile_hw, uv_scale)
     outcomes: dict[tuple[str, str], MapOutcome] = {}
-    for name, m, source, encoding, info in zip(names, stack.maps, pixels.values, pixels.encodings, pixels.infos):
+    written_values = []
+    for name, m, source, encoding, info in zip(names, stack.maps, sources, pixels.encodings, pixels.infos):
         values = tiles[name]
         filename = tile_filename(m.asset, stack.id, imaging.output_extension(info))
         target = confine(out_dir / filename, out_dir)
         written = imaging.write_map(target, values, encoding, like=info)
+        back = imaging.decode_map(imaging.read_image(written, max_pixels=None)[0], encoding)  # what is on disk
+        written_values.append(back)
         outcomes[map_identity(m)] = MapOutcome(
             output=Path(written),
-            metrics=metrics.map_metrics(values, source, is_normal=m.is_normal),
+            metrics=metrics.map_metrics(back, source, is_normal=m.is_normal),
             source_metrics=metrics.map_metrics(source, None, is_normal=m.is_normal),
         )
     timings = dict(meta.get("timings", {}))
     timings["write"] = time.perf_counter() - t3
 
     crop = tuple(int(v) for v in meta["crop_size"])
-    tile_hw = tuple(int(v) for v in next(iter(tiles.values())).shape[:2])
     scale = dict(meta["scale"])
     working = tuple(int(v) for v in scale["gan_working_size"])
-    uv_scale = tuple(float(v) for v in meta["uv_scale"])
-    failing = [f"{m.asset}: {figure}" for m in stack.maps
-               for figure in metrics.failing_figures(outcomes[map_identity(m)].metrics)]
+    t4 = time.perf_counter()
+    verdict = judge(written_values, sources, [m.is_normal for m in stack.maps], [m.asset for m in stack.maps])
     ratio = synthesis.written_lattice_ratio(scale.get("lattice") or {}, scale.get("layout"))
     if ratio is not None and ratio < synthesis.LATTICE_TARGET:  # the source repeats and the tile breaks it
-        failing.append(f"all maps: lattice_ratio {ratio:.3g}")
+        verdict.failing.append(f"all maps: lattice_ratio {ratio:.3g} (tolerance {synthesis.LATTICE_TARGET:.2f}-)")
+        verdict.faithful = False
+    timings["verdict"] = time.perf_counter() - t4
+    failing = list(verdict.failing)
     previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator)
     return StackOutcome(
         stack_id=stack.id,
@@ -250,6 +267,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         working_size=working,
         resampled={**pixels.policy_record, "gan": scale},
         failing=failing,
+        verdict=verdict.as_dict(),
         uv_scale=uv_scale,
         q=dict(meta["q"]),
         candidates=int(meta["candidates"]),
@@ -263,6 +281,19 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         previews=previews,
         findings=list(pixels.findings),
     )
+
+
+def on_tile_grid(sources: list[np.ndarray], normals: list[bool], tile_hw: tuple[int, int],
+                  uv_scale: tuple[float, float]) -> list[np.ndarray]:
+    """The sources resampled to the texel grid of the tile (the UV square holds ``uv_scale`` tiles), so
+    a tile at the GAN's working resolution is measured against a source at that resolution, not at full."""
+    from seamless_usd.synthesis import MapInput, downsample_maps
+
+    grid = (round(tile_hw[0] * uv_scale[1]), round(tile_hw[1] * uv_scale[0]))
+    if grid == tuple(sources[0].shape[:2]):
+        return sources
+    maps = [MapInput(f"m{i}", s, n) for i, (s, n) in enumerate(zip(sources, normals))]
+    return [m.pixels for m in downsample_maps(maps, grid)]
 
 
 def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:
@@ -295,7 +326,7 @@ def _peak_rss_mb() -> float:
 def _q_dict(tile) -> dict[str, Any]:
     q = tile.q
     return {
-        "passed": bool(tile.passed),
+        "passed": bool(tile.q_passed),
         "tau": float(q.tau),
         "band_min": [float(q.band_min_vertical), float(q.band_min_horizontal)],
         "margin": float(q.margin),

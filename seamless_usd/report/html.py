@@ -12,10 +12,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
+
 from seamless_usd.fileio import atomic_write_text
-from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page
+from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page, seams_svg
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
+from seamless_usd.verdict.lines import Seam
 from seamless_usd.report.verdicts import LABELS, SEAM_KEYS, TORUS_NOTE, target_text, targets, verdict
 
 __all__ = ["render_html", "render_index", "write_html", "write_json", "write_library_html",
@@ -102,10 +105,11 @@ def made_on_a_torus(stack: StackReport) -> bool:
     return stack.resampled.get("gan", {}).get("layout") in ("gan", "random", "lattice")
 
 
-def map_verdicts(m: MapReport, torus: bool = False) -> list[tuple[str, object, object, str, object]]:
+def map_verdicts(m: MapReport, torus: bool = False, tolerances: dict | None = None
+                 ) -> list[tuple[str, object, object, str, object]]:
     """Rows ``(key, source value, tile value, target text, Verdict)`` of a map's figures, in order
-    (``torus``: see :func:`made_on_a_torus`)."""
-    bounds = targets()
+    (``torus``: see :func:`made_on_a_torus`; ``tolerances``: the map's own, from the stack's verdict)."""
+    bounds = targets(tolerances)
     present = {k for k, v in [*m.metrics.items(), *m.source_metrics.items()] if v is not None}
     order = _metric_order()
     keys = [k for k in order if k in present] + sorted(present - set(order))
@@ -144,9 +148,13 @@ def _readable_failing(item: str, torus: bool = False) -> tuple[str | None, str]:
     return parts[0], f"{where}{sep}{LABELS[parts[0]]} — {verdict(parts[0], value, torus=torus).text}"
 
 
-def _metrics_table(m: MapReport, torus: bool = False) -> str:
+def _map_tolerances(stack: StackReport, m: MapReport) -> dict:
+    return (stack.verdict.get("tolerances") or {}).get(m.asset, {})
+
+
+def _metrics_table(m: MapReport, torus: bool = False, tolerances: dict | None = None) -> str:
     main, minor = [], []
-    for key, source, new, target, v in map_verdicts(m, torus):
+    for key, source, new, target, v in map_verdicts(m, torus, tolerances):
         cls = "" if v.ok is None else ("ok" if v.ok else "bad")
         row = (f'<th title="{esc(key)}">{esc(LABELS.get(key, key))}</th><td>{esc(fmt(source))}</td>'
                f'<td>{esc(fmt(new))}</td><td>{esc(target)}</td><td class="v {cls}">{esc(v.text)}</td>')
@@ -154,13 +162,13 @@ def _metrics_table(m: MapReport, torus: bool = False) -> str:
     if not main and not minor:
         return ""
     rows = "".join(f"<tr>{r}</tr>" for r in main)
-    lines = torus and any(v.ok is False and k in SEAM_KEYS for k, _, _, _, v in map_verdicts(m, torus))
+    lines = torus and any(v.ok is False and k in SEAM_KEYS for k, _, _, _, v in map_verdicts(m, torus, tolerances))
     note = f'<p class="note muted">{esc(TORUS_NOTE)}</p>' if lines else ""
     if minor:
         rows += '<tr class="sep"><td colspan="5">other figures (no target)</td></tr>'
         rows += "".join(f'<tr class="minor">{r}</tr>' for r in minor)
     return ('<div class="figs"><table class="metrics"><tr><th>figure</th><th>source as is</th><th>new tile</th>'
-            f'<th>target</th><th>verdict</th></tr>{rows}</table>{note}</div>')
+            f'<th>tolerance</th><th>reads</th></tr>{rows}</table>{note}</div>')
 
 
 def _geometry(stack: StackReport) -> ViewGeometry | None:
@@ -174,9 +182,33 @@ def _repeats(r: tuple[float, float]) -> str:
     return " x ".join(f"{v:g}" if float(v).is_integer() else f"{v:.2f}" for v in r)
 
 
-def _pair(stack: StackReport, g: ViewGeometry, source, tile, what: str) -> str:
+def seam_segments(g: ViewGeometry, seams: list[dict], tile_size: tuple[int, int]) -> list[tuple]:
+    """Each seam (tile texels) drawn in every repeat of the tile in the picture, as ``(x1, y1, x2, y2, label)``."""
+    h, w = tile_size
+    (nx, ny), (W, H) = g.tile_repeats, g.size
+    px, py = W / nx, H / ny  # one repeat, in picture px
+    out = []
+    for s in seams:
+        label = f"{s['figure']:+.2f}: {s['map']}, {'x' if s['axis'] == 'x' else 'y'}={s['position']}"
+        for kx in range(int(np.ceil(nx))):
+            for ky in range(int(np.ceil(ny))):
+                ox, oy = kx * px, ky * py
+                if s["axis"] == "x":
+                    x = ox + s["position"] / w * px
+                    seg = (x, oy + s["start"] / h * py, x, oy + (s["end"] + 1) / h * py)
+                else:
+                    y = oy + s["position"] / h * py
+                    seg = (ox + s["start"] / w * px, y, ox + (s["end"] + 1) / w * px, y)
+                if 0 <= seg[0] <= W and 0 <= seg[1] <= H:
+                    out.append((*(min(v, lim) for v, lim in zip(seg, (W, H, W, H))), label))
+    return out
+
+
+def _pair(stack: StackReport, g: ViewGeometry, source, tile, what: str, seams: list[dict] | None = None) -> str:
     source_lines = overlay_svg(g.size, g.lines((1.0, 1.0)))
     tile_lines = overlay_svg(g.size, g.lines(g.tile_extent), g.lines(g.tile_extent, 0.5))
+    if seams and stack.tile_size:
+        tile_lines += seams_svg(g.size, seam_segments(g, seams, tuple(stack.tile_size)))
     uv = stack.uv_scale or (1.0, 1.0)
     what = f" {what}" if what else ""
     return (
@@ -191,19 +223,27 @@ def _why(stack: StackReport) -> str:
         return f'<div class="why info"><b>Left alone</b>: {esc(reason)}</div>'
     if stack.status in (StackStatus.FAILED, StackStatus.PLANNED):
         return ""
-    failing = _failing(stack)
     q = stack.q.get("passed") if stack.q else None
     q_text = ("" if q is None else
-              " The discriminator finds no seam in the centre bands (Q passed)." if q else
-              " The discriminator still sees a seam in the centre bands (Q not passed).")
-    q_text = q_text.strip()
+              "The discriminator's view (not part of the verdict): no seam in its centre bands (Q passed)." if q else
+              "The discriminator's view (not part of the verdict): it still sees a seam in its centre bands "
+              "(Q not passed).")
+    v = stack.verdict
+    if v:
+        size = tuple(v.get("size") or stack.tile_size or (0, 0))
+        items = [f"seam in {'the maps together' if s['map'] == 'stack' else s['map']}: "
+                 f"{Seam(**s).where(size)} ({s['figure']:+.2f} above the source's own strongest line; "
+                 f"marked in red on the repeats below)" for s in v.get("seams", [])]
+        items += [f"not faithful: {f}" for f in v.get("failing", [])]
+        if items:
+            lis = "".join(f"<li>{esc(t)}</li>" for t in items)
+            return f'<div class="why bad"><b>Not passed</b><ul>{lis}</ul>{esc(q_text)}</div>'
+        return (f'<div class="why ok"><b>Passed: seamless and faithful.</b> No seam at the wrap, the centre lines or '
+                f'inside any map, and every fidelity figure is inside the tolerance its source sets. {esc(q_text)}</div>')
+    failing = _failing(stack)
     if failing:
         items = "".join(f"<li>{esc(text)}</li>" for _, text in failing)
-        lines = made_on_a_torus(stack) and any(k in SEAM_KEYS for k, _ in failing)
-        note = f"<p>{esc(TORUS_NOTE)}</p>" if lines else ""
-        return f'<div class="why bad"><b>Outside their targets</b><ul>{items}</ul>{note}{esc(q_text)}</div>'
-    if any(m.metrics for m in stack.maps):
-        return f'<div class="why ok"><b>All figures within their targets.</b> {esc(q_text)}</div>'
+        return f'<div class="why bad"><b>Outside their targets</b><ul>{items}</ul>{esc(q_text)}</div>'
     return f'<div class="why info">{esc(q_text)}</div>' if q_text else ""
 
 
@@ -265,12 +305,13 @@ def stack_html(stack: StackReport) -> str:
     for m in stack.maps:
         pictures = ""
         if g is not None and m.node in p.tile_view:
-            pictures = _pair(stack, g, p.source_view.get(m.node), p.tile_view.get(m.node), "")
+            seams = [s for s in stack.verdict.get("seams", []) if s["map"] in (m.asset, "stack")]
+            pictures = _pair(stack, g, p.source_view.get(m.node), p.tile_view.get(m.node), "", seams)
         out = f' → {esc(Path(m.output).name)}' if m.output else ""
         blocks.append(
             f'<div class="block"><h3>{esc(_map_name(m))} <span class="muted">({esc(m.channels)}, '
             f"{esc(m.color_space)}) @{esc(m.asset)}@{out}</span></h3>"
-            f'<div class="row">{pictures}{_metrics_table(m, made_on_a_torus(stack))}</div></div>'
+            f'<div class="row">{pictures}{_metrics_table(m, made_on_a_torus(stack), _map_tolerances(stack, m))}</div></div>'
         )
     if p.discriminator is not None:
         blocks.append('<div class="block">' + figure(p.discriminator, "discriminator map; seam bands tinted", lossless=True) + "</div>")

@@ -8,7 +8,7 @@ import numpy as np
 from seamless_usd.report.png import png_data_uri
 from seamless_usd.report.webimage import image_data_uri
 
-__all__ = ["CSS", "OVERLAY_TOGGLE", "esc", "fmt", "figure", "overlay_svg", "page"]
+__all__ = ["CSS", "OVERLAY_TOGGLE", "esc", "fmt", "figure", "overlay_svg", "seams_svg", "page"]
 
 CSS = """
 *{box-sizing:border-box}
@@ -26,6 +26,9 @@ h1{font-size:22px;margin:0 0 4px} h2{font-size:17px;margin:0;display:inline} h3{
 #overlay-toggle:checked ~ main .overlay{display:block}
 .overlay line{vector-effect:non-scaling-stroke;stroke-width:1.5}
 .overlay .border{stroke:#00e5ff} .overlay .centre{stroke:#ff3df5;stroke-dasharray:6 4}
+.seams{position:absolute;left:0;top:0;width:100%;height:100%}
+.seams line{vector-effect:non-scaling-stroke;stroke:#ff1744;stroke-width:3;stroke-linecap:round;opacity:.85}
+.seams text{fill:#ff1744;font:bold 12px sans-serif;paint-order:stroke;stroke:#fff;stroke-width:3px}
 .summary span{display:inline-block;margin-right:14px}
 .stack{background:#fff;border:1px solid #d9dce3;border-radius:8px;padding:14px 18px;margin:18px 0}
 .badge{display:inline-block;border-radius:10px;padding:1px 9px;font-size:12px;font-weight:600;margin-left:8px;vertical-align:2px}
@@ -91,6 +94,20 @@ def overlay_svg(size: tuple[int, int], borders: tuple[list[float], list[float]],
         parts += [f'<line class="{cls}" x1="0" y1="{y:.2f}" x2="{w}" y2="{y:.2f}"/>' for y in ys]
     return (f'<svg class="overlay" viewBox="0 0 {w} {h}" preserveAspectRatio="none" aria-hidden="true">'
             f'{"".join(parts)}</svg>')
+
+
+def seams_svg(size: tuple[int, int], segments: list[tuple[float, float, float, float, str]]) -> str:
+    """An always-visible SVG over a picture of ``size = (W, H)``: each seam ``(x1, y1, x2, y2, label)`` as a
+    red line, its label (the seam's figure) beside it and in its tooltip."""
+    if not segments:
+        return ""
+    w, h = size
+    parts = []
+    for x1, y1, x2, y2, label in segments:
+        parts.append(f'<line x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}"><title>{esc(label)}</title></line>')
+        parts.append(f'<text x="{min(x1 + 4, w - 40):.1f}" y="{max(y1 + 14, 14):.1f}">{esc(label.split(":")[0])}</text>')
+    return (f'<svg class="seams" viewBox="0 0 {w} {h}" preserveAspectRatio="none" role="img" '
+            f'aria-label="seams found">{"".join(parts)}</svg>')
 
 
 def figure(pixels: np.ndarray | None, caption: str, overlay: str = "", lossless: bool = False) -> str:

@@ -84,7 +84,8 @@ class StackReport:
     precision: str = ""
     intent: str = ""  # tiling intent class: "tiling", "uv-atlas", "already-tileable", "other"
     intent_reason: str = ""  # the measured reason for the class, e.g. "UVs 0.11-0.89, 37 islands"
-    failing: list[str] = field(default_factory=list)  # fidelity/seam figures outside their targets ("map: figure")
+    failing: list[str] = field(default_factory=list)  # fidelity figures outside their tolerances ("map: figure")
+    verdict: dict[str, Any] = field(default_factory=dict)  # seamless_usd.verdict.Verdict.as_dict() of the written tiles
     previews: Previews = field(default_factory=Previews, repr=False)
 
     def to_dict(self) -> dict:
@@ -111,6 +112,7 @@ class StackReport:
             "intent": self.intent,
             "intent_reason": self.intent_reason,
             "failing": list(self.failing),
+            "verdict": dict(self.verdict),
             "maps": [dict(vars(m)) for m in self.maps],
         }
 
@@ -132,7 +134,7 @@ class Report:
 
     @property
     def ok(self) -> bool:
-        """True when every stack was done and passed Q and nothing failed."""
+        """True when every stack was done and passed the verdict (seamless and faithful) and nothing failed."""
         bad = {StackStatus.FAILED, StackStatus.NOT_PASSED}
         return not any(s.status in bad for s in self.stacks) and not any(
             f.severity is Severity.ERROR for f in self.findings

@@ -71,7 +71,8 @@ SEAM_KEYS: tuple[str, ...] = tuple(_TORUS_WORDS)
 #: What a high seam figure means on a tile made on a torus, for the report beside those figures.
 TORUS_NOTE = ("This tile was made on a torus (refined, or cut from the source): its border and centre lines are "
               "lines of the texture like any other, so a strong line there may be the texture's own, a mortar "
-              "joint say, as much as a join. Look at the repeats.")
+              "joint say, as much as a join. Whether it is a seam is the verdict's call: its seam detector "
+              "compares every line with the source's own lines.")
 
 
 @dataclass(frozen=True)
@@ -86,9 +87,12 @@ class Verdict:
     target: tuple[float | None, float | None] | None = None
 
 
-def targets() -> dict[str, tuple[float | None, float | None]]:
-    """The figures' targets: ``seamless_usd.metrics.TARGETS`` over :data:`FALLBACK_TARGETS`."""
-    merged = dict(FALLBACK_TARGETS)
+def targets(tolerances: dict[str, list] | None = None) -> dict[str, tuple[float | None, float | None]]:
+    """The figures the verdict holds to a tolerance (feature scale, patch distance), with ``tolerances``
+    (the stack's own, from its verdict: ``key -> [low, high]``) over the fixed targets. The seam ratios
+    have none: whether a tile has a seam is the seam detector's call, not theirs."""
+    merged: dict[str, tuple[float | None, float | None]] = {k: v for k, v in FALLBACK_TARGETS.items()
+                                                             if k not in SEAM_KEYS}
     try:
         from seamless_usd import metrics
 
@@ -96,12 +100,10 @@ def targets() -> dict[str, tuple[float | None, float | None]]:
     except ImportError:  # pragma: no cover - the metrics package is part of the project
         found = None
     if isinstance(found, dict):
-        for key, bounds in found.items():
-            try:
-                low, high = bounds
-            except (TypeError, ValueError):
-                continue
-            merged[str(key)] = (low, high)
+        merged.update({k: tuple(v) for k, v in found.items() if k in merged})
+    for key, bounds in (tolerances or {}).items():
+        if key in merged and len(bounds) == 2:
+            merged[key] = (bounds[0], bounds[1])
     return merged
 
 

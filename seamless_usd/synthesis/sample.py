@@ -128,7 +128,7 @@ def sample(model: TrainedModel, maps: list[MapInput], *, seed: int = 0, tile_siz
     cand = candidates[i]
     timings["search_s"] = time.perf_counter() - t_start
     maps_out = {m.name: _to_numpy(o, m.is_normal) for m, o in zip(maps, outs)}
-    return TileResult(maps=maps_out, crop_size=cand.crop_size, passed=cand.q.passed, q=cand.q,
+    return TileResult(maps=maps_out, crop_size=cand.crop_size, q_passed=cand.q.passed, q=cand.q,
                       candidates=candidates, timings=timings, model_hash=model.hash, device=str(dev),
                       precision=precision, offset=cand.offset)
 

@@ -46,7 +46,7 @@ class SeedRun:
     chosen: bool = False
 
     def summary(self) -> dict:
-        return {"seed": self.seed, "q_passed": bool(self.tile.passed), "score": round(self.score, 3),
+        return {"seed": self.seed, "q_passed": bool(self.tile.q_passed), "score": round(self.score, 3),
                 "scale": self.scale, "patch": self.patch, "chosen": self.chosen}
 
 
@@ -144,7 +144,7 @@ def fidelity_score(tile: dict[str, np.ndarray], working: list[MapInput]) -> tupl
 
 def choose_seed(runs: list[SeedRun]) -> SeedRun:
     """The run to keep: one whose tile passes Q before one that does not, then the lowest score, then seed order."""
-    best = min(range(len(runs)), key=lambda i: (not runs[i].tile.passed, runs[i].score, i))
+    best = min(range(len(runs)), key=lambda i: (not runs[i].tile.q_passed, runs[i].score, i))
     for i, run in enumerate(runs):
         run.chosen = i == best
     return runs[best]

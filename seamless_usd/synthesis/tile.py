@@ -20,7 +20,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from seamless_usd.metrics import outside_target, scale_ratio
+from seamless_usd.metrics import scale_ratio
+from seamless_usd.verdict import judge as verdict_of
 
 from .config import SynthesisConfig
 from .data import effective_k
@@ -73,8 +74,9 @@ class MadeTile:
             self.q = self.gan.q
 
     @property
-    def passed(self) -> bool:
-        """Whether the discriminator's Q passes on the written tile (through its layout for a refined GAN tile)."""
+    def q_passed(self) -> bool:
+        """Whether the discriminator's Q passes on the written tile (through its layout for a refined GAN tile).
+        The discriminator's view only: whether the tile *passed* is the verdict's (:mod:`seamless_usd.verdict`)."""
         return bool(self.q.passed)
 
 
@@ -115,7 +117,7 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     4. For a stack that repeats on a lattice, the tile's lattice ratio is measured; with
        ``refine_config.lattice`` and source-sized tiles, the stack also gets a tile cut to whole
        periods of the source (:mod:`.lattice`), and the written tile is the one that
-       passes (Q, D's verdict on the cut's wrap seams; the scale and patch targets; the lattice ratio,
+       passes (the verdict: no seam and fidelity inside the source's tolerances; the lattice ratio,
        which sees a broken bond), then the one with the lower score.
        ``keep_alternatives`` keeps the candidate not written in ``MadeTile.alternatives``.
     """
@@ -195,26 +197,26 @@ def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[f
     return out
 
 
-def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], q_passed: bool, lattice: Lattice
-            ) -> tuple[float, bool, float]:
+def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice) -> tuple[float, bool, float]:
     """(score, passes, lattice ratio) of a candidate tile.
 
     The score is :func:`.seeds.fidelity_score`, and the lattice ratio in the same units ((1 - r) over
     (1 - LATTICE_TARGET)): none of the fidelity and seam figures sees a broken bond, the lattice ratio
-    does. The tile passes as a stack would (Q, the scale and patch targets) and keeps the repeat."""
-    score, scale, patch = fidelity_score(tiles, maps)
+    does. The tile passes as a stack would (the verdict: no seam, fidelity inside the source's
+    tolerances) and keeps the repeat."""
+    score, _, _ = fidelity_score(tiles, maps)
     ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
     score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
-    faithful = not any(outside_target("scale_ratio", scale[m.name]) or outside_target("patch_distance", patch[m.name])
-                       for m in maps)
-    return score, bool(q_passed and faithful and ratio >= LATTICE_TARGET), ratio
+    verdict = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
+                    [m.name for m in maps])
+    return score, bool(verdict.passed and ratio >= LATTICE_TARGET), ratio
 
 
 def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_alternatives: bool) -> None:
     """For a stack that repeats on a lattice, measure the written tile's lattice ratio and, with ``cut``,
     cut a tile of whole periods (:func:`.lattice.lattice_cut`), kept in ``made`` when it wins: the
-    candidate that passes (Q, where the discriminator judges the cut's wrap on the working grid; the
-    scale and patch targets; the lattice ratio) before one that does not, then the lower score (see
+    candidate that passes (the verdict: no seam, fidelity inside the source's tolerances; the lattice
+    ratio) before one that does not, then the lower score (see
     :func:`_judged`). The figures are taken on the source's grid, halved down to SCORE_SIDE."""
     H, W = made.grid_size
     lattice = find_lattice([m.pixels for m in maps])
@@ -228,9 +230,9 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
             for m in maps] if halve > 1 else maps
     grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
     current, current_passes, current_ratio = _judged(_on_grid(made.maps, maps, (1 / halve, 1 / halve)), grid,
-                                                     made.passed, grid_lattice)
+                                                     grid_lattice)
     kind = made.layout_kind
-    made.lattice.update({f"q_passed_{kind}": made.passed, f"lattice_ratio_{kind}": round(current_ratio, 3),
+    made.lattice.update({f"q_passed_{kind}": made.q_passed, f"lattice_ratio_{kind}": round(current_ratio, 3),
                          f"passes_{kind}": current_passes, f"score_{kind}": round(current, 3)})
     sizes = lattice_tile_size((H, W), lattice) if cut else None
     if sizes is None:
@@ -239,7 +241,7 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     field_, offset = lattice_cut([m.pixels for m in maps], tile_hw, band)
     tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
     q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
-    score, passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, q.passed, grid_lattice)
+    score, passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
     wins = (not passes, score) < (not current_passes, current)
     made.lattice.update({"tile": list(tile_hw), "band": list(band), "offset": list(offset),
                          "q_passed": bool(q.passed), "lattice_ratio": round(ratio, 3), "passes": passes,

@@ -68,7 +68,7 @@ class Candidate:
 class TileResult:
     maps: dict[str, np.ndarray]  # name -> (2c_h, 2c_w, C) float32 in [-1, 1], periodic
     crop_size: tuple[int, int]
-    passed: bool
+    q_passed: bool  # Q of the chosen candidate: the crop search's criterion, not the product's verdict
     q: QResult
     candidates: list[Candidate]
     timings: dict[str, float]

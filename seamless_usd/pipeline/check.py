@@ -1,0 +1,181 @@
+"""``check``: the verdict on the textures of a library, before or after processing, with no training.
+
+Each texture stack of a stage or MaterialX document that is meant to tile (intent ``tiling`` or
+``already-tileable``), and each picture named alone, gets the verdict of :mod:`seamless_usd.verdict`:
+
+* a map this tool wrote (its texture prim carries ``SeamlessTileAPI`` with ``seamless:sourceAsset``) is
+  judged against that source, brought to the tile's texel grid with the recorded ``seamless:uvScale``;
+* anything else has no separate source and is judged against itself: its own interior lines are the
+  reference, and a seam is a line unlike them (no fidelity figure applies).
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from seamless_usd.errors import InputError, SeamlessUsdError
+from seamless_usd.findings import asset_ref
+from seamless_usd.pipeline.inputs import SCENE_SUFFIXES, expand_inputs, is_own_output
+
+__all__ = ["IMAGE_SUFFIXES", "CheckItem", "CheckReport", "check_paths"]
+
+IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".exr", ".tif", ".tiff", ".tx", ".tga", ".bmp", ".hdr", ".webp"})
+_JUDGED_INTENTS = ("tiling", "already-tileable")
+
+
+@dataclass
+class CheckItem:
+    """One texture or stack checked: what it is, its verdict, or why it could not be judged."""
+
+    name: str  # the material's prim path, or the picture's path
+    source: str  # the stage, document or picture it came from
+    maps: list[str]  # asset paths as authored (or the picture's path)
+    verdict: dict = field(default_factory=dict)  # Verdict.as_dict(); empty when unreadable
+    error: str = ""
+    seconds: float = 0.0
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.verdict.get("passed")) and not self.error
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "source": self.source, "maps": list(self.maps), "passed": self.passed,
+                "verdict": self.verdict, "error": self.error, "seconds": round(self.seconds, 3)}
+
+
+@dataclass
+class CheckReport:
+    items: list[CheckItem] = field(default_factory=list)
+    unreadable: list[str] = field(default_factory=list)  # inputs that could not be opened, with why
+
+    @property
+    def exit_code(self) -> int:
+        """0 everything tiles; 1 something does not (or a texture could not be read); 2 unreadable input."""
+        if self.unreadable:
+            return 2
+        return 0 if all(i.passed for i in self.items) else 1
+
+    def to_dict(self) -> dict:
+        return {"items": [i.to_dict() for i in self.items], "unreadable": list(self.unreadable),
+                "passed": sum(i.passed for i in self.items), "not_passed": sum(not i.passed for i in self.items),
+                "exit_code": self.exit_code}
+
+
+def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path]]:
+    """(scenes, pictures): pictures named or found in folders that hold no scene."""
+    scenes, pictures = [], []
+    for item in paths:
+        p = Path(item)
+        if p.is_dir():
+            found = expand_inputs([p])
+            if found:
+                scenes += found
+            else:
+                pictures += sorted(q for q in p.rglob("*") if q.is_file() and q.suffix.lower() in IMAGE_SUFFIXES
+                                   and not is_own_output(q.relative_to(p)))
+        elif p.suffix.lower() in IMAGE_SUFFIXES:
+            pictures.append(p)
+        else:
+            scenes += expand_inputs([p])
+    return scenes, pictures
+
+
+def _picture(path: Path) -> np.ndarray:
+    from seamless_usd.imaging import read_image
+
+    pixels, info = read_image(path)
+    a = np.asarray(pixels, dtype=np.float64)
+    a = a.reshape(a.shape[0], a.shape[1], -1)[..., :3]  # alpha is not part of the look
+    return 2.0 * a - 1.0
+
+
+def _judge_picture(path: Path) -> CheckItem:
+    from seamless_usd.verdict import judge
+
+    item = CheckItem(str(path), str(path), [str(path)])
+    t0 = time.perf_counter()
+    try:
+        item.verdict = judge([_picture(path)], None, [False], [path.name], fidelity=False).as_dict()
+    except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
+        item.error = f"{asset_ref(path)}: cannot be judged: {exc}"
+    item.seconds = time.perf_counter() - t0
+    return item
+
+
+def _sources(stage_path: Path, stack) -> tuple[list, tuple[float, float]] | None:
+    """The maps' recorded sources and UV scale, when every map is a tile this tool wrote into a USD stage."""
+    if stage_path.suffix.lower() == ".mtlx":
+        return None
+    from seamless_usd.authoring.schema import Schema, read_provenance
+    from seamless_usd.discover.scan import open_stage
+
+    stage = open_stage(stage_path)
+    sources, scale = [], (1.0, 1.0)
+    for m in stack.maps:
+        prim = stage.GetPrimAtPath(m.node.strip("<>"))
+        prov = read_provenance(prim) if prim else None
+        attr = prim.GetAttribute(Schema.SOURCE_ASSET) if prov is not None else None
+        resolved = attr.Get().resolvedPath if attr and attr.Get() is not None else ""
+        if not resolved:
+            return None
+        sources.append(dataclasses.replace(m, resolved=resolved, asset=prov.source_asset))
+        scale = prov.uv_scale
+    return sources, scale
+
+
+def _judge_stack(stage_path: Path, stack) -> CheckItem:
+    from seamless_usd.imaging import load_stack_pixels
+    from seamless_usd.pipeline.stackjob import on_tile_grid
+    from seamless_usd.verdict import judge
+
+    item = CheckItem(stack.material, str(stage_path), [m.asset for m in stack.maps])
+    t0 = time.perf_counter()
+    try:
+        normals = [m.is_normal for m in stack.maps]
+        tiles = list(load_stack_pixels(list(stack.maps)).values)
+        recorded = _sources(stage_path, stack)
+        sources = None
+        if recorded is not None:
+            src_maps, uv = recorded
+            sources = on_tile_grid(list(load_stack_pixels(src_maps).values), normals, tiles[0].shape[:2], uv)
+        item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps],
+                             fidelity=sources is not None).as_dict()
+    except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
+        item.error = str(exc)
+    item.seconds = time.perf_counter() - t0
+    return item
+
+
+def check_paths(paths: Sequence[str | Path], progress: Callable[[str], None] | None = None) -> CheckReport:
+    """The verdict on every stack meant to tile in ``paths`` (stages, documents, folders) and every picture."""
+    from seamless_usd.discover import scan_paths
+
+    emit = progress or (lambda name: None)
+    report = CheckReport()
+    scenes, pictures = _expand(paths)
+    for scene in scenes:
+        if scene.suffix.lower() not in SCENE_SUFFIXES:
+            report.unreadable.append(f"{asset_ref(scene)}: not a USD stage, MaterialX document or picture")
+            continue
+        try:
+            result = scan_paths([scene])
+        except InputError as exc:
+            report.unreadable.append(str(exc))
+            continue
+        for stack in result.stacks:
+            if stack.duplicate_of or stack.intent not in _JUDGED_INTENTS:
+                continue
+            emit(stack.material)
+            report.items.append(_judge_stack(scene, stack))
+    for picture in pictures:
+        if not picture.is_file():
+            report.unreadable.append(f"{asset_ref(picture)}: no such file")
+            continue
+        emit(str(picture))
+        report.items.append(_judge_picture(picture))
+    return report

@@ -1,0 +1,16 @@
+"""The verdict: is a written tile seamless, at its wrap and inside, and faithful to its source?
+
+One detector (:mod:`.classifier` over :mod:`.features`, read along every line by :mod:`.lines`) and
+one fidelity rule (:mod:`.tolerance`) decide ``passed`` everywhere: the process status and exit code,
+the report, the USD provenance, ``seamless-usd check`` and the scan's ``already-tileable`` intent.
+See :mod:`.judge` for exactly what ``passed`` means.
+"""
+from __future__ import annotations
+
+from .judge import LENGTH, SEAM_MARGIN, SELF_MARGIN, STEP, Verdict, judge
+from .lines import Seam
+from .prepare import WORK_SIDE
+from .tolerance import FIDELITY_KEYS, faithfulness, scale_tolerance
+
+__all__ = ["Verdict", "Seam", "judge", "faithfulness", "scale_tolerance", "FIDELITY_KEYS", "SEAM_MARGIN",
+           "SELF_MARGIN", "LENGTH", "STEP", "WORK_SIDE"]

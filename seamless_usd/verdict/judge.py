@@ -1,0 +1,151 @@
+"""The verdict on a tile: seamless (no seam at its wrap or inside) and faithful to its source.
+
+``passed`` means exactly this, everywhere in the product (the status, the exit code, the report, the
+USD provenance and ``seamless-usd check``):
+
+* **seamless**: no line of the tile, read as it repeats (the wrap lines, the centre lines and every
+  interior line), has a run of 64 working-resolution px that a classifier fitted on the source's own
+  juxtapositions scores more than :data:`SEAM_MARGIN` above the strongest run of the source's own
+  lines; judged for the maps together and for each map;
+* **faithful**: every map's feature-scale ratio and patch distance against its source lie inside
+  tolerances set by the source's own spread (:mod:`.tolerance`). A figure that could not be measured
+  (a tile too small) is not inside its tolerance.
+
+A texture with no separate source (``seamless-usd check`` on a picture, or a stack the scan reads as
+already tileable) is judged against itself: the classifier is fitted on its own interior lines, its
+reference is a high quantile of those lines' runs, and there is no fidelity to judge.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .classifier import fit
+from .lines import Seam, runs, seams_from_scores
+from .prepare import WORK_SIDE, joint, map_weights, prepare_maps, to_working
+from .tolerance import faithfulness
+
+__all__ = ["SEAM_MARGIN", "SELF_MARGIN", "LENGTH", "STEP", "Verdict", "judge"]
+
+#: Length (px at the working resolution) of a line stretch, and the step between stretches.
+LENGTH = 16
+STEP = 4
+#: A run scoring more than this above the source's strongest run is a seam (classifier units).
+SEAM_MARGIN = 0.5
+#: Judged against itself: a run more than this above the texture's own :data:`SELF_RANK`-th strongest line is
+#: a seam. A texture's own lines (mortar joints, plank edges) come many alike, so the reference sits among
+#: them; a join is one line (a wrap) or two (a spliced strip), which stand above it.
+SELF_MARGIN = 1.0
+SELF_RANK = 4
+
+
+@dataclass
+class Verdict:
+    """Whether a tile is seamless and faithful, with where its seams are and its figures."""
+
+    seamless: bool
+    faithful: bool
+    seams: list[Seam] = field(default_factory=list)  # strongest first; map "stack" is the maps together
+    strongest: float = 0.0  # the strongest run above the reference (seams exceed ``margin``)
+    margin: float = SEAM_MARGIN
+    reference: str = "source"  # "source", or "itself" for a texture judged on its own
+    size: tuple[int, int] = (0, 0)  # (h, w) of the tile judged
+    figures: dict[str, dict[str, float | None]] = field(default_factory=dict)  # map -> figure -> value
+    tolerances: dict[str, dict[str, list]] = field(default_factory=dict)  # map -> figure -> [low, high]
+    failing: list[str] = field(default_factory=list)  # "map: figure value (tolerance ...)"
+
+    @property
+    def passed(self) -> bool:
+        """Seamless and faithful: the one meaning of ``passed``."""
+        return self.seamless and self.faithful
+
+    def reasons(self, most: int = 3) -> list[str]:
+        """Why the tile did not pass: its ``most`` strongest seams, then each figure outside its tolerance."""
+        out = [f"seam in {'the maps together' if s.map == 'stack' else s.map}: {s.where(self.size)} "
+               f"({s.figure:+.2f})" for s in self.seams[:most]]
+        if len(self.seams) > most:
+            out.append(f"and {len(self.seams) - most} more seam{'s' if len(self.seams) - most > 1 else ''}")
+        return out + [f"not faithful: {f}" for f in self.failing]
+
+    def as_dict(self) -> dict:
+        return {"passed": self.passed, "seamless": self.seamless, "faithful": self.faithful,
+                "reference": self.reference, "strongest": round(self.strongest, 3), "margin": self.margin,
+                "size": list(self.size), "seams": [s.as_dict() for s in self.seams],
+                "figures": self.figures, "tolerances": self.tolerances, "failing": list(self.failing)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Verdict":
+        return cls(bool(d["seamless"]), bool(d["faithful"]), [Seam(**s) for s in d.get("seams", [])],
+                   float(d.get("strongest", 0.0)), float(d.get("margin", SEAM_MARGIN)), d.get("reference", "source"),
+                   tuple(d.get("size", (0, 0))), dict(d.get("figures", {})), dict(d.get("tolerances", {})),
+                   list(d.get("failing", [])))
+
+
+def _scores(clf, img: np.ndarray, periodic: bool) -> dict[str, np.ndarray]:
+    return {axis: clf.scores(img, axis, periodic) for axis in ("x", "y")}
+
+
+def _strongest_run(scores: dict[str, np.ndarray], periodic: bool, rank: int = 1) -> float:
+    """The ``rank``-th strongest line's best run, lines within 4 px of a stronger one left out."""
+    ranked = []
+    for z in scores.values():
+        peak = runs(z, periodic=periodic).max(axis=0)
+        taken: list[int] = []
+        for line in np.argsort(-peak):
+            if len(taken) >= rank:
+                break
+            if all(min(abs(line - t), len(peak) - abs(line - t)) > 4 for t in taken):
+                taken.append(int(line))
+        ranked += [float(peak[t]) for t in taken]
+    ranked.sort(reverse=True)
+    return ranked[min(rank, len(ranked)) - 1]
+
+
+def _find(tile: np.ndarray, source: np.ndarray | None, factor: float, size: tuple[int, int], name: str, seed: int
+          ) -> tuple[list[Seam], float]:
+    if source is None:
+        clf = fit(tile, LENGTH, STEP, seed=seed)  # its interior lines (read without wrapping) are the reference
+        reference = _strongest_run(_scores(clf, tile, True), True, SELF_RANK)
+        margin = SELF_MARGIN
+    else:
+        clf = fit(source, LENGTH, STEP, seed=seed)
+        reference = _strongest_run(_scores(clf, source, False), False)
+        margin = SEAM_MARGIN
+    return seams_from_scores(_scores(clf, tile, True), reference, margin, factor=factor, tile_shape=size,
+                             length=LENGTH, step=STEP, map_name=name)
+
+
+def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: list[bool], names: list[str],
+          *, fidelity: bool = True, seed: int = 0) -> Verdict:
+    """The verdict on a periodic tile (one or more maps, network domain ``[-1, 1]``) against ``sources``
+    (the same maps at the tile's texel scale; None: judged against itself).
+
+    >>> rng = np.random.default_rng(0)
+    >>> noise = rng.normal(size=(96, 96, 1))
+    >>> judge([noise], None, [False], ["noise"]).seamless
+    True
+    """
+    t = prepare_maps(tiles, normals)
+    s = None if sources is None else prepare_maps(sources, normals)
+    size = t[0].shape[:2]
+    factor = min(1.0, WORK_SIDE / max(size))
+    tw = to_working(t, factor, periodic=True)
+    sw = None if s is None else to_working(s, factor, periodic=False)
+    weights = map_weights(sw if sw is not None else tw)
+    margin = SEAM_MARGIN if s is not None else SELF_MARGIN
+    seams, strongest = _find(joint(tw, weights), None if sw is None else joint(sw, weights), factor, size, "stack",
+                             seed)
+    if len(t) > 1:
+        for k, name in enumerate(names):
+            found, top = _find(tw[k] * weights[k], None if sw is None else sw[k] * weights[k], factor, size, name,
+                               seed)
+            seams += found
+            strongest = max(strongest, top)
+    seams.sort(key=lambda x: -x.figure)
+    verdict = Verdict(not seams, True, seams, strongest, margin, "source" if s is not None else "itself",
+                      tuple(int(v) for v in size))
+    if fidelity and sources is not None:
+        verdict.figures, verdict.tolerances, verdict.failing = faithfulness(tiles, sources, normals, names)
+        verdict.faithful = not verdict.failing
+    return verdict
