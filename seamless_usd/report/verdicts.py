@@ -143,10 +143,11 @@ def verdict(key: str, value: float | None, bounds: tuple[float | None, float | N
     --------
     >>> verdict("scale_ratio", 0.98).text
     'scale kept (0.98)'
-    >>> verdict("centre_seam_x", 1.6).text, verdict("centre_seam_x", 1.6).ok
+    >>> verdict("centre_seam_x", 1.6, (None, 1.15)).text, verdict("centre_seam_x", 1.6, (None, 1.15)).ok
     ('centre seam visible (1.6)', False)
-    >>> verdict("seam_ratio_x", 1.53, torus=True).text
+    >>> verdict("seam_ratio_x", 1.53, (None, 1.15), torus=True).text
     'strong line at the border (1.53)'
+    >>> verdict("seam_ratio_x", 1.53).ok is None  # no target: whether there is a seam is the verdict's call
     """
     bounds = bounds if bounds is not None else targets().get(key)
     if value is None or (isinstance(value, float) and math.isnan(value)):

@@ -1,0 +1,123 @@
+"""The verdict on real texture tiles: seams found where they are, none where there are none, and the
+fidelity tolerance set by the source's own spread."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from seamless_usd.metrics import outside_target, scale_ratio
+from seamless_usd.pipeline.stackjob import on_tile_grid
+from seamless_usd.verdict import Verdict, faithfulness, judge, scale_tolerance
+
+TEXTURES = Path(__file__).resolve().parent.parent / "sample_assets" / "textures"
+
+
+@pytest.fixture(scope="module")
+def wood() -> np.ndarray:
+    """The bundled tileable wood (a whole period of the MaterialX wood, 512 px), halved: network domain."""
+    buf = oiio.ImageBuf(str(TEXTURES / "wood_tileable.jpg"))
+    a = buf.get_pixels(oiio.FLOAT).reshape(512, 512, 3)
+    a = a.reshape(256, 2, 256, 2, 3).mean(axis=(1, 3))  # exact 2 x 2 means: still periodic
+    return 2.0 * a - 1.0
+
+
+def _wrap_window(t: np.ndarray, y: int, x: int, size: int) -> np.ndarray:
+    n = t.shape[0]
+    return np.take(np.take(t, np.arange(y, y + size) % n, 0), np.arange(x, x + size) % n, 1)
+
+
+@pytest.fixture(scope="module")
+def source(wood) -> np.ndarray:
+    """An off-grid window 1.3 periods long: holds every texel of the wood, does not tile."""
+    return _wrap_window(wood, 37, 91, 333)
+
+
+def test_a_tileable_texture_rolled_anywhere_is_seamless(wood, source):
+    v = judge([np.roll(wood, (101, 57), (0, 1))], [source], [False], ["wood"])
+    assert v.seamless and v.seams == [] and v.passed
+
+
+def test_the_source_used_as_its_own_tile_is_seamed_at_its_wrap(source):
+    window = source[:200, :200]  # not a whole period: its wrap joins texels 200 px apart
+    v = judge([window], [source], [False], ["wood"])
+    assert not v.passed and not v.seamless
+    assert any(s.position == 0 for s in v.seams), [s.as_dict() for s in v.seams]
+    assert any("(the wrap)" in r for r in v.reasons())
+
+
+def test_a_planted_interior_seam_is_found_where_it_is(wood, source):
+    tile = np.roll(wood, (11, 23), (0, 1)).copy()
+    other = _wrap_window(wood, 140, 200, 256)  # the same wood from elsewhere
+    tile[:, 96:160] = other[:, 96:160]  # a strip spliced in: seams at x = 96 and x = 160
+    v = judge([tile], [source], [False], ["wood"])
+    assert not v.seamless
+    xs = sorted(s.position for s in v.seams if s.axis == "x")
+    assert any(abs(x - 96) <= 4 for x in xs) and any(abs(x - 160) <= 4 for x in xs), xs
+    assert all(s.end - s.start > 64 for s in v.seams if s.axis == "x")  # the splice runs the whole height
+
+
+def test_a_half_roll_puts_the_seams_on_the_centre_lines(source):
+    window = source[:200, :200]
+    v = judge([np.roll(window, (100, 100), (0, 1))], [source], [False], ["wood"])
+    assert not v.seamless
+    assert any(abs(s.position - 100) <= 4 for s in v.seams), [s.as_dict() for s in v.seams]
+    assert any("(the centre)" in r for r in v.reasons())
+
+
+def test_judged_against_itself_a_tileable_texture_passes_and_a_window_does_not(wood, source):
+    assert judge([np.roll(wood, (40, 170), (0, 1))], None, [False], ["wood"]).seamless
+    v = judge([source[:200, :200]], None, [False], ["wood"])
+    assert not v.seamless and v.reference == "itself" and v.figures == {}  # no fidelity without a source
+
+
+def test_a_seam_in_one_map_of_a_stack_is_named_with_that_map(wood, source):
+    grey = wood.mean(axis=-1, keepdims=True)
+    tile_grey = np.roll(grey, (5, 9), (0, 1)).copy()
+    tile_grey[:, 128:] = np.roll(grey, (90, 150), (0, 1))[:, 128:]  # only the second map is cut at x = 128 and 0
+    v = judge([np.roll(wood, (5, 9), (0, 1)), tile_grey], [source, source.mean(-1, keepdims=True)],
+              [False, False], ["colour", "grey"], fidelity=False)
+    assert not v.seamless
+    assert {s.map for s in v.seams} - {"stack"} == {"grey"}
+
+
+def test_verdict_round_trips_through_its_dict(source):
+    v = judge([source[:200, :200]], [source], [False], ["wood"])
+    back = Verdict.from_dict(v.as_dict())
+    assert back.as_dict() == v.as_dict() and back.passed is False and len(back.reasons()) == len(v.reasons())
+
+
+# --------------------------------------------------------------------------------------------
+# Fidelity tolerances
+# --------------------------------------------------------------------------------------------
+
+
+def test_scale_tolerance_widens_to_the_sources_own_spread():
+    # a source whose left half is twice as fine as its right half: its halves read about 2 and 0.5
+    rng = np.random.default_rng(0)
+    fine = rng.normal(size=(128, 64))
+    coarse = np.kron(rng.normal(size=(64, 32)), np.ones((2, 2)))
+    low, high = scale_tolerance(np.concatenate([fine, coarse], axis=1))
+    assert low < 0.8 and high > 1.25  # far outside the fixed 0.9-1.1
+    assert scale_tolerance(rng.normal(size=(128, 128))) == pytest.approx((0.9, 1.1), abs=0.03)
+
+
+def test_an_unmeasured_figure_is_outside_its_tolerance():
+    assert outside_target("scale_ratio", None) and outside_target("patch_distance", None)
+    rng = np.random.default_rng(1)
+    figures, _, failing = faithfulness([rng.normal(size=(12, 12, 1))], [rng.normal(size=(64, 64, 1))], [False], ["m"])
+    assert figures["m"]["scale_ratio"] is None and any("not measured" in f for f in failing)
+
+
+def test_a_gan_tile_at_the_working_resolution_is_measured_on_its_own_grid(wood):
+    # the pure GAN tile (--refine off) lives on the working grid: a quarter-size source grid here
+    source = wood  # 256 px
+    working = wood.reshape(64, 4, 64, 4, 3).mean(axis=(1, 3))  # the stack at the working resolution
+    tile = np.roll(working, (7, 3), (0, 1))  # a faithful tile of the working stack, 64 px
+    uv = (1.0, 1.0)  # one tile covers the UV square
+    grid = on_tile_grid([source.astype(np.float32)], [False], tile.shape[:2], uv)[0]
+    assert grid.shape[:2] == (64, 64)
+    assert scale_ratio(tile, grid) == pytest.approx(1.0, abs=0.25)
+    assert scale_ratio(tile, source) < 0.5  # measured against the full-resolution source: about 1/4 (the defect)
