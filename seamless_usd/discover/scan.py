@@ -1,6 +1,7 @@
 """The discovery entry points: scan stages, in-memory stages and MaterialX documents."""
 from __future__ import annotations
 
+import contextlib
 import re
 from collections.abc import Sequence
 from pathlib import Path
@@ -27,16 +28,22 @@ def open_stage(path: str | Path) -> Usd.Stage:
     if not path.is_file():
         raise InputError(f"{asset_ref(path)}: no such file")
     try:
-        with Tf.DiagnosticTrap() as trap:
+        with quiet_mtlx():
             stage = Usd.Stage.Open(str(path.resolve()), Usd.Stage.LoadAll)
-            # usd-core cannot compose .mtlx references; discovery reads them itself, so USD's
-            # warning about them is noise. Every other diagnostic is passed on when the trap closes.
-            trap.EraseMatching(lambda d: MTLX_SUFFIX in str(d.commentary).lower())
     except Tf.ErrorException as exc:
         raise InputError(f"{asset_ref(path)}: cannot open the USD stage: {_tf_message(str(exc))}") from None
     if stage is None:
         raise InputError(f"{asset_ref(path)}: cannot open the USD stage")
     return stage
+
+
+@contextlib.contextmanager
+def quiet_mtlx():
+    """usd-core cannot compose .mtlx references; discovery reads them itself, so USD's warnings
+    about them (at each composition) are noise. Every other diagnostic is passed on."""
+    with Tf.DiagnosticTrap() as trap:
+        yield
+        trap.EraseMatching(lambda d: MTLX_SUFFIX in str(d.commentary).lower())
 
 
 def _tf_message(text: str) -> str:
@@ -77,8 +84,15 @@ class _Scan:
         self.result.sources.append(source)
         space = VariantSpace(stage)
         explored: list[ExploredSelection] = []
-        seen_refs: set = set()
+        seen_refs: dict = {}  # a .mtlx reference is read once: its materials and uses
         seen_errors: set = set()
+        with quiet_mtlx():  # recomposing under each selection
+            self._explore(space, source, explored, seen_refs, seen_errors)
+        if space.combinations > 1 or space.mode != "all":
+            self.result.variants.append(VariantExploration(source, space.mode, space.combinations, space.limit,
+                                                           tuple(explored)))
+
+    def _explore(self, space: VariantSpace, source: str, explored: list, seen_refs: dict, seen_errors: set) -> None:
         for selection in space.selections():
             composed = space.current
             found: list[str] = []
@@ -91,10 +105,11 @@ class _Scan:
             if not selection:
                 self._composition_errors(composed, source)
             for ref in refs:
-                ref_found = self._add_reference(ref, selection, (ref.prim, ref.document, ref.target) in seen_refs)
-                seen_refs.add((ref.prim, ref.document, ref.target))
-                found.extend(ref_found[0])
-                uses = uses + ref_found[1]
+                key = (ref.prim, ref.document, ref.target)
+                if key not in seen_refs:
+                    seen_refs[key] = self._add_reference(ref)
+                found.extend(seen_refs[key][0])
+                uses = uses + seen_refs[key][1]
             index = self.geometry.add(space, selection, uvgeom.material_bindings(composed))
             for use in uses:
                 self._add_use(use, selection, index)
@@ -102,9 +117,6 @@ class _Scan:
                 if material not in self.result.materials:
                     self.result.materials.append(material)
             explored.append(ExploredSelection(selection, tuple(dict.fromkeys(found))))
-        if space.combinations > 1 or space.mode != "all":
-            self.result.variants.append(VariantExploration(source, space.mode, space.combinations, space.limit,
-                                                           tuple(explored)))
 
     def _add_use(self, use: TextureUse, selection: tuple, index: int) -> None:
         """A use seen first under ``selection`` keeps it; seen again, only its selections grow."""
@@ -126,30 +138,26 @@ class _Scan:
                 Finding(Severity.WARNING, Codes.COMPOSITION_ERROR, asset_ref(source), text.splitlines()[0])
             )
 
-    def _add_reference(self, ref, selection: tuple, seen: bool) -> tuple[list[str], list[TextureUse]]:
-        """Materials and uses of a ``.mtlx`` document referenced from a prim (findings once)."""
+    def _add_reference(self, ref) -> tuple[list[str], list[TextureUse]]:
+        """Materials and uses of a ``.mtlx`` document referenced from a prim."""
         if not ref.document:
-            if not seen:
-                self.result.findings.append(
-                    Finding(Severity.SKIPPED, Codes.MISSING_FILE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}",
-                            "referenced MaterialX document not found")
-                )
+            self.result.findings.append(
+                Finding(Severity.SKIPPED, Codes.MISSING_FILE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}",
+                        "referenced MaterialX document not found")
+            )
             return [], []
         try:
             doc = mtlx.read_document(ref.document)
         except InputError as exc:
-            if not seen:
-                self.result.findings.append(
-                    Finding(Severity.SKIPPED, Codes.MTLX_UNREADABLE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}",
-                            str(exc))
-                )
+            self.result.findings.append(
+                Finding(Severity.SKIPPED, Codes.MTLX_UNREADABLE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}", str(exc))
+            )
             return [], []
         only, flat = _mtlx_target(ref.target)
         materials, uses, errors = mtlx.walk_document(doc, ref.document, under=ref.prim, only=only, flat=flat)
         if ref.document not in self.result.sources:
             self.result.sources.append(ref.document)
-        if not seen:
-            self.result.findings.extend(errors)
+        self.result.findings.extend(errors)
         return materials, uses
 
     def add_document(self, path: str | Path) -> None:
@@ -165,7 +173,8 @@ class _Scan:
         maps, findings = build_maps(self.uses, self.cache)
         self.result.findings.extend(findings)
         stacks = build_stacks(maps)
-        self.geometry.measure(stacks)
+        with quiet_mtlx():  # composing each selection again
+            self.geometry.measure(stacks)
         self.result.stacks = classify_stacks(stacks, self.geometry, explored=self.geometry.explored_for)
         return self.result
 
