@@ -103,7 +103,8 @@ def render(result: ScanResult, console: Console) -> None:
     if bare:
         console.print(escape(f"materials without texture stacks: {', '.join(bare)}"))
     for explored in result.variants:
-        table = Table(title=escape(f"variant selections of {explored.source}: {explored.note}"), title_justify="left")
+        console.print(escape(f"variant selections of {explored.source}: {explored.note}"), soft_wrap=True)
+        table = Table()
         table.add_column("variant selection")
         table.add_column("materials found", overflow="fold")
         for sel in explored.selections:
