@@ -220,7 +220,8 @@ def classify_stacks(stacks: list[TextureStack], geometry, explored=lambda stack:
     for stack in stacks:
         bound, stats = geometry(stack)
         decision = classify(stack, bound, stats, measures, explored(stack))
-        if not bound and decision.intent is Intent.TILING:  # nothing binds it: do its pixels say atlas?
+        # nothing binds it: do its pixels say atlas? (a flat border also wraps around seamlessly)
+        if not bound and decision.intent in (Intent.TILING, Intent.ALREADY_TILEABLE):
             evidence = atlas_evidence(stack, measures)
             if evidence is not None:
                 decision = IntentDecision(Intent.UV_ATLAS_PIXELS, f"{evidence}; {decision.reason}")
