@@ -13,10 +13,10 @@ from pxr import Usd
 from seamless_usd.discover import scan_paths, scan_stage
 from seamless_usd.discover.variants import MAX_COMBINATIONS, VariantSpace
 from seamless_usd_cli.main import main
+from seamless_usd_schemas import json_schema
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
 SHADING = SAMPLES / "shading"
-SCHEMAS = Path(__file__).resolve().parents[1] / "schemas"
 
 
 def _by_material(result):
@@ -148,7 +148,7 @@ def test_a_space_over_the_limit_is_walked_one_set_at_a_time(tmp_path, capsys):
     assert inner.to_dict()["variant"] == "set0=b, inner=y"
     assert main(["scan", "--json", str(tmp_path / "many.usda")]) == 0
     payload = json.loads(capsys.readouterr().out)
-    jsonschema.validate(payload, json.loads((SCHEMAS / "scan.schema.json").read_text()))
+    jsonschema.validate(payload, json_schema("scan"))
     assert payload["variants"][0]["mode"] == "each-set"
     assert main(["scan", str(tmp_path / "many.usda")]) == 0
     assert "explored one variant set at a time" in capsys.readouterr().out

@@ -8,10 +8,12 @@ import json
 import shutil
 from pathlib import Path
 
+import jsonschema
 import pytest
 from pxr import Sdf, Usd, UsdShade
 
 from seamless_usd_cli.main import main
+from seamless_usd_schemas import json_schema
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
 FLOOR_TEX = "/World/Floor/Looks/M_tiles/diffuseColorTex"
@@ -51,6 +53,7 @@ def _file(stage: Usd.Stage, prim: str) -> str | None:
 def test_atlases_are_left_alone_with_their_selection_named(processed):
     _, _, code, payload, _ = processed
     assert code in (0, 1)  # 1: the tiny preset's tile may not pass Q
+    jsonschema.validate(payload, json_schema("report"))
     by = {(s["material"], s["variant"]): s for s in payload["stacks"]}
     assert set(by) == {
         ("</World/Teapot/Looks/M_utah>", ""),
