@@ -13,6 +13,7 @@ from pxr import Usd
 from seamless_usd.discover import scan_paths, scan_stage
 from seamless_usd.discover.variants import MAX_COMBINATIONS, VariantSpace
 from seamless_usd_cli.main import main
+from test_discover_stacks import material
 from seamless_usd_schemas import json_schema
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
@@ -75,32 +76,9 @@ def test_set_floor_found_in_its_own_variant():
     assert "</World/Floor/Looks/M_tiles>" not in found_in[""]
 
 
-MATERIAL = '''
-        def Material "{name}" {{
-            token outputs:surface.connect = <{path}/Surface.outputs:surface>
-            def Shader "Surface" {{
-                uniform token info:id = "UsdPreviewSurface"
-                color3f inputs:diffuseColor.connect = <{path}/Tex.outputs:rgb>
-                token outputs:surface
-            }}
-            def Shader "Reader" {{
-                uniform token info:id = "UsdPrimvarReader_float2"
-                string inputs:varname = "st"
-                float2 outputs:result
-            }}
-            def Shader "Tex" {{
-                uniform token info:id = "UsdUVTexture"
-                asset inputs:file = @{texture}@
-                float2 inputs:st.connect = <{path}/Reader.outputs:result>
-                float3 outputs:rgb
-            }}
-        }}'''
-
-
 def _many_sets(tmp_path: Path, n: int) -> Path:
     """``n`` prims with a variant set {a, b} each (2**n combinations); variant b of each defines
     a material; prim 0's variant b also holds a nested set {x, y} whose y defines one more."""
-    texture = SAMPLES / "textures" / "wood_color.png"
     prims = []
     for i in range(n):
         nested = ""
@@ -111,7 +89,7 @@ def _many_sets(tmp_path: Path, n: int) -> Path:
             ) {{
                 variantSet "inner" = {{
                     "x" {{ }}
-                    "y" {{ {MATERIAL.format(name="Inner", path=f"/P{i}/Inner", texture=texture)}
+                    "y" {{ {material(f"/P{i}", "Inner", albedo="wood_color.png", rough="wood_roughness.png")}
                     }}
                 }}
             '''
@@ -124,7 +102,7 @@ def Xform "P{i}" (
 ) {{
     variantSet "set{i}" = {{
         "a" {{ }}
-        "b" {nested}{MATERIAL.format(name="M", path=f"/P{i}/M", texture=texture)}
+        "b" {nested}{material(f"/P{i}", "M", albedo="wood_color.png", rough="wood_roughness.png")}
         }}
     }}
 }}''')
@@ -163,7 +141,6 @@ def test_within_the_limit_every_combination_is_composed(tmp_path):
 
 @pytest.mark.parametrize("bound_in", ["nowhere", "other"])
 def test_library_material_is_one_nothing_binds_in_any_selection(tmp_path, bound_in):
-    texture = SAMPLES / "textures" / "wood_color.png"
     binding = 'rel material:binding = </Set/Looks/Lib>' if bound_in == "other" else ""
     path = tmp_path / "lib.usda"
     path.write_text(f'''#usda 1.0
@@ -171,7 +148,7 @@ def Xform "Set" (
     variants = {{ string look = "plain" }}
     prepend variantSets = "look"
 ) {{
-    def Scope "Looks" {{ {MATERIAL.format(name="Lib", path="/Set/Looks/Lib", texture=texture)}
+    def Scope "Looks" {{ {material("/Set/Looks", "Lib", albedo="wood_color.png", rough="wood_roughness.png")}
     }}
     def Mesh "Quad" {{
         int[] faceVertexCounts = [4]

@@ -20,6 +20,7 @@ from seamless_usd.discover.atlas import BACKGROUND_MIN, ISLANDS_MIN, atlas_figur
 from seamless_usd.discover.select import left_alone_stacks
 from seamless_usd.imaging.io import read_image
 from seamless_usd_cli.main import main
+from test_discover_stacks import material
 
 TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
 ATLASES = ["teapot_utah_atlas.png", "teapot_porcelain_atlas.png", "teapot_porcelain_arm.png",
@@ -49,34 +50,10 @@ def test_a_flat_background_alone_is_not_an_atlas():
     assert figures.background > BACKGROUND_MIN and figures.islands == 1 and not figures.is_atlas
 
 
-LIBRARY = '''#usda 1.0
-def Scope "Library" {{
-    def Material "M" {{
-        token outputs:surface.connect = </Library/M/Surface.outputs:surface>
-        def Shader "Surface" {{
-            uniform token info:id = "UsdPreviewSurface"
-            color3f inputs:diffuseColor.connect = </Library/M/Tex.outputs:rgb>
-            token outputs:surface
-        }}
-        def Shader "Reader" {{
-            uniform token info:id = "UsdPrimvarReader_float2"
-            string inputs:varname = "st"
-            float2 outputs:result
-        }}
-        def Shader "Tex" {{
-            uniform token info:id = "UsdUVTexture"
-            asset inputs:file = @{texture}@
-            float2 inputs:st.connect = </Library/M/Reader.outputs:result>
-            float3 outputs:rgb
-        }}
-    }}
-}}
-'''
-
-
 def _library(tmp_path: Path, texture: str) -> Path:
     path = tmp_path / f"library_{Path(texture).stem}.usda"
-    path.write_text(LIBRARY.format(texture=TEXTURES / texture))
+    body = material("/Library", "M", albedo=texture, rough="brick_roughness.png")
+    path.write_text(f'#usda 1.0\ndef Scope "Library" {{{body}\n}}\n')
     return path
 
 
