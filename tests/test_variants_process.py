@@ -111,3 +111,22 @@ def test_the_report_lists_the_selections_explored(processed):
     html = (root / "report.html").read_text()
     assert "Variant selections explored" in html and "every combination explored (12)" in html
     assert "floorVariant=Tiled" in html and "modelVariant=Fancy, shadingVariant=PorcelainFlowers" in html
+
+
+def test_in_place_edits_go_inside_the_variant_that_holds_the_material(processed, tmp_path, capsys):
+    root, _, _, _, _ = processed
+    for name in ("shading", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene = tmp_path / "shading" / "set.usda"
+    main(["process", "--in-place", "--preset", "tiny", "--max-size", "128", "--cache-dir", str(root / "cache"),
+          "--json", str(scene)])  # the model trained above is reused from the cache
+    payload = json.loads(capsys.readouterr().out)
+    assert [Path(p).name for p in payload["layers_written"]] == ["set.usda"]
+    layer = Sdf.Layer.OpenAsAnonymous(str(scene))
+    spec = layer.GetAttributeAtPath("/World/Floor{floorVariant=Tiled}Looks/M_tiles/diffuseColorTex.inputs:file")
+    assert spec.default.path.startswith("./tileable/brick_albedo.")
+    assert not layer.GetPrimAtPath("/World/Floor/Looks")
+    stage = Usd.Stage.Open(str(scene))
+    assert _file(stage, FLOOR_TEX) is None  # Bare, as the stage selects: untouched
+    for name in ("teapot_mtl.usda", "king_look.usda", "king_mat.mtlx"):
+        assert (tmp_path / "shading" / name).read_bytes() == (SAMPLES / "shading" / name).read_bytes()

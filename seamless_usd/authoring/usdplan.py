@@ -326,6 +326,7 @@ class _Author:
             name = f"{Names.UV_NODE}_{n}"
         path = parent.AppendChild(name)
         self._reserved.add((path, self._selection))
+        target = self._sibling_target(prim, target)
         f2 = Sdf.ValueTypeNames.Float2
         if use_place2d:
             node_id, in_name, out_name = Names.MX_PLACE_2D, Names.TEXCOORD, Names.OUT
@@ -343,6 +344,18 @@ class _Author:
             _Edit(target, _EditKind.SCHEMA, path, value=Schema.UV_TRANSFORM_API),
         ]
         return path
+
+    def _sibling_target(self, prim, target: Usd.EditTarget) -> Usd.EditTarget:
+        """Where a new sibling of ``prim`` is defined: ``target``'s layer, mapped through the
+        parent's own prim-index node. A node's mapping may cover only its own prim (a material
+        authored inside a variant: ``/Set/Floor{floorVariant=Tiled}Looks/M``), so a sibling
+        mapped through the texture's node would land outside that variant."""
+        if self._context is not None:
+            return target
+        parent_target = self.target_for(prim.GetParent(), None)
+        if isinstance(parent_target, Usd.EditTarget) and parent_target.GetLayer() == target.GetLayer():
+            return parent_target
+        return target
 
     def _plan_provenance(self, prim, provenance: Provenance, applied, source_file: str) -> None:
         """Record provenance; the source is this map's own file, relative to the edit layer."""
