@@ -68,7 +68,8 @@ def test_set_floor_found_in_its_own_variant():
     result = scan_paths([SHADING / "set.usda"])
     stacks = _by_material(result)
     floor = stacks[("</World/Floor/Looks/M_tiles>", "floorVariant=Tiled")]
-    assert floor.intent == "tiling" and "on </World/Floor> in floorVariant=Tiled: 4.00 x 4.00 periods" in floor.intent_reason
+    assert floor.intent == "tiling"
+    assert "on </World/Floor> in floorVariant=Tiled: 4.00 x 4.00 periods" in floor.intent_reason
     assert sum(1 for s in result.stacks if s.intent == "uv-atlas") == 4
     assert (result.variants[0].mode, result.variants[0].combinations) == ("all", 12)
     found_in = {s.to_dict()["label"]: s.materials for s in result.variants[0].selections}
@@ -167,7 +168,8 @@ def Xform "Set" (
 }}''')
     (stack,) = scan_paths([path]).stacks
     if bound_in == "nowhere":
-        assert "no bound geometry in any of the 2 variant selections explored (a library material)" in stack.intent_reason
+        reason = "no bound geometry in any of the 2 variant selections explored (a library material)"
+        assert reason in stack.intent_reason
     else:
         assert "UVs 0.00-3.00 x 0.00-3.00 on </Set/Quad> in look=other: 3.00 x 3.00 periods" in stack.intent_reason
         assert "library" not in stack.intent_reason
@@ -175,7 +177,8 @@ def Xform "Set" (
 
 def test_an_in_memory_stage_is_explored_without_being_changed():
     stage = Usd.Stage.Open(str(SHADING / "king.usda"))
-    stage.GetSessionLayer().ImportFromString('#usda 1.0\nover "King" (variants = { string shadingVariant = "Black" }) {}')
+    stage.GetSessionLayer().ImportFromString(
+        '#usda 1.0\nover "King" (variants = { string shadingVariant = "Black" }) {}')
     before = stage.GetSessionLayer().ExportToString()
     result = scan_stage(stage)
     # the session layer's selection (Black) is the stage's own: White is the other selection

@@ -3,6 +3,8 @@
 its own variant, and the output stage is checked under each selection."""
 from __future__ import annotations
 
+import contextlib
+import io
 import itertools
 import json
 import shutil
@@ -33,9 +35,6 @@ def processed(tmp_path_factory):
     scene = root / "shading" / "set.usda"
     args = ["process", "--preset", "tiny", "--max-size", "128", "--cache-dir", str(root / "cache"), "--json",
             "--report", str(root / "report.html"), str(scene)]
-    import contextlib
-    import io
-
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         code = main(args)
@@ -130,3 +129,19 @@ def test_in_place_edits_go_inside_the_variant_that_holds_the_material(processed,
     assert _file(stage, FLOOR_TEX) is None  # Bare, as the stage selects: untouched
     for name in ("teapot_mtl.usda", "king_look.usda", "king_mat.mtlx"):
         assert (tmp_path / "shading" / name).read_bytes() == (SAMPLES / "shading" / name).read_bytes()
+
+
+def test_an_open_stage_is_not_edited_for_a_selection_it_does_not_make():
+    from seamless_usd.authoring import MapResult, Provenance, StackResult, author_usd_stage
+    from seamless_usd.discover import scan_stage
+
+    stage = Usd.Stage.Open(str(SAMPLES / "prop" / "prop.usda"))  # as a DCC holds it: edited, not saved
+    (cloth,) = [s for s in scan_stage(stage).stacks if s.selection]
+    prov = Provenance(source_asset="", crop_size=(0, 0), uv_scale=(1.0, 1.0), q_passed=True, q_tau=0.0,
+                      q_band_min=(0.0, 0.0), model_hash="", tool_version="test")
+    result = author_usd_stage(stage, [StackResult(
+        stack=cloth, maps=[MapResult(map=m, output_path=Path(m.resolved)) for m in cloth.maps],
+        uv_scale=(2.0, 2.0), provenance=prov)])
+    assert [f.code for f in result.findings] == ["variant-not-editable"]
+    assert "finish=cloth" in result.findings[0].message
+    assert not result.edited_prims and not any(layer.dirty for layer in stage.GetUsedLayers())

@@ -10,7 +10,7 @@ from pxr import Gf, Sdf, Usd, UsdShade
 from seamless_usd.authoring.files import relative_asset_path
 from seamless_usd.authoring.schema import PROPERTIES, Schema, has_applied, is_seamless_uv_transform, read_provenance, schemas_known
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult
-from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target
+from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target, variant_not_composed
 from seamless_usd.authoring.usdnodes import (
     Names,
     _close,
@@ -75,6 +75,12 @@ class _Author:
             results.sort(key=lambda r: r.stack.selection != ())
         composed = ()
         for stack_result in results:
+            if stack_result.stack.selection and not selections:  # a DCC's open stage: not recomposed
+                finding = variant_not_composed(stack_result.stack)
+                self.result.findings.append(finding)
+                self.result.not_written += [(prim_ref(m.map.node.strip("<>")), finding.message)
+                                            for m in stack_result.maps if m.map.origin is Origin.USD]
+                continue
             selection = stack_result.stack.selection if selections else ()
             if selection != composed:
                 apply_selection(self.stage.GetSessionLayer(), selection)
@@ -321,7 +327,8 @@ class _Author:
     def _new_uv_node(self, prim, target, source_attr: Sdf.Path, scale, use_place2d: bool) -> Sdf.Path:
         parent = prim.GetPath().GetParentPath()
         name, n = Names.UV_NODE, 0
-        while self.stage.GetPrimAtPath(parent.AppendChild(name)) or (parent.AppendChild(name), self._selection) in self._reserved:
+        while (self.stage.GetPrimAtPath(parent.AppendChild(name))
+               or (parent.AppendChild(name), self._selection) in self._reserved):
             n += 1
             name = f"{Names.UV_NODE}_{n}"
         path = parent.AppendChild(name)

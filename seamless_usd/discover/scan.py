@@ -150,7 +150,8 @@ class _Scan:
             doc = mtlx.read_document(ref.document)
         except InputError as exc:
             self.result.findings.append(
-                Finding(Severity.SKIPPED, Codes.MTLX_UNREADABLE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}", str(exc))
+                Finding(Severity.SKIPPED, Codes.MTLX_UNREADABLE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}",
+                        str(exc))
             )
             return [], []
         only, flat = _mtlx_target(ref.target)
