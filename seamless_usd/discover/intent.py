@@ -224,6 +224,7 @@ def classify_stacks(stacks: list[TextureStack], geometry, explored=lambda stack:
         if not bound and decision.intent in (Intent.TILING, Intent.ALREADY_TILEABLE):
             evidence = atlas_evidence(stack, measures)
             if evidence is not None:
-                decision = IntentDecision(Intent.UV_ATLAS_PIXELS, f"{evidence}; {decision.reason}")
+                border = " (its flat border is what wraps around)" if decision.intent is Intent.ALREADY_TILEABLE else ""
+                decision = IntentDecision(Intent.UV_ATLAS_PIXELS, f"{evidence}; {decision.reason}{border}")
         out.append(replace(stack, intent=decision.intent.value, intent_reason=decision.reason))
     return out
