@@ -145,3 +145,18 @@ def test_an_open_stage_is_not_edited_for_a_selection_it_does_not_make():
     assert [f.code for f in result.findings] == ["variant-not-editable"]
     assert "finish=cloth" in result.findings[0].message
     assert not result.edited_prims and not any(layer.dirty for layer in stage.GetUsedLayers())
+
+
+def test_a_dcc_stage_names_the_stacks_of_other_selections_and_plans_its_own(tmp_path):
+    import seamless_usd
+    from seamless_usd.authoring import WriteMode
+
+    stage = Usd.Stage.Open(str(SAMPLES / "prop" / "prop.usda"))
+    options = seamless_usd.Options(preset="tiny", mode=WriteMode.DRY_RUN, output_dir=tmp_path / "tiles",
+                                   cache_dir=tmp_path / "cache")
+    report = seamless_usd.process_stage(stage, options)
+    (skipped,) = [f for f in report.findings if f.code == "variant-not-editable"]
+    assert skipped.where == "</Prop/Materials/M_floor>" and "finish=cloth" in skipped.message
+    floors = [s for s in report.stacks if s.material == "</Prop/Materials/M_floor>"]
+    assert [(s.variant, s.status.value) for s in floors] == [("", "planned")]
+    assert report.variants and report.variants[0]["combinations"] == 2

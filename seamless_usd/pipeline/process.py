@@ -422,6 +422,11 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.report.findings += scan.findings
     run.report.variants += [v.to_dict() for v in scan.variants]
     stacks = select_stacks(scan, run.options.materials)
+    # The open stage is authored as it is composed: stacks of other variant selections are named, not processed
+    from seamless_usd.authoring.usdedits import variant_not_composed
+
+    run.report.findings += [variant_not_composed(s) for s in stacks if s.selection]
+    stacks = [s for s in stacks if not s.selection]
     run.blocked.update(blocked_stacks(scan, stacks, label))
     run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))
     out_dir = _output_dir(run.options, source)
