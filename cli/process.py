@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
@@ -169,7 +170,7 @@ def _stack_table(report: Report, console: Console) -> None:
     for s in report.stacks:
         style = {StackStatus.PASSED: "green", StackStatus.NOT_PASSED: "yellow", StackStatus.FAILED: "red"}.get(s.status, "")
         table.add_row(
-            s.material,
+            escape(s.material + (f" in {s.variant}" if s.variant else "")),
             f"[{style}]{s.status.value}[/]" if style else s.status.value,
             str(len(s.maps)),
             "x".join(map(str, s.crop_size)) if s.crop_size else "-",

@@ -17,6 +17,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from seamless_usd.discover import ScanResult, TextureMap, TextureStack, UVChain, scan_paths
+from seamless_usd.discover.types import describe_selection
 
 __all__ = ["add_arguments", "run", "render"]
 
@@ -56,6 +57,8 @@ def _size_text(m: TextureMap) -> str:
 
 def _stack_table(stack: TextureStack) -> Table:
     title = escape(f"{stack.material}  stack {stack.id}")
+    if stack.selection:
+        title += escape(f"  in {describe_selection(stack.selection)}")
     if stack.duplicate_of:
         title += f"  (same as {stack.duplicate_of})"
     if stack.intent:
@@ -99,6 +102,15 @@ def render(result: ScanResult, console: Console) -> None:
     bare = [m for m in result.materials if m not in with_stacks]
     if bare:
         console.print(escape(f"materials without texture stacks: {', '.join(bare)}"))
+    for explored in result.variants:
+        console.print(escape(f"variant selections of {explored.source}: {explored.note}"), soft_wrap=True)
+        table = Table()
+        table.add_column("variant selection")
+        table.add_column("materials found", overflow="fold")
+        for sel in explored.selections:
+            table.add_row(escape(describe_selection(sel.selection) or "as the stage selects"),
+                          escape(", ".join(sel.materials) or "none"))
+        console.print(table)
     if result.findings:
         table = Table(title="skipped and warnings", title_justify="left")
         for col in ("severity", "code", "where", "reason"):

@@ -291,6 +291,9 @@ def make_tileable(textures: Path | None) -> None:
 
 
 if __name__ == "__main__":
+    from make_variants import make_variants
+
     make_prop()
     make_chess()
     make_tileable(Path(sys.argv[1]) if len(sys.argv) > 1 else None)
+    make_variants()

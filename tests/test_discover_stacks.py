@@ -127,15 +127,19 @@ def Xform "Switch" (
     }}
 }}'''
     result = scan_paths([write(tmp_path / "s.usda", body)])
-    by_material = {s.material: s for s in result.stacks}
+    by_material = {s.material: s for s in result.stacks if not s.selection}
     # instance proxies: both instances seen; the second is the same content
     assert {"</Inst1/Mat>", "</Inst2/Mat>"} <= set(by_material)
     assert by_material["</Inst2/Mat>"].duplicate_of == by_material["</Inst1/Mat>"].id
     # payloads loaded
     assert "</Loaded/PMat>" in by_material
-    # the selected variant only
+    # the selected variant as the stage has it, the other found under its own selection
     names = {Path(m.resolved).name for m in by_material["</Switch/V>"].maps}
     assert names == {"wood_color.png", "wood_roughness.png"}
+    (other,) = [s for s in result.stacks if s.selection]
+    assert other.material == "</Switch/V>" and other.to_dict()["variant"] == "look=brick"
+    assert {Path(m.resolved).name for m in other.maps} == {"brick_albedo.png", "brick_roughness.png"}
+    assert [(v.mode, v.combinations) for v in result.variants] == [("all", 2)]
     # assets authored in the referenced layer resolve against it
     albedo = next(m for m in by_material["</Inst1/Mat>"].maps if "albedo" in m.asset)
     assert Path(albedo.file_at.layer).name == "asset.usda"

@@ -125,10 +125,12 @@ def test_scan_shows_the_intent_in_the_table_and_json(capsys):
     path = str(SAMPLES / "prop" / "prop.usda")
     assert main(["scan", path]) == 0
     table = capsys.readouterr().out
-    assert "intent: uv-atlas" in table and "36 islands" in table and "1 tiling" in table
+    # the floor's texture under finish=cloth (not selected) is a stack of its own, judged there
+    assert "intent: uv-atlas" in table and "36 islands" in table and "2 tiling" in table
+    assert "in finish=cloth" in table
     assert main(["scan", "--json", path]) == 0
     payload = json.loads(capsys.readouterr().out)
     jsonschema.validate(payload, json_schema("scan"))
-    assert {s["material"]: s["intent"] for s in payload["stacks"]} == {
-        "</Prop/Materials/M_floor>": "tiling", "</Prop/Materials/M_body>": "uv-atlas",
-        "</Prop/Materials/M_label>": "other"}
+    assert {(s["material"], s["variant"]): s["intent"] for s in payload["stacks"]} == {
+        ("</Prop/Materials/M_floor>", ""): "tiling", ("</Prop/Materials/M_body>", ""): "uv-atlas",
+        ("</Prop/Materials/M_label>", ""): "other", ("</Prop/Materials/M_floor>", "finish=cloth"): "tiling"}

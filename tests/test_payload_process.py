@@ -42,13 +42,16 @@ def _file(stage: Usd.Stage, prim: str) -> str:
     return UsdShade.Shader(stage.GetPrimAtPath(prim)).GetInput("file").Get().path
 
 
-def test_edits_inside_a_payload_land_in_the_selected_variant_only(assets, cache, capsys):
+def test_edits_inside_a_payload_land_in_each_variant(assets, cache, capsys):
     root = assets / "prop" / "prop.usda"
     before = {p: p.read_bytes() for p in (assets / "prop").iterdir()}
     code, payload = _process(str(root), cache=cache, capsys=capsys)
     _assert_all_written(code, payload)
-    by_material = {s["material"]: s for s in payload["stacks"]}
+    by_material = {s["material"]: s for s in payload["stacks"] if not s["variant"]}
     assert by_material["</Prop/Materials/M_floor>"]["status"] in ("passed", "not-passed")
+    (cloth,) = [s for s in payload["stacks"] if s["variant"]]  # the floor under finish=cloth
+    assert cloth["material"] == "</Prop/Materials/M_floor>" and cloth["variant"] == "finish=cloth"
+    assert cloth["status"] in ("passed", "not-passed")
     assert by_material["</Prop/Materials/M_body>"]["status"] == "left-alone"
     assert by_material["</Prop/Materials/M_body>"]["intent"] == "uv-atlas"
     assert "36 islands" in by_material["</Prop/Materials/M_body>"]["intent_reason"]
@@ -63,12 +66,15 @@ def test_edits_inside_a_payload_land_in_the_selected_variant_only(assets, cache,
     # the atlas and the decal keep their textures and UVs
     assert _file(stage, "/Prop/Materials/M_body/diffuseColorTex") == "../textures/brick_albedo.png"
     assert not stage.GetPrimAtPath("/Prop/Materials/M_body/SeamlessUV")
-    # the edits are inside variant finish=wood: the cloth variant keeps its own texture and UVs
-    spec = Sdf.Layer.FindOrOpen(str(layer)).GetPrimAtPath("/Prop{finish=wood}Materials/M_floor/diffuseColorTex")
-    assert spec is not None
+    # the edits are inside each variant: the cloth variant gets its own tile, made from its texture
+    wood_tile = _file(stage, floor)
+    assert "brick" not in wood_tile and "cloth" not in wood_tile
+    for variant in ("wood", "cloth"):
+        spec = Sdf.Layer.FindOrOpen(str(layer)).GetPrimAtPath(f"/Prop{{finish={variant}}}Materials/M_floor/diffuseColorTex")
+        assert spec is not None
     stage.GetPrimAtPath("/Prop").GetVariantSets().GetVariantSet("finish").SetVariantSelection("cloth")
-    assert _file(stage, floor) == "../textures/cloth.png"
-    assert not stage.GetPrimAtPath("/Prop/Materials/M_floor/SeamlessUV")
+    assert "tileable/cloth." in _file(stage, floor) and _file(stage, floor) != wood_tile
+    assert stage.GetPrimAtPath("/Prop/Materials/M_floor/SeamlessUV")
 
 
 def test_force_processes_the_atlas_too(assets, cache, capsys):

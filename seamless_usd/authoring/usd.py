@@ -114,11 +114,13 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
     overrides = Sdf.Layer.CreateAnonymous(".usda")
     overrides.subLayerPaths.append(str(stage_path))
     # Payloads loaded: materials inside them are edited like any other (a new layer's overrides
-    # reach into payloads, references and the selected variants).
+    # reach into payloads, references and variants; a stack found under another variant
+    # selection is planned under that selection, its edits inside that variant).
     stage = Usd.Stage.Open(overrides, Usd.Stage.LoadAll)
     result = AuthoringResult(dry_run=dry_run, output=out)
     author = _Author(stage, result, anchor_dir=out.parent, layer_names={overrides: out.name})
-    author.plan_all(results, lambda prim, prop=None: Usd.EditTarget(overrides), variant_layer=overrides)
+    author.plan_all(results, lambda prim, prop=None: Usd.EditTarget(overrides), variant_layer=overrides,
+                    selections=True)
     for document, new_document in retarget.items():
         author.plan_retarget(document, new_document, Usd.EditTarget(overrides))
     if not author.edits:

@@ -9,9 +9,10 @@ from pxr import Sdf, Usd
 from seamless_usd.authoring.types import Codes
 
 from seamless_usd.authoring.usdnodes import Names
+from seamless_usd.discover.types import TextureStack, describe_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
-__all__ = ["variant_edit_target"]
+__all__ = ["variant_edit_target", "variant_not_composed"]
 
 
 class _EditKind:
@@ -142,3 +143,13 @@ def variant_edit_target(layer: Sdf.Layer, prim: Usd.Prim, attr: Usd.Attribute | 
         path = path.AppendPath(site.MakeRelativePath(previous)).AppendVariantSelection(vset, vsel)
         previous = site
     return Usd.EditTarget.ForLocalDirectVariant(layer, path)
+
+
+def variant_not_composed(stack: TextureStack) -> Finding:
+    """Why a stack found under another variant selection is not written into an open stage that
+    authoring must not recompose (a DCC's stage): edited as the stage selects, the selected
+    variant's look would change instead."""
+    return Finding(
+        Severity.SKIPPED, Codes.VARIANT_NOT_EDITABLE, stack.material,
+        f"found under variant selection {describe_selection(stack.selection)}, which this open stage does not "
+        "make; nothing written for it (process the file to edit that variant)", material=stack.material)

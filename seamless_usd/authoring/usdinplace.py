@@ -73,7 +73,7 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
     stage = Usd.Stage.Open(str(stage_path), Usd.Stage.LoadAll)  # materials inside payloads too
     layers = {layer: layer.dirty for layer in stage.GetUsedLayers()}
     author = _Author(stage, result, anchor_dir=None)
-    author.plan_all(results, _in_place_target)
+    author.plan_all(results, _in_place_target, selections=True)
     if not author.edits:
         if author.planned_maps and not result.findings:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),

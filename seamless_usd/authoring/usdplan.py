@@ -10,7 +10,7 @@ from pxr import Gf, Sdf, Usd, UsdShade
 from seamless_usd.authoring.files import relative_asset_path
 from seamless_usd.authoring.schema import PROPERTIES, Schema, has_applied, is_seamless_uv_transform, read_provenance, schemas_known
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult
-from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target
+from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target, variant_not_composed
 from seamless_usd.authoring.usdnodes import (
     Names,
     _close,
@@ -25,6 +25,7 @@ from seamless_usd.authoring.usdnodes import (
     _value,
 )
 from seamless_usd.discover.types import Origin
+from seamless_usd.discover.variants import apply_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = []
@@ -43,21 +44,25 @@ class _Author:
         self._done: dict[str, tuple[str, tuple[float, float], str]] = {}  # node -> (out, scale, material)
         self._uv_nodes: dict[tuple, Sdf.Path] = {}  # (parent, source, scale) -> inserted node
         self._reserved: set[Sdf.Path] = set()
-        self._uv_updates: dict[Sdf.Path, tuple[float, float]] = {}  # marked node -> total scale
+        self._uv_updates: dict[tuple, tuple[float, float]] = {}  # (marked node, selection) -> total scale
         self.target_for = None
         self.planned_maps = 0
         self.variant_layer: Sdf.Layer | None = None  # new-layer mode: edits follow the opinion's variant
         self._context: Usd.EditTarget | None = None  # the current map's edit target (variant_layer set)
         self._refused: str | None = None  # why an edit target of the current map was refused
+        self._selection: tuple = ()  # the variant selection the stage is composed under
 
     # -- planning ------------------------------------------------------------------------
 
-    def plan_all(self, results: Iterable[StackResult], target_for, variant_layer: Sdf.Layer | None = None) -> None:
+    def plan_all(self, results: Iterable[StackResult], target_for, variant_layer: Sdf.Layer | None = None,
+                 selections: bool = False) -> None:
         """``target_for(prim, attr_or_None) -> Usd.EditTarget | Finding`` picks where edits go.
 
         With ``variant_layer`` (a new layer over the stage) a map whose file value is authored
         inside a variant gets its edits inside the same variant of that layer, so the other
-        variants keep their own textures; ``target_for`` is then not used.
+        variants keep their own textures; ``target_for`` is then not used. With ``selections``
+        (a stage of our own), a stack found under another variant selection is planned with the
+        stage composed under that selection (authored in its session layer, which is then cleared).
         """
         self.target_for = target_for
         self.variant_layer = variant_layer
@@ -65,13 +70,30 @@ class _Author:
             self._find(Severity.WARNING, Codes.SCHEMA_NOT_REGISTERED, asset_ref(Schema.TILE_API),
                        "USD's schema registry was built before seamless_usd.authoring was "
                        "imported: provenance is written, but this process does not know the schema")
+        results = list(results)
+        if selections:  # one composition per selection, the stage's own first
+            results.sort(key=lambda r: r.stack.selection != ())
+        composed = ()
         for stack_result in results:
+            if stack_result.stack.selection and not selections:  # a DCC's open stage: not recomposed
+                finding = variant_not_composed(stack_result.stack)
+                self.result.findings.append(finding)
+                self.result.not_written += [(prim_ref(m.map.node.strip("<>")), finding.message)
+                                            for m in stack_result.maps if m.map.origin is Origin.USD]
+                continue
+            selection = stack_result.stack.selection if selections else ()
+            if selection != composed:
+                apply_selection(self.stage.GetSessionLayer(), selection)
+                composed = selection
+            self._selection = selection
             for map_result in stack_result.maps:
                 if map_result.map.origin is Origin.USD:  # MaterialX documents: author_mtlx
                     self.planned_maps += 1
                     why = self._plan_map(map_result, stack_result)
                     if why:
                         self.result.not_written.append((prim_ref(map_result.map.node.strip("<>")), why))
+        if composed:
+            apply_selection(self.stage.GetSessionLayer(), ())
     def plan_retarget(self, document: Path, new_document: Path, target: Usd.EditTarget) -> None:
         """Point references to ``document`` at ``new_document`` (delete + prepend, so other
         references of the prim stay as they are; Pcp anchors both before matching)."""
@@ -122,7 +144,8 @@ class _Author:
                        f"tileable file for {prim_ref(node_path)} not found; nothing written for it")
             return why
         scale = (float(stack_result.uv_scale[0]), float(stack_result.uv_scale[1]))
-        done = self._done.get(node_path)
+        done_key = (node_path, tex_map.selection)  # one node under two selections: two sets of edits
+        done = self._done.get(done_key)
         if done is not None:
             if done[0] != out or not _close(done[1], scale):
                 self._find(
@@ -132,7 +155,7 @@ class _Author:
                     "process them separately",
                 )
             return None
-        self._done[node_path] = (out, scale, tex_map.material)
+        self._done[done_key] = (out, scale, tex_map.material)
         first_edit = len(self.edits)
         self._refused = None
         self._context = None
@@ -277,17 +300,17 @@ class _Author:
         use_place2d = kind != _Kind.USD_UV_TEXTURE
         if is_seamless_uv_transform(source.GetPrim()):
             node = UsdShade.Shader(source.GetPrim())
-            if node.GetPath() in self._uv_updates:  # shared by maps of this run: updated once
-                return self._uv_updates[node.GetPath()]
+            if (node.GetPath(), self._selection) in self._uv_updates:  # shared by maps of this run: updated once
+                return self._uv_updates[(node.GetPath(), self._selection)]
             current = _value(node.GetInput(Names.SCALE), (1.0, 1.0))
             prior_node = (1.0 / current[0], 1.0 / current[1]) if use_place2d else current
             total = scale if from_source else (prior_node[0] * scale[0], prior_node[1] * scale[1])
             value = (1.0 / total[0], 1.0 / total[1]) if use_place2d else total
             self._plan_input_value(node.GetPrim(), node, Names.SCALE, Sdf.ValueTypeNames.Float2, value)
-            self._uv_updates[node.GetPath()] = total
+            self._uv_updates[(node.GetPath(), self._selection)] = total
             return total
         source_attr = _connection_source_attr(uv_input)
-        key = (str(prim.GetPath().GetParentPath()), str(source_attr), scale, use_place2d)
+        key = (str(prim.GetPath().GetParentPath()), str(source_attr), scale, use_place2d, self._selection)
         node_path = self._uv_nodes.get(key)
         target = self._target(prim, uv_input.GetAttr())
         if target is None:
@@ -304,11 +327,13 @@ class _Author:
     def _new_uv_node(self, prim, target, source_attr: Sdf.Path, scale, use_place2d: bool) -> Sdf.Path:
         parent = prim.GetPath().GetParentPath()
         name, n = Names.UV_NODE, 0
-        while self.stage.GetPrimAtPath(parent.AppendChild(name)) or parent.AppendChild(name) in self._reserved:
+        while (self.stage.GetPrimAtPath(parent.AppendChild(name))
+               or (parent.AppendChild(name), self._selection) in self._reserved):
             n += 1
             name = f"{Names.UV_NODE}_{n}"
         path = parent.AppendChild(name)
-        self._reserved.add(path)
+        self._reserved.add((path, self._selection))
+        target = self._sibling_target(prim, target)
         f2 = Sdf.ValueTypeNames.Float2
         if use_place2d:
             node_id, in_name, out_name = Names.MX_PLACE_2D, Names.TEXCOORD, Names.OUT
@@ -326,6 +351,18 @@ class _Author:
             _Edit(target, _EditKind.SCHEMA, path, value=Schema.UV_TRANSFORM_API),
         ]
         return path
+
+    def _sibling_target(self, prim, target: Usd.EditTarget) -> Usd.EditTarget:
+        """Where a new sibling of ``prim`` is defined: ``target``'s layer, mapped through the
+        parent's own prim-index node. A node's mapping may cover only its own prim (a material
+        authored inside a variant: ``/Set/Floor{floorVariant=Tiled}Looks/M``), so a sibling
+        mapped through the texture's node would land outside that variant."""
+        if self._context is not None:
+            return target
+        parent_target = self.target_for(prim.GetParent(), None)
+        if isinstance(parent_target, Usd.EditTarget) and parent_target.GetLayer() == target.GetLayer():
+            return parent_target
+        return target
 
     def _plan_provenance(self, prim, provenance: Provenance, applied, source_file: str) -> None:
         """Record provenance; the source is this map's own file, relative to the edit layer."""

@@ -7,8 +7,12 @@ and some that are already tile. Each stack gets one class, with the measured rea
   ``mirror``; MaterialX ``clamp``, ``constant``, ``mirror``);
 - ``tiling``: an existing UV transform or ``uvtiling`` repeats the texture; or the UVs of the
   bound geometry span more than one period; or every UV island shows the whole texture once
-  (a swatch quad, box faces); or no geometry is bound (a library material);
-- ``uv-atlas``: the bound meshes keep their UVs inside one period, as unwrapped islands;
+  (a swatch quad, box faces); or no geometry binds it under any explored variant selection (a
+  library material) and its pixels do not look like an atlas;
+- ``uv-atlas``: the bound meshes keep their UVs inside one period, as unwrapped islands (bindings
+  and UVs read under the variant selection they are authored in, see ``bound.py``);
+- ``uv-atlas (pixels)``: nothing binds it, but its pixels show an atlas's layout (islands on a
+  flat background; see ``atlas.py``): flagged for review, processed only when forced;
 - ``already-tileable``: a would-be *tiling* stack whose every map is already seamless across its
   wrap-around, measured on the pixels (decoded at most 512 px, reduced with bins that keep the
   wrap-around exact), *and* has no seam anywhere inside: the verdict (:mod:`seamless_usd.verdict`),
@@ -30,6 +34,7 @@ from enum import Enum
 
 import numpy as np
 
+from seamless_usd.discover.atlas import atlas_evidence
 from seamless_usd.discover.types import TextureMap, TextureStack
 
 __all__ = ["Intent", "IntentDecision", "Thresholds", "classify_stacks", "measure_map", "THRESHOLDS"]
@@ -38,6 +43,7 @@ __all__ = ["Intent", "IntentDecision", "Thresholds", "classify_stacks", "measure
 class Intent(str, Enum):
     TILING = "tiling"
     UV_ATLAS = "uv-atlas"
+    UV_ATLAS_PIXELS = "uv-atlas (pixels)"  # nothing binds it, but its pixels are an unwrapped atlas's
     ALREADY_TILEABLE = "already-tileable"
     OTHER = "other"
 
@@ -166,15 +172,28 @@ def interior_seam(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> s
     return None
 
 
-def _geometry_decision(stack: TextureStack, factor, stats, bound: int) -> IntentDecision:
+def _in(stats) -> str:
+    """`` in shadingVariant=White`` when the binding was found under another variant selection."""
+    return f" in {stats.selection}" if getattr(stats, "selection", "") else ""
+
+
+def _unbound(explored: int) -> str:
+    if explored > 1:
+        return f"no bound geometry in any of the {explored} variant selections explored (a library material)"
+    if explored == 1:
+        return "no bound geometry on the stage, which has no variants to explore (a library material)"
+    return "no bound geometry: a MaterialX document scanned on its own (a library material)"
+
+
+def _geometry_decision(stack: TextureStack, factor, stats, bound: int, explored: int = 1) -> IntentDecision:
     """Tiling or uv-atlas from the bound meshes' UVs (``stats``: UVStats of each mesh use)."""
     if not bound:
-        return IntentDecision(Intent.TILING, "no bound geometry (a library material)")
+        return IntentDecision(Intent.TILING, _unbound(explored))
     if not stats:
         return IntentDecision(Intent.TILING, f"bound geometry ({bound} mesh use(s)) has no UVs to measure")
     widest = max(stats, key=lambda s: max(s.span[0] * factor[0], s.span[1] * factor[1]))
     span = (widest.span[0] * factor[0], widest.span[1] * factor[1])
-    where = f"<{widest.mesh}>" + (f" and {len(stats) - 1} more" if len(stats) > 1 else "")
+    where = f"<{widest.mesh}>{_in(widest)}" + (f" and {len(stats) - 1} more" if len(stats) > 1 else "")
     rng = f"UVs {widest.lo[0]:.2f}-{widest.hi[0]:.2f} x {widest.lo[1]:.2f}-{widest.hi[1]:.2f}"
     if max(span) > THRESHOLDS.repeat_span:
         return IntentDecision(Intent.TILING, f"{rng} on {where}: {span[0]:.2f} x {span[1]:.2f} periods")
@@ -188,12 +207,12 @@ def _geometry_decision(stack: TextureStack, factor, stats, bound: int) -> Intent
     return IntentDecision(
         Intent.UV_ATLAS,
         f"UVs {worst.lo[0]:.2f}-{worst.hi[0]:.2f} x {worst.lo[1]:.2f}-{worst.hi[1]:.2f}, {worst.islands} islands "
-        f"on <{worst.mesh}>" + (f" (+{len(atlas) - 1} more mesh use(s))" if len(atlas) > 1 else "")
+        f"on <{worst.mesh}>{_in(worst)}" + (f" (+{len(atlas) - 1} more mesh use(s))" if len(atlas) > 1 else "")
         + ": an unwrapped UV atlas",
     )
 
 
-def classify(stack: TextureStack, bound: int, stats: Sequence, measures: dict) -> IntentDecision:
+def classify(stack: TextureStack, bound: int, stats: Sequence, measures: dict, explored: int = 1) -> IntentDecision:
     """Class of one stack from its maps, its bound geometry's UV stats and the pixel measures."""
     clamped = [m for m in stack.maps if m.wrap_s in _CLAMPED or m.wrap_t in _CLAMPED]
     if clamped:
@@ -204,7 +223,7 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, measures: dict) -
         decision = IntentDecision(Intent.TILING, f"{' > '.join(parts)} repeats the texture "
                                                  f"{factor[0]:g} x {factor[1]:g} times")
     else:
-        decision = _geometry_decision(stack, factor, stats, bound)
+        decision = _geometry_decision(stack, factor, stats, bound, explored)
         if decision.intent is not Intent.TILING:
             return decision
     figures = []
@@ -229,13 +248,20 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, measures: dict) -
     return decision
 
 
-def classify_stacks(stacks: list[TextureStack], geometry) -> list[TextureStack]:
+def classify_stacks(stacks: list[TextureStack], geometry, explored=lambda stack: 0) -> list[TextureStack]:
     """Stacks with ``intent`` / ``intent_reason`` set. ``geometry(stack) -> (bound, stats)`` gives
-    the number of mesh uses bound to the stack's material and their UV stats (0, [] when none)."""
+    the number of mesh uses bound to the stack's material and their UV stats (0, [] when none),
+    over the ``explored(stack)`` variant selections of its stage (0: not on a stage)."""
     measures: dict = {}
     out = []
     for stack in stacks:
         bound, stats = geometry(stack)
-        decision = classify(stack, bound, stats, measures)
+        decision = classify(stack, bound, stats, measures, explored(stack))
+        # nothing binds it: do its pixels say atlas? (a flat border also wraps around seamlessly)
+        if not bound and decision.intent in (Intent.TILING, Intent.ALREADY_TILEABLE):
+            evidence = atlas_evidence(stack, measures)
+            if evidence is not None:
+                border = " (its flat border is what wraps around)" if decision.intent is Intent.ALREADY_TILEABLE else ""
+                decision = IntentDecision(Intent.UV_ATLAS_PIXELS, f"{evidence}; {decision.reason}{border}")
         out.append(replace(stack, intent=decision.intent.value, intent_reason=decision.reason))
     return out

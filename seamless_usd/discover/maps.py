@@ -40,6 +40,12 @@ class TextureUse:
     uv: UVChain | None = None  # None: the node has no texture-coordinate input (swatch)
     document: str | None = None
     normal_y_flip: bool = False
+    selection: tuple = ()  # variant selection it was found under (VariantChoice; () : the stage's own)
+
+    def key(self) -> tuple:
+        """What makes two uses found under two variant selections the same use."""
+        return (self.material, self.node, self.asset, self.resolved, self.role, self.uv.key if self.uv else None,
+                self.wrap_s, self.wrap_t, self.scale, self.bias, self.document)
 
 
 class HeaderCache(dict):
@@ -57,9 +63,9 @@ class HeaderCache(dict):
 def build_maps(uses: list[TextureUse], cache: HeaderCache | None = None) -> tuple[list[TextureMap], list[Finding]]:
     """Merge uses per (material, node), check files, read headers, resolve colour spaces."""
     cache = HeaderCache() if cache is None else cache
-    grouped: dict[tuple[str, str], list[TextureUse]] = {}
+    grouped: dict[tuple, list[TextureUse]] = {}
     for use in uses:
-        grouped.setdefault((use.material, use.node), []).append(use)
+        grouped.setdefault((use.material, use.node, use.selection), []).append(use)
     maps: list[TextureMap] = []
     findings: list[Finding] = []
     for group in grouped.values():
@@ -136,6 +142,7 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         document=first.document,
         in_package=is_package_path(first.resolved),
         normal_y_flip=first.normal_y_flip,
+        selection=first.selection,
     )
     if (
         tmap.is_normal

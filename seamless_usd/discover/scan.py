@@ -1,6 +1,7 @@
 """The discovery entry points: scan stages, in-memory stages and MaterialX documents."""
 from __future__ import annotations
 
+import contextlib
 import re
 from collections.abc import Sequence
 from pathlib import Path
@@ -8,11 +9,13 @@ from pathlib import Path
 from pxr import Sdf, Tf, Usd
 
 from seamless_usd.discover import mtlx, usd, uvgeom
+from seamless_usd.discover.bound import Geometry as _Geometry
 from seamless_usd.discover.intent import classify_stacks
 from seamless_usd.discover.maps import HeaderCache, TextureUse, build_maps
 from seamless_usd.discover.stacks import build_stacks
 from seamless_usd.discover.tokens import MTLX_SUFFIX, Codes
-from seamless_usd.discover.types import ScanResult
+from seamless_usd.discover.types import ExploredSelection, ScanResult, VariantExploration
+from seamless_usd.discover.variants import VariantSpace
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
@@ -25,16 +28,22 @@ def open_stage(path: str | Path) -> Usd.Stage:
     if not path.is_file():
         raise InputError(f"{asset_ref(path)}: no such file")
     try:
-        with Tf.DiagnosticTrap() as trap:
+        with quiet_mtlx():
             stage = Usd.Stage.Open(str(path.resolve()), Usd.Stage.LoadAll)
-            # usd-core cannot compose .mtlx references; discovery reads them itself, so USD's
-            # warning about them is noise. Every other diagnostic is passed on when the trap closes.
-            trap.EraseMatching(lambda d: MTLX_SUFFIX in str(d.commentary).lower())
     except Tf.ErrorException as exc:
         raise InputError(f"{asset_ref(path)}: cannot open the USD stage: {_tf_message(str(exc))}") from None
     if stage is None:
         raise InputError(f"{asset_ref(path)}: cannot open the USD stage")
     return stage
+
+
+@contextlib.contextmanager
+def quiet_mtlx():
+    """usd-core cannot compose .mtlx references; discovery reads them itself, so USD's warnings
+    about them (at each composition) are noise. Every other diagnostic is passed on."""
+    with Tf.DiagnosticTrap() as trap:
+        yield
+        trap.EraseMatching(lambda d: MTLX_SUFFIX in str(d.commentary).lower())
 
 
 def _tf_message(text: str) -> str:
@@ -67,15 +76,60 @@ class _Scan:
         self.result = ScanResult()
         self.uses: list[TextureUse] = []
         self.cache = HeaderCache()
-        self.stages: list[Usd.Stage] = []  # for the bound geometry of each material (intent)
+        self.geometry = _Geometry()  # the bound geometry of each material, per variant selection
+        self._use_keys: dict[tuple, TextureUse] = {}
 
     def add_stage(self, stage: Usd.Stage, source: str) -> None:
+        """Walk ``stage`` under every selection of its variant space (see ``variants.py``)."""
         self.result.sources.append(source)
-        self.stages.append(stage)
-        materials, uses, refs, errors = usd.walk_stage(stage)
-        self.result.materials.extend(materials)
-        self.uses.extend(uses)
-        self.result.findings.extend(errors)
+        space = VariantSpace(stage)
+        explored: list[ExploredSelection] = []
+        seen_refs: dict = {}  # a .mtlx reference is read once: its materials and uses
+        seen_errors: set = set()
+        with quiet_mtlx():  # recomposing under each selection
+            self._explore(space, source, explored, seen_refs, seen_errors)
+        if space.combinations > 1 or space.mode != "all":
+            self.result.variants.append(VariantExploration(source, space.mode, space.combinations, space.limit,
+                                                           tuple(explored)))
+
+    def _explore(self, space: VariantSpace, source: str, explored: list, seen_refs: dict, seen_errors: set) -> None:
+        for selection in space.selections():
+            composed = space.current
+            found: list[str] = []
+            materials, uses, refs, errors = usd.walk_stage(composed)
+            found.extend(materials)
+            for err in errors:
+                if (err.where, err.message) not in seen_errors:
+                    seen_errors.add((err.where, err.message))
+                    self.result.findings.append(err)
+            if not selection:
+                self._composition_errors(composed, source)
+            for ref in refs:
+                key = (ref.prim, ref.document, ref.target)
+                if key not in seen_refs:
+                    seen_refs[key] = self._add_reference(ref)
+                found.extend(seen_refs[key][0])
+                uses = uses + seen_refs[key][1]
+            index = self.geometry.add(space, selection, uvgeom.material_bindings(composed))
+            for use in uses:
+                self._add_use(use, selection, index)
+            for material in found:
+                if material not in self.result.materials:
+                    self.result.materials.append(material)
+            explored.append(ExploredSelection(selection, tuple(dict.fromkeys(found))))
+
+    def _add_use(self, use: TextureUse, selection: tuple, index: int) -> None:
+        """A use seen first under ``selection`` keeps it; seen again, only its selections grow."""
+        key = use.key()
+        first = self._use_keys.get(key)
+        if first is None:
+            use.selection = selection
+            self._use_keys[key] = use
+            self.uses.append(use)
+            first = use
+        self.geometry.seen(first, index)
+
+    def _composition_errors(self, stage: Usd.Stage, source: str) -> None:
         for err in stage.GetCompositionErrors():
             text = str(err.ToString()) if hasattr(err, "ToString") else str(err)
             if MTLX_SUFFIX in text.lower():
@@ -83,27 +137,29 @@ class _Scan:
             self.result.findings.append(
                 Finding(Severity.WARNING, Codes.COMPOSITION_ERROR, asset_ref(source), text.splitlines()[0])
             )
-        for ref in refs:
-            if not ref.document:
-                self.result.findings.append(
-                    Finding(Severity.SKIPPED, Codes.MISSING_FILE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}",
-                            "referenced MaterialX document not found")
-                )
-                continue
-            try:
-                doc = mtlx.read_document(ref.document)
-            except InputError as exc:
-                self.result.findings.append(
-                    Finding(Severity.SKIPPED, Codes.MTLX_UNREADABLE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}", str(exc))
-                )
-                continue
-            only, flat = _mtlx_target(ref.target)
-            materials, uses, errors = mtlx.walk_document(doc, ref.document, under=ref.prim, only=only, flat=flat)
-            if ref.document not in self.result.sources:
-                self.result.sources.append(ref.document)
-            self.result.materials.extend(materials)
-            self.uses.extend(uses)
-            self.result.findings.extend(errors)
+
+    def _add_reference(self, ref) -> tuple[list[str], list[TextureUse]]:
+        """Materials and uses of a ``.mtlx`` document referenced from a prim."""
+        if not ref.document:
+            self.result.findings.append(
+                Finding(Severity.SKIPPED, Codes.MISSING_FILE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}",
+                        "referenced MaterialX document not found")
+            )
+            return [], []
+        try:
+            doc = mtlx.read_document(ref.document)
+        except InputError as exc:
+            self.result.findings.append(
+                Finding(Severity.SKIPPED, Codes.MTLX_UNREADABLE, f"{prim_ref(ref.prim)} {asset_ref(ref.asset)}",
+                        str(exc))
+            )
+            return [], []
+        only, flat = _mtlx_target(ref.target)
+        materials, uses, errors = mtlx.walk_document(doc, ref.document, under=ref.prim, only=only, flat=flat)
+        if ref.document not in self.result.sources:
+            self.result.sources.append(ref.document)
+        self.result.findings.extend(errors)
+        return materials, uses
 
     def add_document(self, path: str | Path) -> None:
         doc = mtlx.read_document(path)
@@ -117,31 +173,11 @@ class _Scan:
     def finish(self) -> ScanResult:
         maps, findings = build_maps(self.uses, self.cache)
         self.result.findings.extend(findings)
-        self.result.stacks = classify_stacks(build_stacks(maps), _Geometry(self.stages))
+        stacks = build_stacks(maps)
+        with quiet_mtlx():  # composing each selection again
+            self.geometry.measure(stacks)
+        self.result.stacks = classify_stacks(stacks, self.geometry, explored=self.geometry.explored_for)
         return self.result
-
-
-class _Geometry:
-    """Bound mesh uses and their UV stats per stack, over the scanned stages (read once)."""
-
-    def __init__(self, stages: list[Usd.Stage]):
-        self.bindings = [(stage, uvgeom.material_bindings(stage)) for stage in stages]
-        self.stats: dict = {}
-
-    def __call__(self, stack):
-        bound, stats = 0, []
-        for stage, bindings in self.bindings:
-            for use in bindings.get(stack.material, []):
-                bound += 1
-                key = (id(stage), use, stack.uv.primvar)
-                if key not in self.stats:
-                    try:
-                        self.stats[key] = uvgeom.uv_stats(stage, use, stack.uv.primvar)
-                    except Exception:  # noqa: BLE001 - malformed geometry: no UVs to measure
-                        self.stats[key] = None
-                if self.stats[key] is not None:
-                    stats.append(self.stats[key])
-        return bound, stats
 
 
 def scan_stage(stage: Usd.Stage) -> ScanResult:

@@ -1,4 +1,5 @@
-"""Group maps into texture stacks (one material, one UV chain) and mark identical stacks."""
+"""Group maps into texture stacks (one material, one UV chain, one variant selection) and mark
+identical stacks."""
 from __future__ import annotations
 
 import json
@@ -28,16 +29,16 @@ def build_stacks(maps: list[TextureMap]) -> list[TextureStack]:
     Two texture nodes of one material reading the same file over the same UV chain stay two maps
     (each node is edited by authoring); they are one map for training only if imaging merges them.
     """
-    grouped: dict[tuple[str, str], list[TextureMap]] = {}
+    grouped: dict[tuple, list[TextureMap]] = {}
     chains = {}
     for m in maps:
-        key = (m.material, chain_key(m.uv, m.node))
+        key = (m.material, chain_key(m.uv, m.node), m.selection)
         grouped.setdefault(key, []).append(m)
         chains.setdefault(key, m.uv)
     stacks: list[TextureStack] = []
     first_by_content: dict[str, str] = {}
-    for (material, _), members in grouped.items():
-        stack = TextureStack(material=material, uv=chains[(material, _)], maps=tuple(members))
+    for key, members in grouped.items():
+        stack = TextureStack(material=key[0], uv=chains[key], maps=tuple(members))
         earlier = first_by_content.get(stack.content_key)
         if earlier is not None and earlier != stack.id:
             stack = replace(stack, duplicate_of=earlier)

@@ -23,6 +23,11 @@ __all__ = [
     "TextureMap",
     "TextureStack",
     "ScanResult",
+    "VariantChoice",
+    "describe_selection",
+    "Selection",
+    "ExploredSelection",
+    "VariantExploration",
 ]
 
 
@@ -107,6 +112,57 @@ class UVChain:
 
 
 @dataclass(frozen=True)
+class VariantChoice:
+    """One variant set's selection on one prim."""
+
+    prim: str  # prim path holding the variant set ("/King")
+    set: str  # variant set name ("shadingVariant")
+    variant: str  # the selected variant ("White")
+
+
+Selection = tuple  # of VariantChoice: the choices that differ from the stage's own, parents first
+
+
+def describe_selection(selection: Selection) -> str:
+    """``modelVariant=Fancy, shadingVariant=White``; "" for the stage's own selection."""
+    return ", ".join(f"{c.set}={c.variant}" for c in selection)
+
+
+@dataclass(frozen=True)
+class ExploredSelection:
+    """One composition of a stage's variant space and the materials found under it."""
+
+    selection: Selection
+    materials: tuple[str, ...]
+
+    def to_dict(self) -> dict:
+        return {"selection": _jsonable(asdict(self)["selection"]), "label": describe_selection(self.selection),
+                "materials": list(self.materials)}
+
+
+@dataclass(frozen=True)
+class VariantExploration:
+    """How one stage's variant space was explored."""
+
+    source: str
+    mode: str  # "all": every combination; "each-set": one set at a time (the space was too large)
+    combinations: int  # compositions explored
+    limit: int  # the most combinations explored in "all" mode
+    selections: tuple[ExploredSelection, ...]
+
+    @property
+    def note(self) -> str:
+        if self.mode == "all":
+            return f"every combination explored ({self.combinations})"
+        return (f"more than {self.limit} combinations: explored one variant set at a time from the stage's "
+                f"own selection ({self.combinations} selections); combinations of sets were not composed")
+
+    def to_dict(self) -> dict:
+        return {"source": self.source, "mode": self.mode, "combinations": self.combinations, "limit": self.limit,
+                "note": self.note, "selections": [s.to_dict() for s in self.selections]}
+
+
+@dataclass(frozen=True)
 class ImageInfo:
     """What the file header says (read with OpenImageIO, no pixels decoded)."""
 
@@ -143,6 +199,7 @@ class TextureMap:
     in_package: bool = False  # inside a .usdz (readable through Ar, not editable in place)
     normal_y_flip: bool = False  # the file's green channel stores -Y (DirectX convention):
     # UsdUVTexture scale.y < 0, or a MaterialX normalmap with a negative y scale
+    selection: Selection = ()  # variant selection it was found under (() : the stage's own)
 
     @property
     def is_normal(self) -> bool:
@@ -175,9 +232,16 @@ class TextureStack:
     intent_reason: str = ""  # the measured reason ("UVs 0.11-0.89 x 0.11-0.89, 37 islands on <...>")
 
     @property
+    def selection(self) -> Selection:
+        """The variant selection the stack was found under (() : the stage's own)."""
+        return self.maps[0].selection if self.maps else ()
+
+    @property
     def id(self) -> str:
-        """Stable id of this stack within a scan: material plus UV chain."""
-        h = hashlib.sha1(f"{self.material}|{self.uv.key}".encode()).hexdigest()[:10]
+        """Stable id of this stack within a scan: material plus UV chain (plus the variant
+        selection, when the stack was found under another than the stage's own)."""
+        variant = f"|{describe_selection(self.selection)}" if self.selection else ""
+        h = hashlib.sha1(f"{self.material}|{self.uv.key}{variant}".encode()).hexdigest()[:10]
         return f"{self.material.strip('<>').strip('/').replace('/', '_') or 'material'}-{h}"
 
     @property
@@ -193,6 +257,7 @@ class TextureStack:
         d = _jsonable(asdict(self))
         d["id"] = self.id
         d["content_key"] = self.content_key
+        d["variant"] = describe_selection(self.selection)
         return d
 
 
@@ -204,11 +269,13 @@ class ScanResult:
     stacks: list[TextureStack] = field(default_factory=list)
     findings: list[Finding] = field(default_factory=list)
     materials: list[str] = field(default_factory=list)  # every material seen, even with no stack
+    variants: list[VariantExploration] = field(default_factory=list)  # per stage with variant sets
 
     def to_dict(self) -> dict:
         return {
             "sources": list(self.sources),
             "materials": list(self.materials),
+            "variants": [v.to_dict() for v in self.variants],
             "stacks": [s.to_dict() for s in self.stacks],
             "findings": [f.to_dict() for f in self.findings],
         }

@@ -42,6 +42,7 @@ class UVStats:
     hi: tuple[float, float]  # (u, v) maximum
     islands: int
     full_islands: int  # islands whose own UV extent covers (nearly) a whole period on both axes
+    selection: str = ""  # the variant selection the binding was found under ("" : the stage's own)
 
     @property
     def span(self) -> tuple[float, float]:

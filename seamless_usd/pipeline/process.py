@@ -18,7 +18,7 @@ from seamless_usd import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
 from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_stacks
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
-from seamless_usd.discover.types import ScanResult, TextureStack
+from seamless_usd.discover.types import ScanResult, TextureStack, describe_selection
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 from seamless_usd.pipeline.cache import JobIndex, job_fingerprint
@@ -120,7 +120,8 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
     first_of: dict[str, str] = {}
     for stack in stacks:
         report = StackReport(id=stack.id, material=stack.material, source=source_label, status=StackStatus.FAILED,
-                             intent=stack.intent, intent_reason=stack.intent_reason)
+                             intent=stack.intent, intent_reason=stack.intent_reason,
+                             variant=describe_selection(stack.selection))
         where = prim_ref(stack.material.strip("<>"))
         before = len(results)
         if (source_label, stack.id) in run.left_alone:
@@ -288,6 +289,7 @@ def _scan_source(path: Path, patterns: Sequence[str]) -> _Source:
 def _author_source(run: Run, src: _Source) -> None:
     authoring = _authoring()
     run.report.findings += src.scan.findings
+    run.report.variants += [v.to_dict() for v in src.scan.variants]
     results, handed = _reports_for(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
     if not results and run.options.mode != authoring.WriteMode.DRY_RUN:
         return
@@ -419,7 +421,13 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.report.sources.append(label)
     scan = scan_stage(stage)
     run.report.findings += scan.findings
+    run.report.variants += [v.to_dict() for v in scan.variants]
     stacks = select_stacks(scan, run.options.materials)
+    # The open stage is authored as it is composed: stacks of other variant selections are named, not processed
+    from seamless_usd.authoring.usdedits import variant_not_composed
+
+    run.report.findings += [variant_not_composed(s) for s in stacks if s.selection]
+    stacks = [s for s in stacks if not s.selection]
     run.blocked.update(blocked_stacks(scan, stacks, label))
     run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))
     out_dir = _output_dir(run.options, source)

@@ -261,6 +261,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
     cover = f" (one tile covers {fmt(tuple(1.0 / v for v in uv))} of the source's UV square)" if uv else ""
     main = {
         "source": stack.source,
+        "variant selection": stack.variant or None,
         "tile size (h x w)": fmt(stack.tile_size) if stack.tile_size else None,
         "UV scale": f"{fmt(tuple(uv))}{cover}" if uv else None,
         "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size else None,
@@ -327,6 +328,18 @@ def _findings(report: Report) -> str:
     return f"<h2>Findings</h2><ul class=findings>{items}</ul>" if items else ""
 
 
+def _variants(report: Report) -> str:
+    """The variant selections explored on each stage and the materials found under each."""
+    parts = []
+    for v in report.variants:
+        rows = "".join(
+            f"<tr><td>{esc(s['label'] or 'as the stage selects')}</td>"
+            f"<td>{esc(', '.join(s['materials']) or 'none')}</td></tr>" for s in v["selections"])
+        parts.append(f"<h3>{esc(v['source'])}</h3><p class=muted>{esc(v['note'])}</p>"
+                     f"<table class=facts><tr><th>variant selection</th><th>materials found</th></tr>{rows}</table>")
+    return f"<h2>Variant selections explored</h2>{''.join(parts)}" if parts else ""
+
+
 def render_html(report: Report, title: str = "seamless-usd report") -> str:
     """The whole page of one run (or one source of a library run)."""
     counts = report.counts()
@@ -339,6 +352,7 @@ def render_html(report: Report, title: str = "seamless-usd report") -> str:
         f'<p class="summary">{summary}</p>'
         + (f"<h2>Layers and documents written</h2><ul>{layers}</ul>" if layers else "")
         + _findings(report)
+        + _variants(report)
         + "".join(stack_html(s) for s in report.stacks)
     )
     return page(title, body)
@@ -366,6 +380,7 @@ def source_report(report: Report, source: str) -> Report:
         findings=[f for f in report.findings if f.material in materials or source in f.where],
         tool_version=report.tool_version,
         unreadable=[u for u in report.unreadable if u == source],
+        variants=[v for v in report.variants if v["source"] == source],
     )
 
 

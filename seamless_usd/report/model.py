@@ -84,6 +84,7 @@ class StackReport:
     precision: str = ""
     intent: str = ""  # tiling intent class: "tiling", "uv-atlas", "already-tileable", "other"
     intent_reason: str = ""  # the measured reason for the class, e.g. "UVs 0.11-0.89, 37 islands"
+    variant: str = ""  # the variant selection the stack was found under ("shadingVariant=Black"; "": the stage's own)
     failing: list[str] = field(default_factory=list)  # fidelity figures outside their tolerances ("map: figure")
     verdict: dict[str, Any] = field(default_factory=dict)  # seamless_usd.verdict.Verdict.as_dict() of the written tiles
     previews: Previews = field(default_factory=Previews, repr=False)
@@ -111,6 +112,7 @@ class StackReport:
             "precision": self.precision,
             "intent": self.intent,
             "intent_reason": self.intent_reason,
+            "variant": self.variant,
             "failing": list(self.failing),
             "verdict": dict(self.verdict),
             "maps": [dict(vars(m)) for m in self.maps],
@@ -128,6 +130,7 @@ class Report:
     backups: list[str] = field(default_factory=list)
     plan: list[str] = field(default_factory=list)  # human-readable edits (dry run)
     unreadable: list[str] = field(default_factory=list)  # inputs that could not be opened
+    variants: list[dict] = field(default_factory=list)  # variant spaces explored (VariantExploration.to_dict)
     options: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     tool_version: str = ""
@@ -164,6 +167,7 @@ class Report:
         self.backups += other.backups
         self.plan += other.plan
         self.unreadable += other.unreadable
+        self.variants += other.variants
         for k, v in other.timings.items():
             self.timings[k] = self.timings.get(k, 0.0) + v
 
@@ -180,5 +184,6 @@ class Report:
             "backups": self.backups,
             "plan": self.plan,
             "unreadable": self.unreadable,
+            "variants": self.variants,
             "timings": self.timings,
         }
