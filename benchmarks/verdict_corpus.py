@@ -5,7 +5,8 @@ from at the same texel scale, and its label. The textures are the periodic Mater
 ``../shared/textures`` (each one tiles as a whole) and synthetic periodic noise.
 
 Seamless by construction
-    ``rolled``      a whole period of a tileable texture, rolled by an arbitrary offset;
+    ``rolled``      a whole period of a tileable texture, rolled by an arbitrary offset (not for the cloth
+                    photo, which does not tile as a whole);
     ``noise``       periodic random-phase noise (power-law spectra, some anisotropic);
     ``lattice``     the product's lattice cut of an off-grid window of a repeating texture;
     ``refined``     the product's toroidal refinement of a window (random start), looked at and judged.
@@ -166,25 +167,32 @@ def items(sides: tuple[int, ...] = (256, 512), products: bool = True, seed: int 
             yield Item(f"{fam}-{side}-noise", fam, "noise", True, [tile], src, [False], split)
             yield Item(f"{fam}-{side}-naive", fam, "naive", False, src, src, [False], split)
             yield Item(f"{fam}-{side}-splice", fam, "splice", False, [_splice(tile, rng)], src, [False], split)
-    # the cloth photo is 640 px and periodic: its own family, at its size and halved
+    # the cloth photo (640 px) does not tile as a whole (its wrap reads seam ratios 4.1 and 11.8), though its
+    # weave repeats: windows inside it, no rolled or spliced whole
     for side in (320, 640):
-        yield from _texture_items("cloth", [texture("cloth", side)], [False], "held-back", side, rng, products)
+        yield from _texture_items("cloth", [texture("cloth", side)], [False], "held-back", side, rng, products,
+                                  tileable=False)
 
 
-def _texture_items(family, maps, normals, split, side, rng, products):
-    # the window spans more than one period, so it holds every texel of the tileable texture (a tile
-    # made of them is judged against a source that has them all) and does not tile itself
-    size = int(side * rng.uniform(1.15, 1.4))
-    state = rng.integers(1 << 30)
-    wins = [window(m, size, np.random.default_rng(state)) for m in maps]
-    offset = tuple(rng.integers(1, side, 2))
-    rolled = [np.roll(m, offset, (0, 1)) for m in maps]
+def _texture_items(family, maps, normals, split, side, rng, products, tileable=True):
+    if tileable:
+        # the window spans more than one period, so it holds every texel of the tileable texture (a tile
+        # made of them is judged against a source that has them all) and does not tile itself
+        size = int(side * rng.uniform(1.15, 1.4))
+        state = rng.integers(1 << 30)
+        wins = [window(m, size, np.random.default_rng(state)) for m in maps]
+    else:  # a window inside the picture, never across its own (seamed) wrap
+        size = int(side * 0.6)
+        y, x = rng.integers(0, side - size, 2)
+        wins = [m[y:y + size, x:x + size] for m in maps]
     make = lambda kind, seamless, tile, **notes: Item(f"{family}-{side}-{kind}", family, kind, seamless, tile,
                                                      wins, normals, split, notes)
-    yield make("rolled", True, rolled)
+    if tileable:
+        offset = tuple(rng.integers(1, side, 2))
+        yield make("rolled", True, [np.roll(m, offset, (0, 1)) for m in maps])
+        sp_state = rng.integers(1 << 30)
+        yield make("splice", False, [_splice(m, np.random.default_rng(sp_state)) for m in maps])
     yield make("naive", False, wins)
-    sp_state = rng.integers(1 << 30)
-    yield make("splice", False, [_splice(m, np.random.default_rng(sp_state)) for m in maps])
     yield make("half-roll", False, [np.roll(w, (size // 2, size // 2), (0, 1)) for w in wins])
     yield make("crossfade", False, [crossfade_tile(w, n) for w, n in zip(wins, normals)])
     bl_state = rng.integers(1 << 30)

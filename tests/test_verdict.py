@@ -111,13 +111,17 @@ def test_an_unmeasured_figure_is_outside_its_tolerance():
     assert figures["m"]["scale_ratio"] is None and any("not measured" in f for f in failing)
 
 
-def test_a_gan_tile_at_the_working_resolution_is_measured_on_its_own_grid(wood):
-    # the pure GAN tile (--refine off) lives on the working grid: a quarter-size source grid here
-    source = wood  # 256 px
-    working = wood.reshape(64, 4, 64, 4, 3).mean(axis=(1, 3))  # the stack at the working resolution
-    tile = np.roll(working, (7, 3), (0, 1))  # a faithful tile of the working stack, 64 px
-    uv = (1.0, 1.0)  # one tile covers the UV square
-    grid = on_tile_grid([source.astype(np.float32)], [False], tile.shape[:2], uv)[0]
+def test_a_gan_tile_at_the_working_resolution_is_measured_on_its_own_grid():
+    # a source with one feature size: random-phase waves 16 px long
+    rng = np.random.default_rng(3)
+    fy, fx = np.fft.fftfreq(256)[:, None], np.fft.fftfreq(256)[None, :]
+    ring = np.abs(np.hypot(fx, fy) - 1 / 16) < 0.01
+    source = np.real(np.fft.ifft2(ring * np.exp(2j * np.pi * rng.uniform(size=ring.shape))))
+    source = (source / (3 * source.std()))[..., None].astype(np.float32)
+    # the pure GAN tile (--refine off) lives on the working grid, a quarter of the source's: waves 4 px long
+    working = source.reshape(64, 4, 64, 4, 1).mean(axis=(1, 3))
+    tile = np.roll(working, (7, 3), (0, 1))  # as faithful as a tile of the working stack can be
+    grid = on_tile_grid([source], [False], tile.shape[:2], (1.0, 1.0))[0]  # one tile covers the UV square
     assert grid.shape[:2] == (64, 64)
-    assert scale_ratio(tile, grid) == pytest.approx(1.0, abs=0.25)
-    assert scale_ratio(tile, source) < 0.5  # measured against the full-resolution source: about 1/4 (the defect)
+    assert scale_ratio(tile, grid) == pytest.approx(1.0, abs=0.15)
+    assert scale_ratio(tile, source) > 2.5  # against the full-resolution source: about 4 (the defect)
