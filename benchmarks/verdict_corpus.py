@@ -9,7 +9,8 @@ Seamless by construction
                     photo, which does not tile as a whole);
     ``noise``       periodic random-phase noise (power-law spectra, some anisotropic);
     ``lattice``     the product's lattice cut of an off-grid window of a repeating texture;
-    ``refined``     the product's toroidal refinement of a window (random start), looked at and judged.
+    ``refined``     the product's toroidal refinement of a window (random start), looked at and judged:
+                    seamless on the woods, blocky (broken courses, threads) on the bricks and the weave.
 Seamed by construction
     ``naive``       an off-grid window used as its own tile (a seam at the wrap);
     ``splice``      a tileable texture with a strip from elsewhere spliced in (two interior seams);
@@ -43,6 +44,10 @@ from baselines import crossfade_tile  # noqa: E402
 SHARED = ROOT.parent / "shared" / "textures"
 TUNING = ("brick_base_gray", "wood_color", "noise2", "noise3")
 SEAMLESS = ("rolled", "noise", "lattice", "refined")
+#: The random-start refinements looked at (3 x 3 repeats at 1x) and judged seamless: the woods. On the
+#: bricks and the weave the refinement breaks the courses and threads along the copied blocks' edges:
+#: blocky refinements, labelled seamed.
+REFINED_SEAMLESS = frozenset({"wood_color", "wood_roughness"})
 SEAMED = ("naive", "splice", "half-roll", "crossfade", "blocky")
 
 
@@ -153,11 +158,12 @@ def _families(side: int):
 
 
 def items(sides: tuple[int, ...] = (256, 512), products: bool = True, seed: int = 0):
-    """Every corpus item, deterministic for ``seed``."""
+    """Every corpus item, deterministic for ``seed``; the product's tiles at the first side only (the ones
+    looked at)."""
     rng = np.random.default_rng(seed)
     for side in sides:
         for family, maps, normals, split in _families(side):
-            yield from _texture_items(family, maps, normals, split, side, rng, products)
+            yield from _texture_items(family, maps, normals, split, side, rng, products and side == sides[0])
         for beta, aniso, fam in ((2.0, 1.0, "noise2"), (3.0, 1.0, "noise3"), (2.5, 3.0, "noise2.5a"),
                                  (1.6, 1.0, "noise1.6")):
             big = noise(2 * side, beta, aniso, int(rng.integers(1 << 30)))
@@ -170,8 +176,8 @@ def items(sides: tuple[int, ...] = (256, 512), products: bool = True, seed: int 
     # the cloth photo (640 px) does not tile as a whole (its wrap reads seam ratios 4.1 and 11.8), though its
     # weave repeats: windows inside it, no rolled or spliced whole
     for side in (320, 640):
-        yield from _texture_items("cloth", [texture("cloth", side)], [False], "held-back", side, rng, products,
-                                  tileable=False)
+        yield from _texture_items("cloth", [texture("cloth", side)], [False], "held-back", side, rng,
+                                  products and side == 320, tileable=False)
 
 
 def _texture_items(family, maps, normals, split, side, rng, products, tileable=True):
@@ -201,4 +207,5 @@ def _texture_items(family, maps, normals, split, side, rng, products, tileable=T
         for kind in ("lattice", "refined"):
             tile = _product(kind, wins, normals, int(rng.integers(1 << 16)))
             if tile is not None:
-                yield make(kind, True, tile)
+                seamless = kind == "lattice" or family in REFINED_SEAMLESS
+                yield make(kind, seamless, tile, judged="by eye, 3 x 3 repeats")

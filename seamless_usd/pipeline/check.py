@@ -129,7 +129,7 @@ def _sources(stage_path: Path, stack) -> tuple[list, tuple[float, float]] | None
 
 
 def _judge_stack(stage_path: Path, stack) -> CheckItem:
-    from seamless_usd.imaging import load_stack_pixels
+    from seamless_usd.imaging import WorkingResolution, load_stack_pixels
     from seamless_usd.pipeline.stackjob import on_tile_grid
     from seamless_usd.verdict import judge
 
@@ -142,7 +142,10 @@ def _judge_stack(stage_path: Path, stack) -> CheckItem:
         sources = None
         if recorded is not None:
             src_maps, uv = recorded
-            sources = on_tile_grid(list(load_stack_pixels(src_maps).values), normals, tiles[0].shape[:2], uv)
+            grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
+            # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
+            policy = WorkingResolution(max_size=max(grid))
+            sources = on_tile_grid(list(load_stack_pixels(src_maps, policy).values), normals, tiles[0].shape[:2], uv)
         item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps],
                              fidelity=sources is not None).as_dict()
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
