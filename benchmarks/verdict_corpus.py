@@ -10,7 +10,8 @@ Seamless by construction
     ``noise``       periodic random-phase noise (power-law spectra, some anisotropic);
     ``lattice``     the product's lattice cut of an off-grid window of a repeating texture;
     ``refined``     the product's toroidal refinement of a window (random start), looked at and judged:
-                    seamless on the woods, blocky (broken courses, threads) on the bricks and the weave.
+                    seamless on the wood roughness, blocky (broken courses, threads, grain cut
+                    by hard block ends at 3x) on the bricks, the weave and the wood colour.
 Seamed by construction
     ``naive``       an off-grid window used as its own tile (a seam at the wrap);
     ``splice``      a tileable texture with a strip from elsewhere spliced in (two interior seams);
@@ -44,10 +45,11 @@ from baselines import crossfade_tile  # noqa: E402
 SHARED = ROOT.parent / "shared" / "textures"
 TUNING = ("brick_base_gray", "wood_color", "noise2", "noise3")
 SEAMLESS = ("rolled", "noise", "lattice", "refined")
-#: The random-start refinements looked at (3 x 3 repeats at 1x) and judged seamless: the woods. On the
-#: bricks and the weave the refinement breaks the courses and threads along the copied blocks' edges:
+#: The random-start refinements looked at (3 x 3 repeats at 1x, and zoomed 3x) and judged seamless: the
+#: wood roughness. On the bricks and the weave the refinement breaks the courses and threads along the
+#: copied blocks' edges, and the wood colour shows the blocks' hard vertical ends across its grain at 3x:
 #: blocky refinements, labelled seamed.
-REFINED_SEAMLESS = frozenset({"wood_color", "wood_roughness"})
+REFINED_SEAMLESS = frozenset({"wood_roughness"})
 SEAMED = ("naive", "splice", "half-roll", "crossfade", "blocky")
 
 

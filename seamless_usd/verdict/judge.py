@@ -22,12 +22,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .classifier import fit
+from .copies import COPY_SHARE, COPY_THRESHOLD, copy_origins, copy_seams
 from .lines import Seam, runs, seams_from_scores
 from .prepare import WORK_SIDE, joint, map_weights, prepare_maps, to_working
 from .tolerance import faithfulness
 
 __all__ = ["SEAM_MARGIN", "SELF_MARGIN", "LENGTH", "STEP", "Verdict", "judge"]
 
+#: Run (texels at full resolution) over which a copied tile's continuation error is averaged.
+COPY_RUN = 32
 #: Length (px at the working resolution) of a line stretch, and the step between stretches.
 LENGTH = 16
 STEP = 4
@@ -50,6 +53,7 @@ class Verdict:
     strongest: float = 0.0  # the strongest run above the reference (seams exceed ``margin``)
     margin: float = SEAM_MARGIN
     reference: str = "source"  # "source", or "itself" for a texture judged on its own
+    method: str = "classifier"  # "copies": a tile of source texels, judged by continuation error; else "classifier"
     size: tuple[int, int] = (0, 0)  # (h, w) of the tile judged
     figures: dict[str, dict[str, float | None]] = field(default_factory=dict)  # map -> figure -> value
     tolerances: dict[str, dict[str, list]] = field(default_factory=dict)  # map -> figure -> [low, high]
@@ -70,7 +74,7 @@ class Verdict:
 
     def as_dict(self) -> dict:
         return {"passed": self.passed, "seamless": self.seamless, "faithful": self.faithful,
-                "reference": self.reference, "strongest": round(self.strongest, 3), "margin": self.margin,
+                "reference": self.reference, "method": self.method, "strongest": round(self.strongest, 3), "margin": self.margin,
                 "size": list(self.size), "seams": [s.as_dict() for s in self.seams],
                 "figures": self.figures, "tolerances": self.tolerances, "failing": list(self.failing)}
 
@@ -78,8 +82,24 @@ class Verdict:
     def from_dict(cls, d: dict) -> "Verdict":
         return cls(bool(d["seamless"]), bool(d["faithful"]), [Seam(**s) for s in d.get("seams", [])],
                    float(d.get("strongest", 0.0)), float(d.get("margin", SEAM_MARGIN)), d.get("reference", "source"),
-                   tuple(d.get("size", (0, 0))), dict(d.get("figures", {})), dict(d.get("tolerances", {})),
-                   list(d.get("failing", [])))
+                   d.get("method", "classifier"), tuple(d.get("size", (0, 0))), dict(d.get("figures", {})),
+                   dict(d.get("tolerances", {})), list(d.get("failing", [])))
+
+
+def _copied(t: list[np.ndarray], s: list[np.ndarray], names: list[str]) -> tuple[list[Seam], float] | None:
+    """Seams of a tile made of the source's own texels (:mod:`.copies`), for the maps together and each map;
+    None when fewer than :data:`.copies.COPY_SHARE` of its texels are found in the source."""
+    tj, sj = np.concatenate(t, axis=-1), np.concatenate(s, axis=-1)
+    origin, share = copy_origins(tj, sj)
+    if share < COPY_SHARE:
+        return None
+    seams, strongest = copy_seams(tj, sj, origin, "stack", COPY_RUN)
+    if len(t) > 1:
+        for tile, source, name in zip(t, s, names):
+            found, _ = copy_seams(tile, source, origin, name, COPY_RUN)
+            seams += found
+    seams.sort(key=lambda x: -x.figure)
+    return seams, strongest
 
 
 def _scores(clf, img: np.ndarray, periodic: bool) -> dict[str, np.ndarray]:
@@ -129,6 +149,16 @@ def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: li
     t = prepare_maps(tiles, normals)
     s = None if sources is None else prepare_maps(sources, normals)
     size = t[0].shape[:2]
+    if s is not None:
+        copied = _copied(t, s, names)
+        if copied is not None:
+            seams, strongest = copied
+            verdict = Verdict(not seams, True, seams, strongest, COPY_THRESHOLD, "source", "copies",
+                              tuple(int(v) for v in size))
+            if fidelity:
+                verdict.figures, verdict.tolerances, verdict.failing = faithfulness(tiles, sources, normals, names)
+                verdict.faithful = not verdict.failing
+            return verdict
     factor = min(1.0, WORK_SIDE / max(size))
     tw = to_working(t, factor, periodic=True)
     sw = None if s is None else to_working(s, factor, periodic=False)
@@ -144,7 +174,7 @@ def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: li
             strongest = max(strongest, top)
     seams.sort(key=lambda x: -x.figure)
     verdict = Verdict(not seams, True, seams, strongest, margin, "source" if s is not None else "itself",
-                      tuple(int(v) for v in size))
+                      "classifier", tuple(int(v) for v in size))
     if fidelity and sources is not None:
         verdict.figures, verdict.tolerances, verdict.failing = faithfulness(tiles, sources, normals, names)
         verdict.faithful = not verdict.failing
