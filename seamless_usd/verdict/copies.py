@@ -16,13 +16,16 @@ import numpy as np
 
 from .lines import Seam
 
-__all__ = ["COPY_SHARE", "COPY_THRESHOLD", "copy_origins", "copy_seams"]
+__all__ = ["COPY_SHARE", "COPY_THRESHOLD", "MAP_THRESHOLD", "copy_origins", "copy_seams"]
 
 #: Share of a tile's texels that must be found in the source for the tile to be judged as copies.
 COPY_SHARE = 0.9
 #: Mean continuation error over a run (source neighbour-difference units) above which a run is a seam: the
 #: lattice cuts of the tuning textures read at most 0.77, the blocky refinements 1.03 and more.
 COPY_THRESHOLD = 0.9
+#: The same for one map alone: its own neighbour difference is a noisier unit than the maps' together, and
+#: the lattice cuts of the six quality-benchmark stacks read up to 1.01 on one map (0.77 together).
+MAP_THRESHOLD = 1.2
 
 
 def _keys(img: np.ndarray, periodic: bool) -> np.ndarray:

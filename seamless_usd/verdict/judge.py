@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .classifier import fit
-from .copies import COPY_SHARE, COPY_THRESHOLD, copy_origins, copy_seams
+from .copies import COPY_SHARE, COPY_THRESHOLD, MAP_THRESHOLD, copy_origins, copy_seams
 from .lines import Seam, runs, seams_from_scores
 from .prepare import WORK_SIDE, joint, map_weights, prepare_maps, to_working
 from .tolerance import faithfulness
@@ -96,7 +96,7 @@ def _copied(t: list[np.ndarray], s: list[np.ndarray], names: list[str]) -> tuple
     seams, strongest = copy_seams(tj, sj, origin, "stack", COPY_RUN)
     if len(t) > 1:
         for tile, source, name in zip(t, s, names):
-            found, _ = copy_seams(tile, source, origin, name, COPY_RUN)
+            found, _ = copy_seams(tile, source, origin, name, COPY_RUN, MAP_THRESHOLD)
             seams += found
     seams.sort(key=lambda x: -x.figure)
     return seams, strongest
