@@ -4,16 +4,19 @@
 USD provenance and ``seamless-usd check``):
 
 * **seamless**: no line of the tile, read as it repeats (the wrap lines, the centre lines and every
-  interior line), has a run of 64 working-resolution px that a classifier fitted on the source's own
-  juxtapositions scores more than :data:`SEAM_MARGIN` above the strongest run of the source's own
-  lines; judged for the maps together and for each map;
+  interior line), is a join the texture would not make, for the maps together and for each map. A
+  tile made of the source's own texels (refined, lattice-cut, or a window used as its tile) is judged
+  by the continuation error at its joins (:mod:`.copies`); any other tile (the GAN's own, a blend) by a
+  classifier fitted on the source's own juxtapositions (:mod:`.classifier`): a run of 64
+  working-resolution px scoring more than :data:`SEAM_MARGIN` above the strongest run of the source's
+  own lines is a seam;
 * **faithful**: every map's feature-scale ratio and patch distance against its source lie inside
   tolerances set by the source's own spread (:mod:`.tolerance`). A figure that could not be measured
   (a tile too small) is not inside its tolerance.
 
 A texture with no separate source (``seamless-usd check`` on a picture, or a stack the scan reads as
 already tileable) is judged against itself: the classifier is fitted on its own interior lines, its
-reference is a high quantile of those lines' runs, and there is no fidelity to judge.
+reference is its own 4th-strongest line (:data:`SELF_RANK`), and there is no fidelity to judge.
 """
 from __future__ import annotations
 
