@@ -27,6 +27,8 @@ from typing import Callable
 
 import numpy as np
 
+from seamless_usd.verdict import judge
+
 __all__ = ["MethodResult", "SYNTHESIS_METHODS", "run_synthesis", "img2texture_tile", "to_source_grid"]
 
 SYNTHESIS_METHODS = ("seamlessgan", "refine-random", "seamlessgan+refine", "lattice-cut", "seamless-usd")
@@ -98,7 +100,7 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
     total = time.perf_counter() - t0
     gan = made.gan
     info = {
-        "preset": preset, "iterations": config.iterations, "crop_size": list(gan.crop_size), "passed": bool(gan.q_passed),
+        "preset": preset, "iterations": config.iterations, "crop_size": list(gan.crop_size), "q_passed": bool(gan.q_passed),
         "working_size": list(made.working_size), "structure_px": round(made.structure_px, 1),
         "train_seconds": round(made.timings.get("train", 0.0), 2),
         "sample_seconds": round(made.timings.get("sample", 0.0), 2),
@@ -117,11 +119,16 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
                "lattice-cut": gan_seconds + lattice_s}
     details = {**info, "layout_used": made.layout_used, "refine_seconds": round(made.timings.get("refine", 0.0), 2),
                "layout": made.layout_kind, "lattice": made.lattice}
-    passed = {"seamless-usd": made.q_passed, "seamlessgan+refine": bool(gan.q_passed),
-              "lattice-cut": bool(made.lattice.get("q_passed"))}  # Q of each row's own tile
+    q_passed = {"seamless-usd": made.q_passed, "seamlessgan+refine": bool(gan.q_passed),
+                "lattice-cut": bool(made.lattice.get("q_passed"))}  # Q of each row's own tile
     for method in _REFINED:
         if method in methods and refined[method] is not None:
-            out[method] = MethodResult(dict(refined[method]), seconds[method], {**details, "passed": passed[method]})
+            tiles = dict(refined[method])
+            verdict = judge([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
+                            [m.name for m in maps])  # the product's verdict on this row's tile
+            out[method] = MethodResult(tiles, seconds[method], {**details, "q_passed": q_passed[method],
+                                                                "passed": verdict.passed,
+                                                                "verdict": verdict.reasons()})
     return out
 
 

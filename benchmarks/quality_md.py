@@ -89,8 +89,10 @@ def to_markdown(result: dict) -> str:
         for r in (r for r in rows if r["stack"] == stack):
             tile = "x".join(str(n) for n in r["tile_size"])
             extra = ""
-            if r.get("passed") is not None:  # the SeamlessGAN rows: Q of the row's layout
-                extra = "" if r["passed"] else " (Q failed)"
+            if r.get("passed") is not None:  # the product's verdict on the row's tile
+                extra = " (passed)" if r["passed"] else " (not passed)"
+            if r.get("q_passed") is False:  # the SeamlessGAN rows: Q of the row's layout
+                extra += " (Q failed)"
             if r["method"] == "seamless-usd" and r.get("layout") == "lattice":
                 extra += " (lattice cut)"
             elif r.get("layout_used") is False and r["method"] != "lattice-cut":

@@ -135,7 +135,7 @@ def end_to_end(preset: str) -> dict:
     for m in maps:
         write_side_by_side(tiles / f"speed_{preset}__brick512__{m.name}.png", res.maps[m.name], m.pixels)
     rec = {"preset": preset, "train_s": t1 - t0, "sample_s": t2 - t1, "total_s": t2 - t0,
-           "iterations": cfg.iterations, "crop_size": list(res.crop_size), "passed": res.passed,
+           "iterations": cfg.iterations, "crop_size": list(res.crop_size), "q_passed": res.q_passed,
            "candidates": len(res.candidates), "precision": res.precision}
     print(f"  end-to-end {preset}: train {rec['train_s']:.0f} s + sample {rec['sample_s']:.0f} s = "
           f"{rec['total_s'] / 60:.1f} min; crop {res.crop_size}, passed={res.passed}, {len(res.candidates)} candidates")
@@ -156,7 +156,7 @@ def seam_compare(preset: str, probs: tuple[float, ...] = (0.0, 0.3)) -> dict:
         cfg = get_preset(preset).replace(seam_training_prob=p, max_candidates=1)
         t0 = time.perf_counter()
         res = sample(train(maps, cfg, seed=0), maps, seed=0)
-        rec = {"seconds": time.perf_counter() - t0, "q_margin": res.q.margin, "passed": res.passed, "maps": {}}
+        rec = {"seconds": time.perf_counter() - t0, "q_margin": res.q.margin, "q_passed": res.q_passed, "maps": {}}
         for m in maps:
             tile = res.maps[m.name]
             rolled = np.roll(tile, (tile.shape[0] // 2, tile.shape[1] // 2), (0, 1))
