@@ -138,7 +138,7 @@ def end_to_end(preset: str) -> dict:
            "iterations": cfg.iterations, "crop_size": list(res.crop_size), "q_passed": res.q_passed,
            "candidates": len(res.candidates), "precision": res.precision}
     print(f"  end-to-end {preset}: train {rec['train_s']:.0f} s + sample {rec['sample_s']:.0f} s = "
-          f"{rec['total_s'] / 60:.1f} min; crop {res.crop_size}, passed={res.passed}, {len(res.candidates)} candidates")
+          f"{rec['total_s'] / 60:.1f} min; crop {res.crop_size}, Q passed={res.q_passed}, {len(res.candidates)} candidates")
     return rec
 
 
