@@ -47,12 +47,14 @@ def stack_reason(stack: StackReport) -> str:
         return f"same as {stack.duplicate_of}" if stack.duplicate_of else "identical to a stack processed before"
     if stack.status is StackStatus.PLANNED:
         return "would be processed (dry run)"
+    if stack.status is StackStatus.NOT_PASSED:
+        return stack.message or "not passed"
     failing = failing_figures(stack)
     if failing:
         more = f" (+{len(failing) - 2} more)" if len(failing) > 2 else ""
         return "; ".join(failing[:2]) + more
-    if stack.status is StackStatus.NOT_PASSED:
-        return stack.message or "Q not passed"
+    if stack.status is StackStatus.PASSED and stack.verdict:
+        return "seamless and faithful"
     return "all figures within their targets" if any(m.metrics for m in stack.maps) else (stack.message or "")
 
 
