@@ -49,6 +49,16 @@ def test_the_bundled_demo_passes_and_everything_says_so(brick):
     assert all(p.q_passed is not None for p in recorded)
 
 
+def test_the_bundled_weave_passes_too(tmp_path, capsys):
+    """A second bundled stack end to end: the cloth behind a Material interface input, at its own 200 px."""
+    shutil.copytree(SAMPLES / "interface", tmp_path / "interface")
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    code = main(["process", str(tmp_path / "interface" / "scene.usda"), "--preset", "tiny",
+                 "--cache-dir", str(tmp_path / "cache"), "--json"])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    assert code == 0 and stack["status"] == "passed" and stack["verdict"]["method"] == "copies", stack["message"]
+
+
 def test_check_judges_a_written_tile_against_its_recorded_source(brick, capsys):
     code = main(["check", str(brick["out"]), "--json"])
     payload = json.loads(capsys.readouterr().out)
