@@ -254,7 +254,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     verdict = judge(written_values, sources, [m.is_normal for m in stack.maps], [m.asset for m in stack.maps])
     ratio = synthesis.written_lattice_ratio(scale.get("lattice") or {}, scale.get("layout"))
     if ratio is not None and ratio < synthesis.LATTICE_TARGET:  # the source repeats and the tile breaks it
-        verdict.failing.append(f"all maps: lattice_ratio {ratio:.3g} (tolerance {synthesis.LATTICE_TARGET:.2f}-)")
+        verdict.failing.append(f"all maps: lattice_ratio {ratio:.3g} (tolerance at least {synthesis.LATTICE_TARGET:.2f})")
         verdict.faithful = False
     timings["verdict"] = time.perf_counter() - t4
     failing = list(verdict.failing)

@@ -15,7 +15,7 @@ import numpy as np
 from seamless_usd.metrics import TARGETS, patch_distance, scale_ratio
 from seamless_usd.metrics.fidelity import PATCH_SIZE
 
-__all__ = ["FIDELITY_KEYS", "scale_tolerance", "faithfulness"]
+__all__ = ["FIDELITY_KEYS", "scale_tolerance", "faithfulness", "tolerance_words"]
 
 FIDELITY_KEYS = ("scale_ratio", "patch_distance")
 
@@ -46,6 +46,13 @@ def scale_tolerance(source: np.ndarray, is_normal: bool = False) -> tuple[float,
     return (min([low] + finite), max([high] + finite))
 
 
+def tolerance_words(low: float | None, high: float | None) -> str:
+    """``"0.90-1.10"``, ``"at most 1.20"`` or ``"at least 0.90"``."""
+    if low is not None and high is not None:
+        return f"{low:.2f}-{high:.2f}"
+    return f"at most {high:.2f}" if high is not None else f"at least {low:.2f}" if low is not None else "none"
+
+
 def faithfulness(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list[bool], names: list[str]
                  ) -> tuple[dict, dict, list[str]]:
     """Per map, its fidelity figures and tolerances, and the list of figures outside them."""
@@ -62,7 +69,7 @@ def faithfulness(tiles: list[np.ndarray], sources: list[np.ndarray], normals: li
         tolerances[name] = {k: [None if b is None else round(float(b), 3) for b in v] for k, v in bounds.items()}
         for key, value in figures[name].items():
             low, high = bounds[key]
-            words = f"{'' if low is None else f'{low:.2f}'}-{'' if high is None else f'{high:.2f}'}"
+            words = tolerance_words(low, high)
             if value is None:
                 failing.append(f"{name}: {key} not measured (the tile is {side} px; tolerance {words})")
             elif not np.isfinite(value) or (low is not None and value < low) or (high is not None and value > high):
