@@ -265,7 +265,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
         "tile size (h x w)": fmt(stack.tile_size) if stack.tile_size else None,
         "UV scale": f"{fmt(tuple(uv))}{cover}" if uv else None,
         "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size else None,
-        "Q": _q_text(stack.q),
+        "Q (the discriminator's view)": _q_text(stack.q),
         "same as": stack.duplicate_of,
         "result from": stack.origin or None,
     }
