@@ -1,17 +1,13 @@
 """Lattice periods, tiles cut to whole periods, and the lattice layout candidate of make_tile."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
-import OpenImageIO as oiio
 import pytest
+from textures import load_texture
 
 from seamless_usd.synthesis import MapInput, RefineConfig, get_preset, make_tile
 from seamless_usd.synthesis.lattice import (LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio,
                                             lattice_tile_size)
-
-TEXTURES = Path(__file__).resolve().parent.parent / "sample_assets" / "textures"
 
 
 def _bricks(h: int, w: int, seed: int = 0, brick: tuple[int, int] = (12, 32), mortar: int = 2) -> np.ndarray:
@@ -45,10 +41,6 @@ def _phase_seam(tile: np.ndarray, period: float, axis: int) -> float:
     return float(np.abs(t[0] - t[-1]).mean() / inner)
 
 
-def _read(name: str) -> np.ndarray:
-    return np.asarray(oiio.ImageBuf(str(TEXTURES / name)).get_pixels(oiio.FLOAT), dtype=np.float32) * 2 - 1
-
-
 def test_a_running_bond_repeats_every_two_rows_and_every_brick():
     lattice = find_lattice([_bricks(120, 160)])
     py, px = lattice.period
@@ -64,12 +56,12 @@ def test_noise_and_wood_planks_do_not_repeat():
     smooth = np.real(np.fft.ifft2(np.fft.fft2(white, axes=(0, 1)) * blur, axes=(0, 1)))
     assert not find_lattice([white]).found
     assert not find_lattice([smooth]).found
-    assert not find_lattice([_read("wood_color.png"), _read("wood_roughness.png")]).found
+    assert not find_lattice([load_texture("wood_color.png"), load_texture("wood_roughness.png")]).found
 
 
 def test_the_bundled_brick_repeats_on_its_own_lattice():
     """The MaterialX brick the sample is cut from repeats every 2048/7 px: 107 px in the 256 px sample."""
-    maps = [_read("brick_albedo.png"), _read("brick_normal.png"), _read("brick_roughness.png")]
+    maps = [load_texture("brick_albedo.png"), load_texture("brick_normal.png"), load_texture("brick_roughness.png")]
     py, px = find_lattice(maps).period
     assert py == pytest.approx(107, rel=0.03) and px == pytest.approx(107, rel=0.03)
 
@@ -127,7 +119,7 @@ def test_the_cut_across_the_y_wrap_closes_across_the_x_wrap():
     cost[:20, 1] = cost[20:, 7] = 0.0  # the cheapest free path starts at column 1 and ends at column 7
     path = _closed_path(cost)
     assert abs(int(path[0]) - int(path[-1])) <= 1 and np.abs(np.diff(path)).max() <= 1
-    cloth = _read("cloth.png")
+    cloth = load_texture("cloth.png")
     tile_hw, band = lattice_tile_size(cloth.shape[:2], find_lattice([cloth]))
     field, _ = lattice_cut([cloth], tile_hw, band)
     assert (field[:, -1, 0] != field[:, 0, 0]).sum() <= 1  # the texels across the x wrap share their source row

@@ -8,13 +8,7 @@ from seamless_usd.synthesis.networks import Discriminator, Generator
 from seamless_usd.synthesis.train import build_networks
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny networks run fastest (and steadiest on a shared machine) on one thread."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread
 
 
 def _stack(h=64, w=80, seed=0):

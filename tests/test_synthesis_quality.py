@@ -1,20 +1,13 @@
 """Quality function Q and the crop-size search."""
 import numpy as np
 import pytest
-import torch
 
 from seamless_usd.synthesis import MapInput, get_preset, sample, train
 from seamless_usd.synthesis.quality import band_masks, quality
 from seamless_usd.synthesis.sample import crop_plan
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny networks run fastest (and steadiest on a shared machine) on one thread."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread
 
 
 def test_bands_are_20_percent_through_the_centre():

@@ -1,11 +1,9 @@
 """Toroidal exemplar refinement, working resolution and the crop plan for source-sized tiles."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
-import OpenImageIO as oiio
 import pytest
+from textures import load_texture
 
 from seamless_usd import metrics
 from seamless_usd.synthesis import MapInput, RefineConfig, get_preset, make_tile, refine
@@ -13,17 +11,10 @@ from seamless_usd.synthesis.refine import level_scales
 from seamless_usd.synthesis.sample import SOURCE_TILE_MIN_FRACTION, crop_plan
 from seamless_usd.synthesis.scale import structure_size, working_factor
 
-TEXTURES = Path(__file__).resolve().parent.parent / "sample_assets" / "textures"
-
-
-def _load(name: str) -> np.ndarray:
-    a = oiio.ImageBuf(str(TEXTURES / name)).get_pixels(oiio.FLOAT) * 2.0 - 1.0
-    return np.ascontiguousarray(a, dtype=np.float32)
-
 
 @pytest.fixture(scope="module")
 def brick() -> list[np.ndarray]:
-    albedo, normal, rough = _load("brick_albedo.png"), _load("brick_normal.png"), _load("brick_roughness.png")
+    albedo, normal, rough = load_texture("brick_albedo.png"), load_texture("brick_normal.png"), load_texture("brick_roughness.png")
     n = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
     return [albedo, n.astype(np.float32), rough]
 
@@ -49,7 +40,7 @@ def test_refined_tile_is_faithful_and_tiles(brick, refined):
         m = metrics.map_metrics(tile, source)
         assert 0.85 <= m["scale_ratio"] <= 1.4, m  # copy boundaries add a little fine detail
     # seam ratios on wood (straight mortar rows on a brick tile's border inflate the ratio without a seam)
-    wood = [_load("wood_color.png"), _load("wood_roughness.png")]
+    wood = [load_texture("wood_color.png"), load_texture("wood_roughness.png")]
     res = refine(wood, None, (256, 256), seed=0)
     for source, tile in zip(wood, res.maps):
         m = metrics.map_metrics(tile, source)
@@ -108,8 +99,8 @@ def test_crop_plan_for_source_sized_tiles():
 
 
 def test_make_tile_source_sized_and_refine_off():
-    albedo = _load("wood_color.png")[:128, :160]
-    rough = _load("wood_roughness.png")[:128, :160]
+    albedo = load_texture("wood_color.png")[:128, :160]
+    rough = load_texture("wood_roughness.png")[:128, :160]
     maps = [MapInput("a", albedo), MapInput("r", rough)]
     made = make_tile(maps, get_preset("tiny"), seed=0)
     assert made.refined and made.tile_size == (128, 160) and made.uv_scale == (1.0, 1.0)

@@ -11,13 +11,7 @@ from seamless_usd.synthesis.features import VGG19_CFG, VGG19Features, build_feat
 from seamless_usd.synthesis.schedule import learning_rate
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny networks run fastest (and steadiest on a shared machine) on one thread."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread
 
 
 def _stack(seed=0):
