@@ -88,9 +88,10 @@ def Xform "World"
 """
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory) -> Path:
-    return tmp_path_factory.mktemp("batch-cache")
+@pytest.fixture()
+def cache(model_cache) -> Path:
+    """The session's model cache (tests that count trained stacks use a cold folder of their own)."""
+    return model_cache
 
 
 def _library(root: Path, copies: int = 3) -> Path:
@@ -106,7 +107,7 @@ def _library(root: Path, copies: int = 3) -> Path:
 
 
 def _run(*args: str, capsys) -> tuple[int, dict]:
-    code = main(["process", "--preset", "tiny", "--json", *args])
+    code = main(["process", "--preset", "tiny", "--max-size", "128", "--json", *args])  # plumbing: small is enough
     return code, json.loads(capsys.readouterr().out)
 
 
@@ -233,7 +234,8 @@ def test_a_warm_rerun_on_a_local_cluster_starts_no_cluster(tmp_path, capsys, mon
     # a changed texture is work again: only then is a cluster asked for
     shutil.copy(SAMPLES / "textures" / "cloth.png", lib / "looks" / "cloth_copy.png")
     (lib / "looks" / "two.usda").write_text(TWO_MATERIALS.replace("../textures/wood_color.png", "./cloth_copy.png"))
-    main(["process", "--preset", "tiny", "--cache-dir", str(cache), "--scheduler", "local:2", str(lib / "looks" / "two.usda")])
+    main(["process", "--preset", "tiny", "--max-size", "128", "--cache-dir", str(cache), "--scheduler", "local:2",
+          str(lib / "looks" / "two.usda")])
     assert len(started) == 1, "the changed stack needs work: the cluster is asked for"
 
 
