@@ -18,63 +18,12 @@ import time
 from pathlib import Path
 
 import pytest
+from test_reliability_inputs import write_scene
 
 from seamless_usd_cli.main import main
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
 ARGS = ("--preset", "tiny", "--max-size", "112", "--json")
-
-TWO = """#usda 1.0
-def Scope "Looks"
-{
-    def Material "Brick"
-    {
-        token outputs:surface.connect = </Looks/Brick/Surface.outputs:surface>
-        def Shader "Surface"
-        {
-            uniform token info:id = "UsdPreviewSurface"
-            color3f inputs:diffuseColor.connect = </Looks/Brick/Albedo.outputs:rgb>
-            token outputs:surface
-        }
-        def Shader "Albedo"
-        {
-            uniform token info:id = "UsdUVTexture"
-            asset inputs:file = @../textures/brick_albedo.png@
-            float2 inputs:st.connect = </Looks/Brick/St.outputs:result>
-            float3 outputs:rgb
-        }
-        def Shader "St"
-        {
-            uniform token info:id = "UsdPrimvarReader_float2"
-            string inputs:varname = "st"
-            float2 outputs:result
-        }
-    }
-    def Material "Cloth"
-    {
-        token outputs:surface.connect = </Looks/Cloth/Surface.outputs:surface>
-        def Shader "Surface"
-        {
-            uniform token info:id = "UsdPreviewSurface"
-            color3f inputs:diffuseColor.connect = </Looks/Cloth/Albedo.outputs:rgb>
-            token outputs:surface
-        }
-        def Shader "Albedo"
-        {
-            uniform token info:id = "UsdUVTexture"
-            asset inputs:file = @../textures/cloth.png@
-            float2 inputs:st.connect = </Looks/Cloth/St.outputs:result>
-            float3 outputs:rgb
-        }
-        def Shader "St"
-        {
-            uniform token info:id = "UsdPrimvarReader_float2"
-            string inputs:varname = "st"
-            float2 outputs:result
-        }
-    }
-}
-"""
 
 
 def _library(root: Path) -> Path:
@@ -82,9 +31,8 @@ def _library(root: Path) -> Path:
     (root / "textures").mkdir(parents=True)
     for name in ("brick_albedo.png", "cloth.png"):
         shutil.copy(SAMPLES / "textures" / name, root / "textures" / name)
-    (root / "looks").mkdir()
-    (root / "looks" / "two.usda").write_text(TWO)
-    return root / "looks" / "two.usda"
+    return write_scene(root / "looks" / "two.usda",
+                       {"Brick": "../textures/brick_albedo.png", "Cloth": "../textures/cloth.png"})
 
 
 def _free_port() -> int:
