@@ -9,8 +9,10 @@ import OpenImageIO as oiio
 OIIO_TYPES = {np.uint8: oiio.UINT8, np.uint16: oiio.UINT16, np.float16: oiio.HALF, np.float32: oiio.FLOAT}
 
 
-def write_raw_image(path: Path, data: np.ndarray, names: tuple[str, ...] | None = None) -> Path:
-    """Write ``data`` (H, W) or (H, W, C) as stored; its dtype decides the file's sample type."""
+def write_raw_image(path: Path, data: np.ndarray, names: tuple[str, ...] | None = None,
+                    color_space: str | None = None) -> Path:
+    """Write ``data`` (H, W) or (H, W, C) as stored; its dtype decides the file's sample type.
+    ``color_space`` is recorded as the file's ``oiio:ColorSpace``."""
     if data.ndim == 2:
         data = data[..., None]
     h, w, c = data.shape
@@ -18,6 +20,8 @@ def write_raw_image(path: Path, data: np.ndarray, names: tuple[str, ...] | None 
     if names:
         spec.channelnames = names
     spec.attribute("oiio:UnassociatedAlpha", 1)
+    if color_space:
+        spec.attribute("oiio:ColorSpace", color_space)
     out = oiio.ImageOutput.create(str(path))
     assert out.open(str(path), spec), out.geterror()
     assert out.write_image(np.ascontiguousarray(data)), out.geterror()

@@ -3,16 +3,15 @@ from __future__ import annotations
 
 import json
 import re
-import os
 import shutil
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import jsonschema
 import pytest
+from fswatch import wait_until
 from runchecks import assert_all_written as _assert_all_written
 from pxr import Usd, UsdShade
 
@@ -89,9 +88,10 @@ def Xform "World"
 """
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory) -> Path:
-    return tmp_path_factory.mktemp("batch-cache")
+@pytest.fixture()
+def cache(model_cache) -> Path:
+    """The session's model cache (tests that count trained stacks use a cold folder of their own)."""
+    return model_cache
 
 
 def _library(root: Path, copies: int = 3) -> Path:
@@ -107,7 +107,7 @@ def _library(root: Path, copies: int = 3) -> Path:
 
 
 def _run(*args: str, capsys) -> tuple[int, dict]:
-    code = main(["process", "--preset", "tiny", "--json", *args])
+    code = main(["process", "--preset", "tiny", "--max-size", "128", "--json", *args])  # plumbing: small is enough
     return code, json.loads(capsys.readouterr().out)
 
 
@@ -234,7 +234,8 @@ def test_a_warm_rerun_on_a_local_cluster_starts_no_cluster(tmp_path, capsys, mon
     # a changed texture is work again: only then is a cluster asked for
     shutil.copy(SAMPLES / "textures" / "cloth.png", lib / "looks" / "cloth_copy.png")
     (lib / "looks" / "two.usda").write_text(TWO_MATERIALS.replace("../textures/wood_color.png", "./cloth_copy.png"))
-    main(["process", "--preset", "tiny", "--cache-dir", str(cache), "--scheduler", "local:2", str(lib / "looks" / "two.usda")])
+    main(["process", "--preset", "tiny", "--max-size", "128", "--cache-dir", str(cache), "--scheduler", "local:2",
+          str(lib / "looks" / "two.usda")])
     assert len(started) == 1, "the changed stack needs work: the cluster is asked for"
 
 
@@ -243,30 +244,33 @@ def _tiles(folder: Path) -> dict[str, bytes]:
 
 
 def test_a_run_killed_after_the_first_stack_resumes_to_the_same_outputs(tmp_path):
-    env = dict(os.environ)
-    cmd = [sys.executable, "-m", "seamless_usd_cli.main", "process", "--preset", "tiny"]
+    cmd = [sys.executable, "-m", "seamless_usd_cli.main", "process", "--preset", "tiny", "--max-size", "128", "--json"]
     # uninterrupted reference
     ref = _library(tmp_path / "ref", copies=0)
-    subprocess.run([*cmd, "--cache-dir", str(tmp_path / "ref-cache"), str(ref / "looks")], check=False, env=env,
-                   capture_output=True, timeout=600)
+    done = subprocess.run([*cmd, "--cache-dir", str(tmp_path / "ref-cache"), str(ref / "looks")],
+                          capture_output=True, timeout=600)
+    _assert_all_written(done.returncode, json.loads(done.stdout))
     expected = _tiles(ref / "looks" / "tileable")
     assert len(expected) == 2
-    # killed once the first stack's tile is written, then run again
+    # killed the moment the first stack's tile is in place (a file-system event), then run again
     lib = _library(tmp_path / "run", copies=0)
     cache = tmp_path / "run-cache"
-    proc = subprocess.Popen([*cmd, "--cache-dir", str(cache), str(lib / "looks")], env=env,
+    proc = subprocess.Popen([*cmd, "--cache-dir", str(cache), str(lib / "looks")],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and proc.poll() is None:
-        if list((lib / "looks" / "tileable").glob("*.tile.png")):
-            proc.send_signal(signal.SIGKILL)
-            break
-        time.sleep(0.05)
+    tiles = lib / "looks" / "tileable"
+    reached = wait_until(lambda: bool(list(tiles.glob("*.tile.png"))), [lib], timeout=300,
+                         stop=lambda: proc.poll() is not None)
+    if reached and proc.poll() is None:
+        proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=60)
+    assert reached and proc.returncode == -signal.SIGKILL, "the run ended before its first tile was written"
+    assert len(_tiles(tiles)) == 1, "killed after the first stack, before the second"
     assert not (lib / "looks" / "two.seamless.usda").exists(), "killed before the layer was written"
-    done = subprocess.run([*cmd, "--cache-dir", str(cache), str(lib / "looks")], env=env, capture_output=True, timeout=600)
-    assert done.returncode in (0, 1), done.stderr.decode()[-2000:]
-    assert _tiles(lib / "looks" / "tileable") == expected
+    done = subprocess.run([*cmd, "--cache-dir", str(cache), str(lib / "looks")], capture_output=True, timeout=600)
+    payload = json.loads(done.stdout)
+    _assert_all_written(done.returncode, payload)
+    assert sorted(s["origin"] for s in payload["stacks"]) == ["cache", "trained"]  # the first stack is resumed
+    assert _tiles(tiles) == expected
     assert (lib / "looks" / "two.seamless.usda").is_file()
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import sys
+import time
 from pathlib import Path
 
 KERNELS = Path(__file__).resolve().parents[1] / "benchmarks" / "kernels.py"
@@ -20,12 +21,17 @@ def _kernels():
 
 def test_every_convolution_of_a_step_is_timed_with_its_work(tmp_path):
     k = _kernels()
+    began = time.perf_counter()
     assert k.main(["--preset", "tiny", "--seconds", "0.01", "--out", str(tmp_path)]) == 0
+    wall_ms = (time.perf_counter() - began) * 1e3
     data = json.loads((tmp_path / "kernels.json").read_text())
     rows = data["rows"]
     nets = {r["layer"].split(".")[0] for r in rows}
     assert nets == {"G", "D", "style"}
-    assert all(r["calls"] >= 1 and r["ms"] > 0 for r in rows)
+    peak = data["matmul_peak_gflops"]
+    for r in rows:  # a time per call that fits in the run, for work no faster than a few times the matmul peak
+        assert r["calls"] >= 1 and r["calls"] * r["ms"] <= wall_ms, r
+        assert r["flops"] / (r["ms"] * 1e6) <= 4 * peak, (r, peak)
     assert any(r["kind"] == "convT" for r in rows)  # the decoders' transposed convolutions
     for r in rows:
         m, kk, n = r["gemm_shape"]

@@ -175,4 +175,5 @@ def test_refine_gan_leaves_the_lattice_cut_out(scene, capsys):
     assert tuple(stack["tile_size"]) == (H, W) and tuple(stack["uv_scale"]) == (1.0, 1.0)
     # the pattern repeats, so the written tile's lattice ratio is measured, and a broken repeat fails it
     ratio = gan["lattice"][f"lattice_ratio_{gan['layout']}"]
-    assert (ratio < 0.9) == any("lattice_ratio" in f for f in stack["failing"]), (ratio, stack["failing"])
+    # the tiny GAN's layout does not keep the 16 x 24 px repeat: the ratio is low and the figure is listed
+    assert ratio < 0.9 and any("lattice_ratio" in f for f in stack["failing"]), (ratio, stack["failing"])

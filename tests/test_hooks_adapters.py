@@ -15,14 +15,9 @@ from types import SimpleNamespace
 
 import pytest
 
+import seamless_usd
 from seamless_usd.hooks import common
 from seamless_usd.hooks.common import HookError, HookSettings
-
-
-def _needs_options():
-    import seamless_usd
-
-    assert seamless_usd.Options is not None  # the public API the adapters build on
 
 
 class _Recorder:
@@ -101,7 +96,6 @@ def test_maya_chaser_args_become_settings(maya_chaser):
 
 
 def test_maya_post_export_processes_the_exported_stage(maya_chaser, recorder, tmp_path):
-    _needs_options()
     from pxr import Usd
 
     module, _, _ = maya_chaser
@@ -110,6 +104,7 @@ def test_maya_post_export_processes_the_exported_stage(maya_chaser, recorder, tm
     assert chaser.ExportDefault() and chaser.ExportFrame(1.0)
     assert chaser.PostExport() is True
     (got_stage, options), = recorder.calls
+    assert isinstance(options, seamless_usd.Options)  # the public API's options, built from the chaser args
     assert got_stage is stage and (options.preset, options.seed) == ("draft", 2)
 
 
@@ -215,7 +210,6 @@ def _texture_stage():
 
 
 def test_houdini_process_layer_uses_the_save_path(houdini_processor, recorder, tmp_path):
-    _needs_options()
     proc = houdini_processor.usdOutputProcessor()()
     rop = {"seamlessusd_enabled": 1, "seamlessusd_preset": "draft", "lopoutput": str(tmp_path / "rop.usd")}
     proc.beginSave(rop, {"seamlessusd_seed": 9}, None, 1.0, {})
@@ -223,17 +217,19 @@ def test_houdini_process_layer_uses_the_save_path(houdini_processor, recorder, t
     save = tmp_path / "sub" / "layer.usda"
     assert proc.processLayer(stage.GetRootLayer(), str(save)) is True
     (got_stage, options), = recorder.calls
+    assert isinstance(options, seamless_usd.Options)
     assert got_stage.GetRootLayer().identifier == str(save.resolve())
     assert (options.preset, options.seed) == ("draft", 9)
 
 
 def test_houdini_process_layer_old_signature_falls_back_to_rop_output(houdini_processor, recorder, tmp_path):
-    _needs_options()
     proc = houdini_processor.usdOutputProcessor()()
     proc.beginSave({"seamlessusd_enabled": 1, "lopoutput": str(tmp_path / "rop.usd")}, {}, None, 1.0)
     stage = _texture_stage()
     proc.processLayer(stage.GetRootLayer())
-    assert recorder.calls[0][0].GetRootLayer().identifier == str((tmp_path / "rop.usd").resolve())
+    (got_stage, options), = recorder.calls
+    assert isinstance(options, seamless_usd.Options) and options.preset == "default"  # no parm: the default
+    assert got_stage.GetRootLayer().identifier == str((tmp_path / "rop.usd").resolve())
 
 
 def test_houdini_disabled_or_no_textures_leaves_layer_alone(houdini_processor, recorder, tmp_path):
@@ -249,7 +245,6 @@ def test_houdini_disabled_or_no_textures_leaves_layer_alone(houdini_processor, r
 
 
 def test_houdini_strict_failure_raises(houdini_processor, monkeypatch, tmp_path):
-    _needs_options()
 
     def broken(stage, options):
         raise RuntimeError("boom")

@@ -1,26 +1,18 @@
 """Fidelity figures against the source: feature scale and patch-distribution distance, on real textures."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
-import OpenImageIO as oiio
 import pytest
+from textures import load_texture
 from scipy import ndimage
 
 from seamless_usd import metrics
 from seamless_usd.metrics import fidelity
 
-TEXTURES = Path(__file__).resolve().parent.parent / "sample_assets" / "textures"
-
-
-def _load(name: str) -> np.ndarray:
-    return oiio.ImageBuf(str(TEXTURES / name)).get_pixels(oiio.FLOAT) * 2.0 - 1.0  # network domain
-
 
 @pytest.fixture(scope="module", params=["brick_albedo.png", "wood_color.png", "cloth.png", "brick_roughness.png"])
 def source(request) -> np.ndarray:
-    return _load(request.param)
+    return load_texture(request.param)
 
 
 def test_source_against_itself_scores_one(source):
@@ -63,7 +55,7 @@ def test_a_crop_of_a_periodic_source_scores_alike_at_every_offset():
     """Sharp edges on a short period: the pyramid's box grids meet them differently at each crop
     offset. The bundled weave repeats every 80 px; each 160 px crop holds two whole periods of it.
     Read on one grid, the crops scored 0.85-2.10 (the offsets 14, 5 and 39, 40 the highest)."""
-    cloth = _load("cloth.png")
+    cloth = load_texture("cloth.png")
     figures = [metrics.patch_distance(cloth[y: y + 160, x: x + 160], cloth)
                for y, x in ((0, 0), (14, 5), (39, 40), (40, 40), (13, 7), (1, 3))]
     assert max(figures) < 1.0, figures
@@ -71,14 +63,14 @@ def test_a_crop_of_a_periodic_source_scores_alike_at_every_offset():
 
 
 def test_normal_maps_use_unit_vectors():
-    n = _load("brick_normal.png")
+    n = load_texture("brick_normal.png")
     assert metrics.scale_ratio(n, n, is_normal=True) == pytest.approx(1.0)
     up = ndimage.zoom(n[:128, :128], (2, 2, 1), order=1)
     assert metrics.scale_ratio(up, n, is_normal=True) < 0.6
 
 
 def test_map_metrics_carries_fidelity_and_targets():
-    s = _load("wood_color.png")
+    s = load_texture("wood_color.png")
     m = metrics.map_metrics(s, s)
     assert m["scale_ratio"] == pytest.approx(1.0)
     assert metrics.failing_figures(m) == []

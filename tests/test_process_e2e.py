@@ -1,7 +1,9 @@
 """End to end: ``seamless-usd process`` on real sample scenes (tiny preset, shared cache)."""
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import io
 import json
 import re
 import shutil
@@ -25,12 +27,6 @@ def _hashes(root: Path) -> dict[str, str]:
         for p in sorted(root.rglob("*"))
         if p.is_file()
     }
-
-
-@pytest.fixture(scope="session")
-def model_cache(tmp_path_factory) -> Path:
-    """One cache for the whole session: each unique stack trains once."""
-    return tmp_path_factory.mktemp("cache")
 
 
 @pytest.fixture()
@@ -61,15 +57,28 @@ def _texture_files(stage: Usd.Stage) -> dict[str, Path]:
     return out
 
 
-@pytest.fixture()
-def processed(assets, model_cache, capsys):
-    """The brick sample processed into a new layer, with an HTML + JSON report."""
+@pytest.fixture(scope="module")
+def processed(tmp_path_factory, model_cache):
+    """The brick sample processed into a new layer, with an HTML + JSON report, once for the module.
+    Tests that change what it wrote work on a copy (:func:`processed_copy`)."""
+    assets = tmp_path_factory.mktemp("processed") / "assets"
+    shutil.copytree(SAMPLES, assets)
     scene = assets / "brick" / "scene.usda"
     before = _hashes(assets)
     report = assets / "out" / "report.html"
-    code = _process(str(scene), "--report", str(report), "--json", cache=model_cache)
-    payload = json.loads(capsys.readouterr().out)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = _process(str(scene), "--report", str(report), "--json", cache=model_cache)
+    payload = json.loads(out.getvalue())
     return dict(assets=assets, scene=scene, before=before, code=code, report=report, payload=payload)
+
+
+@pytest.fixture()
+def processed_copy(processed, tmp_path):
+    """A private copy of the processed assets (the relative asset paths still resolve)."""
+    assets = tmp_path / "assets"
+    shutil.copytree(processed["assets"], assets)
+    return dict(processed, assets=assets, scene=assets / "brick" / "scene.usda")
 
 
 def test_new_layer_edits_resolve_to_written_tiles(processed):
@@ -105,12 +114,11 @@ def test_uv_transform_keeps_texel_scale(processed):
     W, H = stack["resampled"]["working_size"]  # the texture's pixel grid, which spans the UV unit square
     tile_h, tile_w = stack["tile_size"]
     gan = stack["resampled"]["gan"]
-    if gan["layout"] == "lattice":  # the bundled brick repeats: the tile is whole periods of it ...
-        assert [tile_h, tile_w] == gan["lattice"]["tile"]
-        for side, period in zip((tile_h, tile_w), gan["lattice"]["period_px"]):
-            assert side / period == pytest.approx(round(side / period), abs=0.1)
-    else:  # ... else the default tile has the source's pixel size
-        assert (tile_h, tile_w) == (H, W)
+    # the bundled brick repeats on a lattice: the tile is cut to whole periods of it, smaller than the texture
+    assert gan["layout"] == "lattice", gan
+    assert [tile_h, tile_w] == gan["lattice"]["tile"] and tile_h < H and tile_w < W
+    for side, period in zip((tile_h, tile_w), gan["lattice"]["period_px"]):
+        assert round(side / period) >= 1 and side / period == pytest.approx(round(side / period), abs=0.1)
     assert stack["uv_scale"] == pytest.approx([W / tile_w, H / tile_h])  # ... and the texel density is kept
     stage = Usd.Stage.Open(str(processed["scene"].with_name("scene.seamless.usda")))
     albedo = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Brick/Albedo"))
@@ -133,14 +141,14 @@ def test_sources_are_untouched_and_report_is_valid(processed):
     assert "Brick" in html
 
 
-def test_second_run_on_the_output_is_clean(processed, model_cache, capsys):
+def test_second_run_on_the_output_is_clean(processed_copy, model_cache, capsys):
     """Processing the output again (forced: the tile is already tileable) replaces the tile and
     composes the UV scale into the one SeamlessUV node instead of adding another."""
-    layer = processed["scene"].with_name("scene.seamless.usda")
+    layer = processed_copy["scene"].with_name("scene.seamless.usda")
     first_stage = Usd.Stage.Open(str(layer))
     first_albedo = UsdShade.Shader(first_stage.GetPrimAtPath("/World/Looks/Brick/Albedo"))
     first_file = first_albedo.GetInput("file").Get().resolvedPath
-    first_scale = processed["payload"]["stacks"][0]["uv_scale"]
+    first_scale = processed_copy["payload"]["stacks"][0]["uv_scale"]
     del first_stage
     before = layer.read_bytes()
     code = _process(str(layer), "--in-place", "--force", "--json", cache=model_cache)
@@ -232,7 +240,7 @@ def test_every_sample_asset_processes(assets, model_cache, capsys):
     scenes = sorted(str(p) for p in assets.rglob("*.usda") if "library" not in p.parts and not layers.search(p.name)) + sorted(
         str(p) for p in assets.rglob("*.mtlx")
     )
-    code = _process(*scenes, "--json", cache=model_cache)
+    code = _process(*scenes, "--max-size", "128", "--json", cache=model_cache)  # plumbing: small is enough
     payload = json.loads(capsys.readouterr().out)
     _assert_all_written(code, payload)
     assert payload["stacks"], "the samples have stacks"

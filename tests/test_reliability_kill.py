@@ -25,10 +25,11 @@ import pytest
 from pxr import Sdf, Usd, UsdShade
 from safetensors import safe_open
 
+from fswatch import wait_until
 from test_reliability_inputs import hashes, image_size
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
-ITERATIONS = 24  # tiny preset checkpoints every 2 iterations: a kill during training leaves one behind
+ITERATIONS = 6  # tiny preset checkpoints every 2 iterations: a kill at the first checkpoint is mid-training
 ARGS = ("--preset", "tiny", "--iterations", str(ITERATIONS), "--max-size", "112")
 
 
@@ -51,24 +52,25 @@ def _start(lib: Path, cache: Path, *extra: str) -> subprocess.Popen:
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=lib)
 
 
-def _kill_when(proc: subprocess.Popen, ready, timeout: float = 120.0, on_poll=None) -> bool:
-    """SIGKILL ``proc`` as soon as ``ready()``; False when it ended before that."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+def _kill_when(proc: subprocess.Popen, ready, watch: Path, timeout: float = 120.0, on_poll=None) -> bool:
+    """SIGKILL ``proc`` as soon as ``ready()``; False when it ended before that. ``ready`` is checked on
+    every file-system event under ``watch`` (library and cache), not by polling."""
+    def check() -> bool:
         if on_poll is not None:
             on_poll()
-        if ready():
-            if proc.poll() is not None:
-                return False
-            proc.send_signal(signal.SIGKILL)
-            proc.wait()
-            return True
-        if proc.poll() is not None:
-            return False
-        time.sleep(0.002)
-    proc.kill()
+        return ready()
+
+    try:
+        reached = wait_until(check, [watch], timeout, stop=lambda: proc.poll() is not None)
+    except TimeoutError:
+        proc.kill()
+        proc.wait()
+        raise AssertionError("the kill point was not reached in time") from None
+    if not reached or proc.poll() is not None:
+        return False
+    proc.send_signal(signal.SIGKILL)
     proc.wait()
-    raise AssertionError("the kill point was not reached in time")
+    return True
 
 
 def _checkpoints(cache: Path) -> list[Path]:
@@ -158,7 +160,7 @@ def test_sigkill_during_training_writing_maps_and_saving_layers(library, tmp_pat
 
     # 1. during training: the moment the first checkpoint lands in the cache
     proc = _start(library, cache, "--json")
-    assert _kill_when(proc, lambda: bool(_checkpoints(cache)))
+    assert _kill_when(proc, watch=tmp_path, ready=lambda: bool(_checkpoints(cache)))
     kills.append("training")
     [ckpt] = _checkpoints(cache)
     killed_at = _step(ckpt)
@@ -176,20 +178,20 @@ def test_sigkill_during_training_writing_maps_and_saving_layers(library, tmp_pat
                 seen_steps.add(step)
 
     proc = _start(library, cache, "--json")
-    assert _kill_when(proc, lambda: bool(_tiles(library)), on_poll=watch_checkpoint)
+    assert _kill_when(proc, watch=tmp_path, ready=lambda: bool(_tiles(library)), on_poll=watch_checkpoint)
     kills.append("writing maps")
     assert seen_steps and min(seen_steps) > killed_at, (killed_at, sorted(seen_steps))
     check_integrity(library, cache, originals)
 
     # 3. again while writing maps, later: once a tile is complete (renamed into place)
     proc = _start(library, cache, "--json")
-    assert _kill_when(proc, lambda: bool(_tiles(library, with_temp=False)))
+    assert _kill_when(proc, watch=tmp_path, ready=lambda: bool(_tiles(library, with_temp=False)))
     kills.append("writing maps (a tile complete)")
     check_integrity(library, cache, originals)
 
     # 4. while saving layers (after every stack is done, before every scene has its layer)
     proc = _start(library, cache, "--json")
-    assert _kill_when(proc, lambda: bool(_layers(library)))
+    assert _kill_when(proc, watch=tmp_path, ready=lambda: bool(_layers(library)))
     kills.append("saving layers")
     check_integrity(library, cache, originals)
 
@@ -197,7 +199,7 @@ def test_sigkill_during_training_writing_maps_and_saving_layers(library, tmp_pat
     for layer in _layers(library):
         layer.unlink()
     proc = _start(library, cache, "--json")
-    assert _kill_when(proc, lambda: any(".tmp" not in p.name for p in _layers(library)))
+    assert _kill_when(proc, watch=tmp_path, ready=lambda: any(".tmp" not in p.name for p in _layers(library)))
     kills.append("saving layers (one layer complete)")
     check_integrity(library, cache, originals)
 
@@ -215,8 +217,8 @@ def test_sigkill_during_training_writing_maps_and_saving_layers(library, tmp_pat
 def test_two_runs_at_once_share_library_and_cache(library, tmp_path):
     cache = tmp_path / "cache"
     originals = hashes(library)
-    first = _start(library, cache, "--json")
-    second = _start(library, cache, "--json")
+    first = _start(library, cache, "--json", "--iterations", "4")
+    second = _start(library, cache, "--json", "--iterations", "4")
     (code1, report1), (code2, report2) = _finish(first), _finish(second)
     counts = check_integrity(library, cache, originals)
     assert counts["temp"] == 0 and counts["layers"] == 2 and counts["entries"] == 2

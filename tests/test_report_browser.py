@@ -15,7 +15,7 @@ import pytest
 
 from seamless_usd.report.html import write_html, write_library_html
 from seamless_usd.report.model import Report, StackReport, StackStatus
-from seamless_usd.report.specimen import specimen_stack
+from specimen import specimen_stack
 
 ROOT = Path(__file__).resolve().parents[1]
 ARTIFACTS = ROOT / "test-artifacts"

@@ -14,7 +14,7 @@ from seamless_usd.report.html import seam_segments, render_html, write_html, wri
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.report.repeat import ViewGeometry, repeat_view, view_geometry
-from seamless_usd.report.specimen import specimen_stack
+from specimen import specimen_stack
 
 ROOT = Path(__file__).resolve().parents[1]
 BRICK = ROOT / "sample_assets/brick/scene.usda"

@@ -15,13 +15,7 @@ from seamless_usd.synthesis.step import Batch, d_loss, g_loss, generate
 from seamless_usd.synthesis.train import build_networks
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny networks run fastest (and steadiest on a shared machine) on one thread."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread
 
 
 CHANNELS = [3, 1, 3]

@@ -1,20 +1,15 @@
 """Quality function Q and the crop-size search."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
-import torch
 
 from seamless_usd.synthesis import MapInput, get_preset, sample, train
 from seamless_usd.synthesis.quality import band_masks, quality
 from seamless_usd.synthesis.sample import crop_plan
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny networks run fastest (and steadiest on a shared machine) on one thread."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread
 
 
 def test_bands_are_20_percent_through_the_centre():
@@ -52,22 +47,30 @@ def test_crop_plan_one_whole_crop_then_three_per_size():
 
 @pytest.fixture(scope="module")
 def trained():
+    """A model shared by the module; tests change a copy's config, never this one."""
     rng = np.random.default_rng(0)
     maps = [MapInput("albedo", rng.uniform(-1, 1, (64, 64, 3)).astype(np.float32))]
     return train(maps, get_preset("tiny")), maps
 
 
+
 def test_search_stops_at_the_first_pass(trained):
-    model, maps = trained
-    model.config = model.config.replace(gamma=0.0)  # tau = 0: every candidate passes
+    trained_model, maps = trained
+    model = replace(trained_model, config=trained_model.config.replace(gamma=0.0))  # tau = 0: every candidate passes
     result = sample(model, maps)
     assert result.passed and len(result.candidates) == 1 and result.crop_size == (64, 64)
 
 
 def test_search_keeps_the_best_failing_candidate(trained):
-    model, maps = trained
-    model.config = model.config.replace(gamma=10.0, max_candidates=5)  # tau above any probability
+    trained_model, maps = trained
+    model = replace(trained_model, config=trained_model.config.replace(gamma=10.0, max_candidates=5))  # tau above any probability
     result = sample(model, maps)
     assert not result.passed and len(result.candidates) == 5
     best = max(result.candidates, key=lambda c: c.q.margin)
     assert result.q is best.q and result.crop_size == best.crop_size
+
+
+def test_the_shared_model_keeps_its_config(trained):
+    """Runs after the tests that sample with changed configs: they worked on copies."""
+    model, _ = trained
+    assert model.config == get_preset("tiny")

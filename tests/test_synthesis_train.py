@@ -1,6 +1,8 @@
 """Training: schedule, determinism, checkpoints, resume, safe loading, local VGG weights."""
 import pickle
 
+import time
+
 import numpy as np
 import pytest
 import torch
@@ -11,13 +13,7 @@ from seamless_usd.synthesis.features import VGG19_CFG, VGG19Features, build_feat
 from seamless_usd.synthesis.schedule import learning_rate
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny networks run fastest (and steadiest on a shared machine) on one thread."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread
 
 
 def _stack(seed=0):
@@ -44,10 +40,15 @@ def test_same_seed_same_weights_other_seed_differs():
 
 
 def test_progress_reports_iterations_rate_and_losses():
-    seen = []
-    train(_stack(), get_preset("tiny").replace(iterations=3), progress=seen.append)
+    seen, clock = [], []
+    began = time.perf_counter()
+    train(_stack(), get_preset("tiny").replace(iterations=3), progress=lambda p: (seen.append(p), clock.append(time.perf_counter())))
     assert [p.iteration for p in seen] == [1, 2, 3] and all(p.total == 3 for p in seen)
-    assert seen[-1].eta_s == 0 and seen[-1].it_per_s > 0
+    for p, t in zip(seen, clock):
+        # the training's clock runs inside this call: its elapsed time is at most ours, its rate at least ours
+        assert 0 < p.elapsed_s <= t - began and p.it_per_s >= p.iteration / (t - began), (p, t - began)
+        assert (p.eta_s > 0) == (p.iteration < 3)
+    assert seen[-1].eta_s == 0
     assert {"d", "g", "g_adv", "l1", "style"} <= set(seen[-1].losses)
 
 

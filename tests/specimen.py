@@ -1,4 +1,4 @@
-"""A specimen report from a real stack without training: for the report's tests and for layout work.
+"""Test helper: a specimen report from a real stack without training, for the report's tests and for layout work.
 
 The tile is made from the source itself, so the page has real pixels and real figures in seconds:
 
@@ -9,7 +9,7 @@ The tile is made from the source itself, so the page has real pixels and real fi
 * ``"magnified"``: the periodic component's top-left quarter enlarged 2x (a result whose features
   are twice too large: a scale ratio near 0.5).
 
-Run ``python -m seamless_usd.report.specimen SCENE OUT.html`` to write one page.
+Run ``python tests/specimen.py SCENE OUT.html`` to write one page.
 """
 from __future__ import annotations
 
