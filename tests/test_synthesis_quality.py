@@ -58,14 +58,14 @@ def test_search_stops_at_the_first_pass(trained):
     trained_model, maps = trained
     model = replace(trained_model, config=trained_model.config.replace(gamma=0.0))  # tau = 0: every candidate passes
     result = sample(model, maps)
-    assert result.passed and len(result.candidates) == 1 and result.crop_size == (64, 64)
+    assert result.q_passed and len(result.candidates) == 1 and result.crop_size == (64, 64)
 
 
 def test_search_keeps_the_best_failing_candidate(trained):
     trained_model, maps = trained
     model = replace(trained_model, config=trained_model.config.replace(gamma=10.0, max_candidates=5))  # tau above any probability
     result = sample(model, maps)
-    assert not result.passed and len(result.candidates) == 5
+    assert not result.q_passed and len(result.candidates) == 5
     best = max(result.candidates, key=lambda c: c.q.margin)
     assert result.q is best.q and result.crop_size == best.crop_size
 
