@@ -182,6 +182,10 @@ def _repeats(r: tuple[float, float]) -> str:
     return " x ".join(f"{v:g}" if float(v).is_integer() else f"{v:.2f}" for v in r)
 
 
+#: Seams listed in words and drawn per map (strongest first); the JSON report has them all.
+SEAMS_SHOWN = 6
+
+
 def seam_segments(g: ViewGeometry, seams: list[dict], tile_size: tuple[int, int]) -> list[tuple]:
     """Each seam (tile texels) drawn in every repeat of the tile in the picture, as ``(x1, y1, x2, y2, label)``."""
     h, w = tile_size
@@ -199,8 +203,8 @@ def seam_segments(g: ViewGeometry, seams: list[dict], tile_size: tuple[int, int]
                 else:
                     y = oy + s["position"] / h * py
                     seg = (ox + s["start"] / w * px, y, ox + (s["end"] + 1) / w * px, y)
-                if 0 <= seg[0] <= W and 0 <= seg[1] <= H:
-                    out.append((*(min(v, lim) for v, lim in zip(seg, (W, H, W, H))), label))
+                if 0 <= seg[0] <= W and 0 <= seg[1] <= H:  # the label once, on the first repeat
+                    out.append((*(min(v, lim) for v, lim in zip(seg, (W, H, W, H))), label if kx == ky == 0 else ""))
     return out
 
 
@@ -231,9 +235,12 @@ def _why(stack: StackReport) -> str:
     v = stack.verdict
     if v:
         size = tuple(v.get("size") or stack.tile_size or (0, 0))
+        seams = v.get("seams", [])
         items = [f"seam in {'the maps together' if s['map'] == 'stack' else s['map']}: "
-                 f"{Seam(**s).where(size)} ({s['figure']:+.2f} above the source's own strongest line; "
-                 f"marked in red on the repeats below)" for s in v.get("seams", [])]
+                 f"{Seam(**s).where(size)} ({s['figure']:+.2f} above the seam threshold; marked in red on the "
+                 f"repeats below)" for s in seams[:SEAMS_SHOWN]]
+        if len(seams) > SEAMS_SHOWN:
+            items.append(f"and {len(seams) - SEAMS_SHOWN} more seams (all in the JSON report)")
         items += [f"not faithful: {f}" for f in v.get("failing", [])]
         if items:
             lis = "".join(f"<li>{esc(t)}</li>" for t in items)
@@ -293,7 +300,9 @@ def stack_html(stack: StackReport) -> str:
     if stack.intent and stack.status is not StackStatus.LEFT_ALONE:
         intent = f'<p class="intent muted">tiling intent: <b>{esc(stack.intent)}</b>' + (
             f" — {esc(stack.intent_reason)}" if stack.intent_reason else "") + "</p>"
-    message = f"<p>{esc(stack.message)}</p>" if stack.message and stack.status is not StackStatus.LEFT_ALONE else ""
+    shown_below = stack.status is StackStatus.NOT_PASSED and stack.verdict  # the "Not passed" box lists it
+    message = (f"<p>{esc(stack.message)}</p>" if stack.message and stack.status is not StackStatus.LEFT_ALONE
+               and not shown_below else "")
     main, more = _facts(stack)
     details = f"<details><summary>run details</summary><table class=facts>{more}</table></details>" if more else ""
     blocks = []
@@ -306,7 +315,7 @@ def stack_html(stack: StackReport) -> str:
     for m in stack.maps:
         pictures = ""
         if g is not None and m.node in p.tile_view:
-            seams = [s for s in stack.verdict.get("seams", []) if s["map"] in (m.asset, "stack")]
+            seams = [s for s in stack.verdict.get("seams", []) if s["map"] in (m.asset, "stack")][:SEAMS_SHOWN]
             pictures = _pair(stack, g, p.source_view.get(m.node), p.tile_view.get(m.node), "", seams)
         out = f' → {esc(Path(m.output).name)}' if m.output else ""
         blocks.append(

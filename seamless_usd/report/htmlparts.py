@@ -27,7 +27,7 @@ h1{font-size:22px;margin:0 0 4px} h2{font-size:17px;margin:0;display:inline} h3{
 .overlay line{vector-effect:non-scaling-stroke;stroke-width:1.5}
 .overlay .border{stroke:#00e5ff} .overlay .centre{stroke:#ff3df5;stroke-dasharray:6 4}
 .seams{position:absolute;left:0;top:0;width:100%;height:100%}
-.seams line{vector-effect:non-scaling-stroke;stroke:#ff1744;stroke-width:3;stroke-linecap:round;opacity:.85}
+.seams line{vector-effect:non-scaling-stroke;stroke:#ff1744;stroke-width:2;stroke-linecap:round;opacity:.8}
 .seams text{fill:#ff1744;font:bold 12px sans-serif;paint-order:stroke;stroke:#fff;stroke-width:3px}
 .summary span{display:inline-block;margin-right:14px}
 .stack{background:#fff;border:1px solid #d9dce3;border-radius:8px;padding:14px 18px;margin:18px 0}
@@ -105,7 +105,8 @@ def seams_svg(size: tuple[int, int], segments: list[tuple[float, float, float, f
     parts = []
     for x1, y1, x2, y2, label in segments:
         parts.append(f'<line x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}"><title>{esc(label)}</title></line>')
-        parts.append(f'<text x="{min(x1 + 4, w - 40):.1f}" y="{max(y1 + 14, 14):.1f}">{esc(label.split(":")[0])}</text>')
+        if label:
+            parts.append(f'<text x="{min(x1 + 4, w - 40):.1f}" y="{max(y1 + 14, 14):.1f}">{esc(label.split(":")[0])}</text>')
     return (f'<svg class="seams" viewBox="0 0 {w} {h}" preserveAspectRatio="none" role="img" '
             f'aria-label="seams found">{"".join(parts)}</svg>')
 
