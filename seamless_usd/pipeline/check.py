@@ -107,14 +107,13 @@ def _judge_picture(path: Path) -> CheckItem:
     return item
 
 
-def _sources(stage_path: Path, stack) -> tuple[list, tuple[float, float]] | None:
-    """The maps' recorded sources and UV scale, when every map is a tile this tool wrote into a USD stage."""
-    if stage_path.suffix.lower() == ".mtlx":
+def _sources(stage, stack) -> tuple[list, tuple[float, float]] | None:
+    """The maps' recorded sources and UV scale, when every map is a tile this tool wrote into the USD
+    ``stage`` (None for a MaterialX document)."""
+    if stage is None:
         return None
     from seamless_usd.authoring.schema import Schema, read_provenance
-    from seamless_usd.discover.scan import open_stage
 
-    stage = open_stage(stage_path)
     sources, scale = [], (1.0, 1.0)
     for m in stack.maps:
         prim = stage.GetPrimAtPath(m.node.strip("<>"))
@@ -128,7 +127,7 @@ def _sources(stage_path: Path, stack) -> tuple[list, tuple[float, float]] | None
     return sources, scale
 
 
-def _judge_stack(stage_path: Path, stack) -> CheckItem:
+def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     from seamless_usd.imaging import WorkingResolution, load_stack_pixels
     from seamless_usd.pipeline.stackjob import on_tile_grid
     from seamless_usd.verdict import judge
@@ -138,7 +137,7 @@ def _judge_stack(stage_path: Path, stack) -> CheckItem:
     try:
         normals = [m.is_normal for m in stack.maps]
         tiles = list(load_stack_pixels(list(stack.maps)).values)
-        recorded = _sources(stage_path, stack)
+        recorded = _sources(stage, stack)
         sources = None
         if recorded is not None:
             src_maps, uv = recorded
@@ -157,6 +156,7 @@ def _judge_stack(stage_path: Path, stack) -> CheckItem:
 def check_paths(paths: Sequence[str | Path], progress: Callable[[str], None] | None = None) -> CheckReport:
     """The verdict on every stack meant to tile in ``paths`` (stages, documents, folders) and every picture."""
     from seamless_usd.discover import scan_paths
+    from seamless_usd.discover.scan import open_stage
 
     emit = progress or (lambda name: None)
     report = CheckReport()
@@ -170,11 +170,11 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str], None] | N
         except InputError as exc:
             report.unreadable.append(str(exc))
             continue
-        for stack in result.stacks:
-            if stack.duplicate_of or stack.intent not in _JUDGED_INTENTS:
-                continue
+        judged = [s for s in result.stacks if not s.duplicate_of and s.intent in _JUDGED_INTENTS]
+        stage = open_stage(scene) if judged and scene.suffix.lower() != ".mtlx" else None  # once per stage
+        for stack in judged:
             emit(stack.material)
-            report.items.append(_judge_stack(scene, stack))
+            report.items.append(_judge_stack(scene, stage, stack))
     for picture in pictures:
         if not picture.is_file():
             report.unreadable.append(f"{asset_ref(picture)}: no such file")

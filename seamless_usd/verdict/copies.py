@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .features import moving_mean
 from .lines import Seam
 
 __all__ = ["COPY_SHARE", "COPY_THRESHOLD", "MAP_THRESHOLD", "copy_origins", "copy_seams"]
@@ -120,8 +121,7 @@ def copy_seams(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, name: s
         along = err if axis == 1 else err.T  # rows run along the line; columns are lines
         n = along.shape[0]
         k = min(run, n)
-        c = np.cumsum(np.concatenate([np.zeros((1, along.shape[1])), along, along[: k - 1]]), axis=0)
-        means = (c[k:] - c[:-k]) / k  # (n, lines): the run starting at each texel
+        means = moving_mean(along, k, periodic=True)  # (n, lines): the run starting at each texel
         peak = means.max(axis=0)
         strongest = max(strongest, float(peak.max()))
         taken: list[int] = []

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["DISTANCES", "FEATURES", "line_features"]
+__all__ = ["DISTANCES", "FEATURES", "line_features", "moving_mean"]
 
 DISTANCES = (1, 2, 4, 8)
 FEATURES = 2 * len(DISTANCES) + 1
@@ -24,8 +24,9 @@ REACH = 2 * max(DISTANCES)
 _EPS = 1e-6
 
 
-def _along_mean(a: np.ndarray, length: int, periodic: bool) -> np.ndarray:
-    """Moving mean of ``a`` (along, ...) over ``length`` rows; periodic wraps, else only whole windows."""
+def moving_mean(a: np.ndarray, length: int, periodic: bool) -> np.ndarray:
+    """Moving mean of ``a`` (along, ...) over ``length`` rows, from cumulative sums: periodic wraps (one
+    mean per row, starting there), else only whole windows."""
     if periodic:
         a = np.concatenate([a, a[: length - 1]], axis=0)
     c = np.cumsum(a, axis=0, dtype=np.float64)
@@ -50,7 +51,7 @@ def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> 
         lines = np.arange(REACH, w - REACH + 1)
     feats, within_all = [], []
     for d in DISTANCES:
-        sq = _along_mean(((ext[:, d:] - ext[:, :-d]) ** 2).sum(-1), length, periodic)[::step]  # pair (x, x + d)
+        sq = moving_mean(((ext[:, d:] - ext[:, :-d]) ** 2).sum(-1), length, periodic)[::step]  # pair (x, x + d)
         straddle = np.zeros((sq.shape[0], len(lines)))
         within = np.zeros_like(straddle)
         for j in range(1, d + 1):
@@ -63,7 +64,7 @@ def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> 
     for within in within_all:  # local contrast against the image's own
         feats.append(np.log(within + _EPS) - np.log(np.median(within) + _EPS))
     step1 = ext[:, lines] - ext[:, lines - 1]  # (H, lines, C)
-    mean_step = _along_mean(step1.reshape(h, -1), length, periodic)[::step].reshape(-1, len(lines), channels)
-    energy = _along_mean((step1 ** 2).sum(-1), length, periodic)[::step]
+    mean_step = moving_mean(step1.reshape(h, -1), length, periodic)[::step].reshape(-1, len(lines), channels)
+    energy = moving_mean((step1 ** 2).sum(-1), length, periodic)[::step]
     feats.append((mean_step ** 2).sum(-1) / (energy + _EPS))  # 1: one coherent step along the stretch
     return np.stack(feats, axis=-1)

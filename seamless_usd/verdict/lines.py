@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .features import moving_mean
+
 __all__ = ["RUN", "Seam", "runs", "seams_from_scores"]
 
 #: Stretches averaged into a run (each stretch starts ``step`` px after the last).
@@ -50,11 +52,7 @@ class Seam:
 def runs(z: np.ndarray, run: int = RUN, periodic: bool = True) -> np.ndarray:
     """Mean of ``run`` consecutive stretches of every line: ``(stretches, lines)`` scores in, the same shape
     out (periodic: wrapping; otherwise only whole runs). Fewer stretches than ``run``: the whole line."""
-    n = z.shape[0]
-    k = min(run, n)
-    a = np.concatenate([z, z[: k - 1]], axis=0) if periodic else z
-    c = np.cumsum(np.concatenate([np.zeros((1, z.shape[1])), a], axis=0), axis=0)
-    return (c[k:] - c[:-k]) / k
+    return moving_mean(z, min(run, z.shape[0]), periodic)
 
 
 def seams_from_scores(scores: dict[str, np.ndarray], reference: float, margin: float, *, factor: float,
