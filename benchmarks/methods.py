@@ -11,7 +11,7 @@
     so the two rows differ only by the refinement).
 ``lattice-cut``
     Only for stacks that repeat on a lattice: a tile of whole periods cut from the source, joined
-    across its wraps along minimum-error boundary cuts (``seamless_usd.synthesis.lattice``).
+    across its wraps along minimum-error boundary cuts (``seamless_usd.synthesis.lattice.cut``).
 ``seamless-usd``
     The product's default (``--refine on``): of the two rows above, the one that passes Q,
     then the lower fidelity score; the same as ``seamlessgan+refine`` where there is no lattice.

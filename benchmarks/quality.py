@@ -44,7 +44,7 @@ from quality_md import TARGETS, fmt, to_markdown  # noqa: E402,F401 (re-exported
 from stacks import SHARED_DIR, STACKS, MapFile, StackSpec, load_stack  # noqa: E402,F401 (re-exported)
 
 from seamless_usd import metrics as M  # noqa: E402
-from seamless_usd.synthesis.lattice import find_lattice, lattice_ratio  # noqa: E402
+from seamless_usd.synthesis.lattice.cut import find_lattice, lattice_ratio  # noqa: E402
 
 __all__ = [
     "MapFile",
@@ -100,7 +100,7 @@ def default_features() -> tuple[Callable | None, str]:
         import torch
 
         from seamless_usd.synthesis.config import SynthesisConfig
-        from seamless_usd.synthesis.features import build_feature_extractor, to_rgb_batch
+        from seamless_usd.synthesis.gan.features import build_feature_extractor, to_rgb_batch
     except ImportError as exc:
         return None, f"Gram distance left out: {exc}"
     config = SynthesisConfig()

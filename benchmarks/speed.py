@@ -44,7 +44,7 @@ if str(HERE) not in sys.path:  # steps.py sits beside this script
 
 from seamless_usd.synthesis import MapInput, get_preset, sample, train  # noqa: E402
 from seamless_usd.synthesis.precision import cpu_supports_bf16, resolve_precision  # noqa: E402
-from seamless_usd.synthesis.train import TrainedModel, build_networks  # noqa: E402
+from seamless_usd.synthesis.gan.train import TrainedModel, build_networks  # noqa: E402
 from steps import (CHANNELS, bench_compile, bench_seeds, bench_steps, bench_wait_policy, load_average,  # noqa: E402
                    profile_step)
 

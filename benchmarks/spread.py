@@ -94,7 +94,7 @@ def torus_tiles(stack: dict[str, tuple[np.ndarray, bool]], seed: int) -> dict[st
     """The tiles made on a torus without training: the lattice cut (when the stack repeats) and the
     refinement from a random start."""
     from seamless_usd import synthesis as syn
-    from seamless_usd.synthesis.lattice import find_lattice, lattice_cut, lattice_tile_size
+    from seamless_usd.synthesis.lattice.cut import find_lattice, lattice_cut, lattice_tile_size
 
     names = list(stack)
     maps = [stack[n][0] for n in names]
@@ -114,9 +114,9 @@ def q_over_origins(stack: dict[str, tuple[np.ndarray, bool]], tiles: dict[str, d
     """Train SeamlessGAN on the stack (the preset's seeds; the first seed's discriminator judges), then
     judge each tile, and the source as a tile, at ``Q_ORIGINS`` x ``Q_ORIGINS`` origins."""
     from seamless_usd import synthesis as syn
-    from seamless_usd.synthesis.sample import judge
+    from seamless_usd.synthesis.gan.sample import judge
     from seamless_usd.synthesis.tile import _on_grid
-    from seamless_usd.synthesis.train import TrainedModel
+    from seamless_usd.synthesis.gan.train import TrainedModel
 
     maps = [syn.MapInput(n, np.ascontiguousarray(px, dtype=np.float32), isn) for n, (px, isn) in stack.items()]
     with tempfile.TemporaryDirectory() as ck:

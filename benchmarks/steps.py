@@ -22,11 +22,11 @@ import torch  # noqa: E402
 
 from seamless_usd.synthesis import get_preset  # noqa: E402
 from seamless_usd.synthesis.config import SynthesisConfig  # noqa: E402
-from seamless_usd.synthesis.engine import CropWorkers, maybe_compile, plan_engine  # noqa: E402
-from seamless_usd.synthesis.features import build_feature_extractor  # noqa: E402
+from seamless_usd.synthesis.gan.engine import CropWorkers, maybe_compile, plan_engine  # noqa: E402
+from seamless_usd.synthesis.gan.features import build_feature_extractor  # noqa: E402
 from seamless_usd.synthesis.precision import cpu_supports_bf16  # noqa: E402
-from seamless_usd.synthesis.step import Batch, StepFunctions, d_loss, g_loss, generate, step_parts, training_step  # noqa: E402
-from seamless_usd.synthesis.train import build_networks  # noqa: E402
+from seamless_usd.synthesis.gan.step import Batch, StepFunctions, d_loss, g_loss, generate, step_parts, training_step  # noqa: E402
+from seamless_usd.synthesis.gan.train import build_networks  # noqa: E402
 
 CHANNELS = [3, 3, 1]  # albedo, normal, roughness
 HERE = Path(__file__).resolve().parent

@@ -70,7 +70,7 @@ def _figures(item, with_q: bool, models: dict) -> dict:
 def _q(item, models: dict):
     """Q of the tile under a draft discriminator trained on the item's source (one model per source)."""
     from seamless_usd.synthesis import MapInput, get_preset, train
-    from seamless_usd.synthesis.sample import judge as q_judge
+    from seamless_usd.synthesis.gan.sample import judge as q_judge
 
     key = (item.family, item.source[0].shape)
     if key not in models:

@@ -136,8 +136,8 @@ def _blocky(src: np.ndarray, side: int, rng: np.random.Generator) -> np.ndarray:
 
 def _product(kind: str, sources: list[np.ndarray], normals: list[bool], seed: int) -> list[np.ndarray] | None:
     """The product's lattice cut or random-start refinement of ``sources`` (None when no lattice)."""
-    from seamless_usd.synthesis.lattice import find_lattice, lattice_cut, lattice_tile_size
-    from seamless_usd.synthesis.refine import RefineConfig, refine
+    from seamless_usd.synthesis.lattice.cut import find_lattice, lattice_cut, lattice_tile_size
+    from seamless_usd.synthesis.refinement.refine import RefineConfig, refine
 
     if kind == "lattice":
         lat = find_lattice(sources)

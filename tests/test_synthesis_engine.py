@@ -6,12 +6,12 @@ import torch
 
 from seamless_usd.synthesis import MapInput, get_preset, train
 from seamless_usd.synthesis.config import SynthesisConfig
-from seamless_usd.synthesis.data import training_crops
-from seamless_usd.synthesis.engine import CropWorkers, compile_cache_dir, engine_for, maybe_compile, plan_engine
-from seamless_usd.synthesis.features import build_feature_extractor, style_loss
+from seamless_usd.synthesis.gan.data import training_crops
+from seamless_usd.synthesis.gan.engine import CropWorkers, compile_cache_dir, engine_for, maybe_compile, plan_engine
+from seamless_usd.synthesis.gan.features import build_feature_extractor, style_loss
 from seamless_usd.synthesis.precision import choose_precision
-from seamless_usd.synthesis.step import Batch, training_step
-from seamless_usd.synthesis.train import build_networks
+from seamless_usd.synthesis.gan.step import Batch, training_step
+from seamless_usd.synthesis.gan.train import build_networks
 
 CHANNELS = [3, 1, 4]  # RGB, grey and RGBA: every branch of the style loss's channel handling
 CONFIG = get_preset("tiny").replace(k=16, ngf=8, ndf=8, n_res_blocks=1, batch=2)

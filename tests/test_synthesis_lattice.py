@@ -6,7 +6,7 @@ import pytest
 from textures import load_texture
 
 from seamless_usd.synthesis import MapInput, RefineConfig, get_preset, make_tile
-from seamless_usd.synthesis.lattice import (LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio,
+from seamless_usd.synthesis.lattice.cut import (LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio,
                                             lattice_tile_size)
 
 
@@ -113,7 +113,7 @@ def test_the_cut_wraps_bricks_without_a_seam_and_copies_real_normals():
 def test_the_cut_across_the_y_wrap_closes_across_the_x_wrap():
     """The y wrap's cut runs along the whole tile width; where its ends part, the rows between them
     meet rows one tile down across the x wrap. On the bundled weave the free path ended 4 rows apart."""
-    from seamless_usd.synthesis.lattice import _closed_path
+    from seamless_usd.synthesis.lattice.cut import _closed_path
 
     cost = np.ones((40, 9))
     cost[:20, 1] = cost[20:, 7] = 0.0  # the cheapest free path starts at column 1 and ends at column 7

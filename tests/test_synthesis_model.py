@@ -6,8 +6,8 @@ import pytest
 import torch
 
 from seamless_usd.synthesis import MapInput, PRESETS, get_preset, sample, train
-from seamless_usd.synthesis.networks import Discriminator, Generator
-from seamless_usd.synthesis.train import build_networks
+from seamless_usd.synthesis.gan.networks import Discriminator, Generator
+from seamless_usd.synthesis.gan.train import build_networks
 
 
 pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread

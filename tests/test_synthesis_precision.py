@@ -9,10 +9,10 @@ import pytest
 import torch
 
 from seamless_usd.synthesis import get_preset
-from seamless_usd.synthesis.features import build_feature_extractor
+from seamless_usd.synthesis.gan.features import build_feature_extractor
 from seamless_usd.synthesis.precision import cpu_supports_bf16, resolve_precision
-from seamless_usd.synthesis.step import Batch, d_loss, g_loss, generate
-from seamless_usd.synthesis.train import build_networks
+from seamless_usd.synthesis.gan.step import Batch, d_loss, g_loss, generate
+from seamless_usd.synthesis.gan.train import build_networks
 
 
 pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread

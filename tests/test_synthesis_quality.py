@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from seamless_usd.synthesis import MapInput, get_preset, sample, train
-from seamless_usd.synthesis.quality import band_masks, quality
-from seamless_usd.synthesis.sample import crop_plan
+from seamless_usd.synthesis.gan.quality import band_masks, quality
+from seamless_usd.synthesis.gan.sample import crop_plan
 
 
 pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread

@@ -7,8 +7,8 @@ from textures import load_texture
 
 from seamless_usd import metrics
 from seamless_usd.synthesis import MapInput, RefineConfig, get_preset, make_tile, refine
-from seamless_usd.synthesis.refine import level_scales
-from seamless_usd.synthesis.sample import SOURCE_TILE_MIN_FRACTION, crop_plan
+from seamless_usd.synthesis.refinement.refine import level_scales
+from seamless_usd.synthesis.gan.sample import SOURCE_TILE_MIN_FRACTION, crop_plan
 from seamless_usd.synthesis.scale import structure_size, working_factor
 
 

@@ -4,11 +4,11 @@ import pytest
 import torch
 
 from seamless_usd.synthesis import MapInput, get_preset, make_tile, train
-from seamless_usd.synthesis.checkpoint import CHECKPOINT_NAME, load_checkpoint
-from seamless_usd.synthesis.features import build_feature_extractor
-from seamless_usd.synthesis.seeds import SeedRun, choose_seed, fidelity_score, seed_checkpoint_dir, train_seeds
-from seamless_usd.synthesis.step import Batch, g_loss, generate, training_step
-from seamless_usd.synthesis.train import build_networks
+from seamless_usd.synthesis.gan.checkpoint import CHECKPOINT_NAME, load_checkpoint
+from seamless_usd.synthesis.gan.features import build_feature_extractor
+from seamless_usd.synthesis.gan.seeds import SeedRun, choose_seed, fidelity_score, seed_checkpoint_dir, train_seeds
+from seamless_usd.synthesis.gan.step import Batch, g_loss, generate, training_step
+from seamless_usd.synthesis.gan.train import build_networks
 from seamless_usd.synthesis.types import QResult, TileResult
 
 TINY = get_preset("tiny").replace(iterations=4)

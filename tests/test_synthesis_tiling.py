@@ -5,8 +5,8 @@ import torch
 
 from seamless_usd.metrics import seam_ratios
 from seamless_usd.synthesis import get_preset
-from seamless_usd.synthesis.tiling import tile_generate
-from seamless_usd.synthesis.train import build_networks
+from seamless_usd.synthesis.gan.tiling import tile_generate
+from seamless_usd.synthesis.gan.train import build_networks
 
 
 pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread

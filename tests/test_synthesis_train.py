@@ -8,9 +8,9 @@ import pytest
 import torch
 
 from seamless_usd.synthesis import MapInput, TrainedModel, get_preset, train
-from seamless_usd.synthesis.checkpoint import CHECKPOINT_NAME
-from seamless_usd.synthesis.features import VGG19_CFG, VGG19Features, build_feature_extractor
-from seamless_usd.synthesis.schedule import learning_rate
+from seamless_usd.synthesis.gan.checkpoint import CHECKPOINT_NAME
+from seamless_usd.synthesis.gan.features import VGG19_CFG, VGG19Features, build_feature_extractor
+from seamless_usd.synthesis.gan.schedule import learning_rate
 
 
 pytestmark = pytest.mark.usefixtures("one_thread")  # tiny networks: fastest and steadiest on one thread

@@ -302,8 +302,8 @@ def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:
     Training resumes from a checkpoint it can load; one it refuses would fail the stack on every
     run, so it is removed (never unpickled) and training starts over.
     """
-    from seamless_usd.synthesis.checkpoint import CHECKPOINT_NAME, load_checkpoint
-    from seamless_usd.synthesis.seeds import seed_checkpoint_dir
+    from seamless_usd.synthesis.gan.checkpoint import CHECKPOINT_NAME, load_checkpoint
+    from seamless_usd.synthesis.gan.seeds import seed_checkpoint_dir
 
     for i in range(seeds):  # one checkpoint per seed
         path = seed_checkpoint_dir(checkpoint_dir, i) / CHECKPOINT_NAME

@@ -1,4 +1,11 @@
-"""SeamlessGAN engine: train on a texture stack, sample a tileable stack. Knows nothing about USD.
+"""Synthesis: a texture stack in, a tileable stack out. Knows nothing about USD.
+
+Three methods, one folder each, composed by ``tile.make_tile``:
+
+- ``gan/``: SeamlessGAN, trained at the working resolution; its latent tiling gives the tileable layout;
+- ``refinement/``: toroidal exemplar refinement, which brings that layout to full resolution with
+  source texels;
+- ``lattice/``: the lattice cut, for textures that repeat (bricks, tiles, weaves).
 
 >>> from seamless_usd.synthesis import MapInput, get_preset, train, sample
 >>> import numpy as np
@@ -13,11 +20,11 @@ import os
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from .config import PRESETS, SynthesisConfig, get_preset
-from .lattice import LATTICE_TARGET
-from .refine import RefineConfig, RefineResult, refine
-from .sample import SamplingProgress, sample
+from .gan.sample import SamplingProgress, sample
+from .gan.train import TrainedModel, train
+from .lattice.cut import LATTICE_TARGET
+from .refinement.refine import RefineConfig, RefineResult, refine
 from .tile import MadeTile, downsample_maps, make_tile, written_lattice_ratio
-from .train import TrainedModel, train
 from .types import Candidate, MapInput, QResult, TileResult, TrainingProgress
 
 __all__ = ["SynthesisConfig", "PRESETS", "get_preset", "MapInput", "train", "sample", "TrainedModel",

@@ -24,12 +24,12 @@ from seamless_usd.metrics import scale_ratio
 from seamless_usd.verdict import judge as verdict_of
 
 from .config import SynthesisConfig
-from .data import effective_k
-from .lattice import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
-from .refine import RefineConfig, refine, resize_periodic
-from .sample import judge, sample
+from .gan.data import effective_k
+from .gan.sample import judge, sample
+from .gan.seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
+from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
+from .refinement.refine import RefineConfig, refine, resize_periodic
 from .scale import structure_size, working_factor
-from .seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
 from .types import MapInput, QResult, TileResult, stack_shape
 
 __all__ = ["MadeTile", "make_tile", "downsample_maps", "written_lattice_ratio", "TILE_SIZES", "LAYOUT_SCALE_RANGE"]

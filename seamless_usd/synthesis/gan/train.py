@@ -13,15 +13,15 @@ import torch
 
 from .checkpoint import (CHECKPOINT_NAME, load_checkpoint, load_optimizer_tensors, optimizer_tensors,
                          save_checkpoint, versions)
-from .config import SynthesisConfig
+from ..config import SynthesisConfig
 from .data import effective_k, stack_tensor, training_crops
 from .engine import CropWorkers, EnginePlan, engine_for, maybe_compile
 from .features import build_feature_extractor
 from .networks import Discriminator, Generator, init_weights
-from .precision import pick_device, resolve_precision
+from ..precision import pick_device, resolve_precision
 from .schedule import learning_rate
 from .step import Batch, StepFunctions, d_loss, g_loss, generate, step_parts, training_step
-from .types import MapInput, TrainingProgress, stack_shape
+from ..types import MapInput, TrainingProgress, stack_shape
 
 __all__ = ["TrainedModel", "train", "training_hash", "build_networks"]
 

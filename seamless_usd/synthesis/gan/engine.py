@@ -21,8 +21,8 @@ from typing import Callable, Iterable, TypeVar
 
 import torch
 
-from .config import SynthesisConfig
-from .precision import bf16_support, choose_precision
+from ..config import SynthesisConfig
+from ..precision import bf16_support, choose_precision
 
 __all__ = ["EnginePlan", "plan_engine", "engine_for", "CropWorkers", "compile_cache_dir", "maybe_compile"]
 

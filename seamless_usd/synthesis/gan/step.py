@@ -17,11 +17,11 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from .config import SynthesisConfig
+from ..config import SynthesisConfig
 from .engine import CropWorkers
 from .features import style_loss
 from .networks import Discriminator, Generator
-from .precision import autocast
+from ..precision import autocast
 
 __all__ = ["Batch", "generate", "d_loss", "g_loss", "training_step", "step_parts", "StepFunctions"]
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .types import QResult
+from ..types import QResult
 
 __all__ = ["band_masks", "quality"]
 

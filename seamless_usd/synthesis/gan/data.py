@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from .types import MapInput, stack_shape
+from ..types import MapInput, stack_shape
 
 __all__ = ["stack_tensor", "split_maps", "training_crops", "effective_k"]
 

@@ -29,7 +29,7 @@ import torch
 import torch.nn.functional as F
 
 from .patches import PatchSpace, clamp_field, gather, occurrence_bias, patch_cost, patchmatch, vote
-from .precision import pick_device
+from ..precision import pick_device
 
 __all__ = ["RefineConfig", "RefineResult", "refine", "joint_features", "level_scales", "resize_periodic", "spread"]
 

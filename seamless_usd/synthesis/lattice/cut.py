@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .refine import joint_features, spread
-from .scale import autocorrelation, box_downsample
+from ..refinement.refine import joint_features, spread
+from ..scale import autocorrelation, box_downsample
 
 __all__ = ["Lattice", "find_lattice", "lattice_tile_size", "lattice_cut", "lattice_ratio", "PERIOD_STRENGTH",
            "PERIOD_DIP", "LATTICE_TARGET"]

@@ -25,10 +25,10 @@ import torch
 
 from seamless_usd.metrics import TARGETS, centre_seam_ratios, patch_distance, scale_ratio, seam_ratios
 
-from .config import SynthesisConfig
-from .precision import pick_device
+from ..config import SynthesisConfig
+from ..precision import pick_device
 from .train import TrainedModel, train
-from .types import MapInput, TileResult, TrainingProgress
+from ..types import MapInput, TileResult, TrainingProgress
 
 __all__ = ["SeedRun", "seed_list", "seed_checkpoint_dir", "seed_workers", "train_seeds", "fidelity_score",
            "choose_seed"]

@@ -9,11 +9,11 @@ import numpy as np
 import torch
 
 from .data import stack_tensor
-from .precision import autocast
+from ..precision import autocast
 from .quality import quality
 from .tiling import tile_generate
 from .train import TrainedModel
-from .types import Candidate, MapInput, QResult, TileResult, stack_shape
+from ..types import Candidate, MapInput, QResult, TileResult, stack_shape
 
 __all__ = ["sample", "judge", "crop_plan", "SamplingProgress"]
 
