@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import platform
+import resource
 import sys
 import time
 from pathlib import Path
@@ -41,10 +42,13 @@ if str(HERE) not in sys.path:  # the baselines sit beside this script
 from methods import SYNTHESIS_METHODS, MethodResult, img2texture_tile, preset_config, run_synthesis, to_source_grid
 from baselines import BASELINES  # noqa: E402
 from quality_md import TARGETS, fmt, to_markdown  # noqa: E402,F401 (re-exported)
-from stacks import SHARED_DIR, STACKS, MapFile, StackSpec, load_stack  # noqa: E402,F401 (re-exported)
+from stacks import (FULLRES_STACKS, QUALITY_STACKS, SHARED_DIR, STACKS, MapFile, StackSpec,  # noqa: E402,F401
+                    load_stack)
 
 from seamless_usd import metrics as M  # noqa: E402
+from seamless_usd.metrics.structure import structure_figures  # noqa: E402
 from seamless_usd.synthesis.lattice.cut import find_lattice, lattice_ratio  # noqa: E402
+from seamless_usd.verdict.joins import join_stats  # noqa: E402
 
 __all__ = [
     "MapFile",
@@ -143,6 +147,21 @@ def side_by_side(tile: np.ndarray, source: np.ndarray, is_normal: bool, gap: int
     return out
 
 
+def crops(tile: np.ndarray, source: np.ndarray, is_normal: bool, zoom: int, gap: int = 8) -> np.ndarray:
+    """uint8: a window of the tile repeated (across its wrap corner, where a seam would show) beside a window
+    of the source, each ``PICTURE_MAX / 2 / zoom`` texels across, every texel shown ``zoom`` x ``zoom``."""
+    side = PICTURE_MAX // 2 // zoom
+    h, w = tile.shape[:2]
+    rep = M.tile_2x2(tile)[h - side // 2: h + side - side // 2, w - side // 2: w + side - side // 2]
+    sh, sw = source.shape[:2]
+    win = source[sh // 2 - side // 2: sh // 2 + side - side // 2, sw // 2 - side // 2: sw // 2 + side - side // 2]
+    parts = [np.repeat(np.repeat(M.preview_uint8(a, is_normal), zoom, 0), zoom, 1) for a in (rep, win)]
+    out = np.full((parts[0].shape[0], 2 * parts[0].shape[1] + gap, 3), 255, np.uint8)
+    out[:, : parts[0].shape[1]] = parts[0]
+    out[:, parts[0].shape[1] + gap:] = parts[1]
+    return out
+
+
 def write_picture(path: Path, pixels: np.ndarray) -> None:
     """Write an ``(H, W, 3)`` uint8 picture (JPEG by the suffix), shrunk to at most ``PICTURE_MAX`` px."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -161,6 +180,25 @@ def write_picture(path: Path, pixels: np.ndarray) -> None:
 # --------------------------------------------------------------------------------------------
 # The run
 # --------------------------------------------------------------------------------------------
+
+
+def inner_figures(res: MethodResult, stack: dict[str, tuple[np.ndarray, bool]]) -> dict[str, dict]:
+    """Per map, what lies inside the tile: the bad joins between copied blocks (count, total length in
+    texels, and the field's coherence; None for a tile not made of source texels) and the structure figure
+    against the source (``seamless_usd.metrics.structure``)."""
+    names = list(stack)
+    tiles = [res.tiles[k] for k in names]
+    refs = [res.references[k] if res.references else stack[k][0] for k in names]
+    normals = [stack[k][1] for k in names]
+    joins = join_stats(tiles, refs, normals, names) if tiles[0].shape == refs[0].shape else {"maps": None}
+    out = {}
+    for k, t, r in zip(names, tiles, refs):
+        mine = (joins["maps"] or {}).get(k if len(names) > 1 else "stack")
+        out[k] = {"bad_joins": None if mine is None else mine["count"],
+                  "join_length": None if mine is None else mine["length"],
+                  "coherence": joins.get("coherence"),
+                  "structure": structure_figures(t, r)["structure"]}
+    return out
 
 
 def _round(v):
@@ -259,10 +297,12 @@ def run(
             refs = [res.references[k] if res.references else px for k, (px, _) in stack.items()]  # same grid
             ratio = lattice_ratio([res.tiles[k] for k in stack], refs,
                                   find_lattice(refs) if res.references else source_lattice)
+            inner = inner_figures(res, stack)
             for map_name, (src_full, is_normal) in stack.items():
                 tile = res.tiles[map_name]
                 src = res.references[map_name] if res.references else src_full  # same texel scale
                 m = M.map_metrics(tile, src, is_normal, features=features)
+                m.update(inner[map_name])
                 row = {
                     "stack": stack_name,
                     "map": map_name,
@@ -272,6 +312,7 @@ def run(
                     "tile_size": list(tile.shape[:2]),
                     **{k: _round(v) for k, v in m.items()},
                     "seconds": round(res.seconds, 2),
+                    "peak_rss_gib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2 ** 20, 2),  # so far
                     "lattice_ratio": _round(ratio),  # the stack's, on every map's row
                     **res.info,
                 }
@@ -281,6 +322,11 @@ def run(
                     shown = to_source_grid(tile, src, src_full)
                     write_picture(out / "tiles" / name, side_by_side(shown, src_full, is_normal))
                     row["picture"] = f"tiles/{name}"
+                    if max(src_full.shape[:2]) > PICTURE_MAX:  # full resolution: texels as they are, 1x and 3x
+                        for zoom in (1, 3):
+                            crop = f"{stack_name}__{map_name}__{method}__{zoom}x.jpg"
+                            write_picture(out / "tiles" / crop, crops(shown, src_full, is_normal, zoom))
+                            row[f"crop_{zoom}x"] = f"tiles/{crop}"
                 log(
                     f"  {map_name:<10} scale {fmt(m['scale_ratio'])}  patch {fmt(m['patch_distance'])}  "
                     f"seam x {m['seam_ratio_x']:.2f} y {m['seam_ratio_y']:.2f}  "
@@ -314,7 +360,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Command line entry; returns the exit code."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--preset", default="default", help="SeamlessGAN preset (default: %(default)s)")
-    p.add_argument("--stacks", default=None, help=f"comma-separated, from: {', '.join(STACKS)} (default: all available)")
+    p.add_argument("--stacks", default=None, help=f"comma-separated, from: {', '.join(STACKS)}; or 'fullres' for the full-resolution set "
+                   f"({', '.join(FULLRES_STACKS)}) (default: {', '.join(QUALITY_STACKS)}, where available)")
     p.add_argument("--methods", default=",".join(METHODS), help=f"comma-separated, from: {', '.join(METHODS)} (default: all)")
     p.add_argument("--seed", type=int, default=0, help="training and sampling seed (default: %(default)s)")
     p.add_argument("--iterations", type=int, default=None,
@@ -337,11 +384,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     a = p.parse_args(argv)
     methods = _names(a.methods, METHODS, "method")
     if a.stacks is None:
-        stacks = [n for n, s in STACKS.items() if s.folder == "samples" or a.textures_dir.is_dir()]
-        if len(stacks) < len(STACKS):
+        stacks = [n for n in QUALITY_STACKS if STACKS[n].folder == "samples" or a.textures_dir.is_dir()]
+        if len(stacks) < len(QUALITY_STACKS):
             print(f"note: @{a.textures_dir}@ not found; running the sample stacks only", file=sys.stderr)
     else:
-        stacks = _names(a.stacks, list(STACKS), "stack")
+        stacks = list(FULLRES_STACKS) if a.stacks == "fullres" else _names(a.stacks, list(STACKS), "stack")
         if not a.textures_dir.is_dir() and any(STACKS[n].folder == "shared" for n in stacks):
             print(
                 f"error: the mx_* stacks need the MaterialX images in @{a.textures_dir}@ "

@@ -27,6 +27,10 @@ def _figure(row: dict, key: str):
     return row.get(key)
 
 
+def _int(v):
+    return None if v is None else int(v)
+
+
 def _meets(v, op: str, threshold: float) -> bool:
     return v is not None and (v <= threshold if op == "<=" else v >= threshold)
 
@@ -106,6 +110,23 @@ def to_markdown(result: dict) -> str:
                 + f" | {fmt(r['seconds'], 1)} |"
             )
         lines += [""]
+        inner = [r for r in rows if r["stack"] == stack and r.get("structure") is not None]
+        if inner:
+            lines += ["Inside the tile: bad joins between copied blocks (count and total length in texels, "
+                      "`seamless_usd.verdict.joins`; – when the tile is not made of source texels), the field's "
+                      "coherence, and the structure figure (line ends and line lengths against the source, divided "
+                      "by the source's own half-vs-half spread; target <= 1.5, `seamless_usd.metrics.structure`):",
+                      "", "| map | method | bad joins | join length | coherence | structure |", "|---|---|---:|---:|---:|---:|"]
+            lines += [f"| {r['map']} | {r['method']} | {fmt(_int(r.get('bad_joins')))} | {fmt(_int(r.get('join_length')))} | "
+                      f"{fmt(r.get('coherence'), 3)} | {fmt(r.get('structure'))} |" for r in inner]
+            crops = [r for r in inner if r.get("crop_1x")]
+            if crops:
+                lines += ["", "Texels as they are (the tile repeated across its wrap corner | the source), 1x and 3x: "
+                          + ", ".join(f"[{r['map']} 1x]({r['crop_1x']}) / [3x]({r['crop_3x']})" for r in crops)]
+            peak = max((r.get("peak_rss_gib") or 0 for r in inner), default=0)
+            if peak:
+                lines += ["", f"Peak memory of the process so far: {peak:.2f} GiB."]
+            lines += [""]
         ratios = {r["method"]: r["lattice_ratio"] for r in rows
                   if r["stack"] == stack and r.get("lattice_ratio") is not None}
         if ratios:

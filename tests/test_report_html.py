@@ -157,6 +157,24 @@ def test_run_details_say_what_seeded_the_refinement():
     assert "tile made from" in page and "the SeamlessGAN tile, refined" in page and "repeats every" not in page
 
 
+def test_run_details_show_each_synthesis_stage_as_a_picture():
+    m = _map("/M/C", "diffuseColor")
+    ramp = np.linspace(-1, 1, 24 * 24 * 3, dtype=np.float32).reshape(24, 24, 3)
+    stages = [("GAN layout, 24 x 24 px (working resolution)", ramp),
+              ("refinement level 48 x 48 px, carried (no search)", np.zeros((48, 48, 3), np.float32))]
+    p = stack_previews([m], [np.zeros((32, 32, 3))], [np.zeros((32, 32, 3))], (1.0, 1.0), levels=stages)
+    assert [c for c, _ in p.levels] == [c for c, _ in stages]
+    assert p.levels[0][1].dtype == np.uint8 and p.levels[0][1].shape == (24, 24, 3)
+    assert p.levels[0][1][0, 0, 0] == 0 and p.levels[0][1][-1, -1, -1] == 255  # -1..1 shown as 0..255
+    stack = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.PASSED, previews=p)
+    page = render_html(Report(sources=["s.usda"], stacks=[stack]))
+    details = page[page.index("run details"):]
+    assert "stage by stage" in details and details.count("<figure>") >= 2
+    assert "refinement level 48 x 48 px, carried (no search)" in details
+    bare = StackReport(id="M-2", material="</M2>", source="s.usda", status=StackStatus.PASSED)
+    assert "stage by stage" not in render_html(Report(sources=["s.usda"], stacks=[bare]))
+
+
 def test_left_alone_and_failed_stacks_say_why():
     left = StackReport(id="D-1", material="</Decal>", source="s.usda", status=StackStatus.LEFT_ALONE,
                        intent="uv-atlas", intent_reason="UVs 0.11-0.89, 37 islands")

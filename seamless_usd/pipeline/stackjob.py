@@ -212,16 +212,21 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                     "layout_scale": {m.asset: made.layout_scale.get(n) for n, m in zip(names, stack.maps)},
                     "refine_levels": made.refine_levels,
                     "seeds": made.seeds,  # with several seeds: each one's figures, and the one kept
+                    "level_pictures": [caption for caption, _ in made.level_pictures],
                 },
             }
             discriminator = _discriminator_preview(made)
             tiles = dict(made.maps)
             if discriminator is not None:
                 tiles["__discriminator__"] = discriminator.astype(np.float32)
+            for i, (_, picture) in enumerate(made.level_pictures):
+                tiles[f"__level{i}__"] = picture
             entry.store(tiles, meta)
         else:
             tiles, meta = cached
     discriminator = tiles.pop("__discriminator__", None)
+    captions = meta["scale"].get("level_pictures", [])
+    levels = [(c, tiles.pop(f"__level{i}__")) for i, c in enumerate(captions) if f"__level{i}__" in tiles]
 
     t3 = time.perf_counter()
     out_dir = Path(job.output_dir)
@@ -257,8 +262,11 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         verdict.failing.append(f"all maps: lattice_ratio {ratio:.3g} (tolerance at least {synthesis.LATTICE_TARGET:.2f})")
         verdict.faithful = False
     timings["verdict"] = time.perf_counter() - t4
+    for m, figures in zip(stack.maps, inside_figures(written_values, sources, stack.maps)):
+        outcomes[map_identity(m)].metrics.update(figures)
     failing = list(verdict.failing)
-    previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator)
+    previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator,
+                              levels=levels)
     return StackOutcome(
         stack_id=stack.id,
         maps=outcomes,
@@ -331,6 +339,26 @@ def _q_dict(tile) -> dict[str, Any]:
         "band_min": [float(q.band_min_vertical), float(q.band_min_horizontal)],
         "margin": float(q.margin),
     }
+
+
+def inside_figures(tiles: list[np.ndarray], sources: list[np.ndarray], maps: list[TextureMap]) -> list[dict]:
+    """Per map, what lies inside the written tile (figures without a tolerance, for the report): the bad joins
+    between copied blocks (count, total length in texels) and the field's coherence (:mod:`.verdict.joins`;
+    None when the tile is not made of source texels), and the structure figure against the source
+    (:mod:`seamless_usd.metrics.structure`)."""
+    from seamless_usd.metrics.structure import structure_figures
+    from seamless_usd.verdict.joins import join_stats
+
+    names = [m.asset for m in maps]
+    joins = join_stats(tiles, sources, [m.is_normal for m in maps], names)
+    out = []
+    for name, tile, source in zip(names, tiles, sources):
+        mine = (joins["maps"] or {}).get(name if len(maps) > 1 else "stack")
+        out.append({"bad_joins": None if mine is None else float(mine["count"]),
+                    "join_length": None if mine is None else float(mine["length"]),
+                    "coherence": joins["coherence"],
+                    "structure": structure_figures(tile, source)["structure"]})
+    return out
 
 
 def _discriminator_preview(tile) -> np.ndarray | None:

@@ -304,10 +304,16 @@ def stack_html(stack: StackReport) -> str:
     message = (f"<p>{esc(stack.message)}</p>" if stack.message and stack.status is not StackStatus.LEFT_ALONE
                and not shown_below else "")
     main, more = _facts(stack)
-    details = f"<details><summary>run details</summary><table class=facts>{more}</table></details>" if more else ""
+    p = stack.previews
+    stages = ""
+    if p.levels:
+        stages = ('<p class="muted">How the tile was built, stage by stage (the first map, one texel per sample): '
+                  'where a plank or a joint first breaks is the stage to look at.</p><div class="row">'
+                  + "".join(figure(px, caption, lossless=True) for caption, px in p.levels) + "</div>")
+    details = (f"<details><summary>run details</summary><table class=facts>{more}</table>{stages}</details>"
+               if more or stages else "")
     blocks = []
     g = _geometry(stack)
-    p = stack.previews
     if g is not None and (p.lit_tile is not None or p.lit_note):
         lit = _pair(stack, g, p.lit_source, p.lit_tile, "lit") if p.lit_tile is not None else ""
         blocks.append(f'<div class="block"><h3>Material, lit from a grazing angle</h3>'

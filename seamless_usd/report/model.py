@@ -58,6 +58,8 @@ class Previews:
     view: dict[str, Any] = field(default_factory=dict)  # ViewGeometry.to_dict(): window, tile_extent, size
     thumbnail: np.ndarray | None = None  # small picture of the result for the library index
     discriminator: np.ndarray | None = None  # D map with the seam bands drawn
+    levels: list[tuple[str, np.ndarray]] = field(default_factory=list)  # (caption, uint8 RGB): the layout and
+    #                                                                       each refinement level (run details)
 
 
 @dataclass

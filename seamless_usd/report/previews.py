@@ -59,7 +59,8 @@ def _lit_note(maps: Sequence, has_lit: bool) -> str:
 
 def stack_previews(maps: Sequence, sources: Sequence[np.ndarray], tiles: Sequence[np.ndarray],
                    uv_scale: tuple[float, float] | None, discriminator: np.ndarray | None = None, *,
-                   repeats: int = REPEATS, max_px: int = VIEW_MAX) -> Previews:
+                   repeats: int = REPEATS, max_px: int = VIEW_MAX,
+                   levels: Sequence[tuple[str, np.ndarray]] = ()) -> Previews:
     """Previews of a stack.
 
     Parameters
@@ -71,6 +72,7 @@ def stack_previews(maps: Sequence, sources: Sequence[np.ndarray], tiles: Sequenc
     discriminator : uint8 RGB picture of the discriminator map, or None.
     repeats : repeats of the larger of source and tile across the shared window.
     max_px : longest side of the same-scale pictures.
+    levels : (caption, first map in the network domain) per synthesis stage, shown as they are.
 
     Examples
     --------
@@ -82,6 +84,8 @@ def stack_previews(maps: Sequence, sources: Sequence[np.ndarray], tiles: Sequenc
     ((96, 96, 3), [3.0, 3.0], (96, 96, 3))
     """
     out = Previews(discriminator=None if discriminator is None else np.asarray(discriminator, np.uint8))
+    if maps:
+        out.levels = [(c, map_picture(np.asarray(px, np.float32), maps[0].is_normal)) for c, px in levels]
     if not maps:
         return out
     source_hw = np.asarray(sources[0]).shape[:2]

@@ -37,6 +37,10 @@ LABELS: dict[str, str] = {
     "detail_ratio_centre": "detail at the centre lines",
     "ssim": "SSIM vs source",
     "gram_distance": "Gram distance vs source",
+    "bad_joins": "bad joins between copied blocks",
+    "join_length": "their length (texels)",
+    "coherence": "coherence of the copies",
+    "structure": "structure vs source (≤ 1.5: lines and cells kept)",
 }
 
 # key -> (words when within target, words below the low bound, words above the high bound)

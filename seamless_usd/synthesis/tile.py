@@ -68,6 +68,8 @@ class MadeTile:
     lattice: dict = field(default_factory=dict)  # the stack's lattice, and each layout candidate's figures
     q: QResult | None = None  # Q of the written tile: the GAN sample's, else D's verdict on the tile itself
     alternatives: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)  # the candidate not written
+    level_pictures: list[tuple[str, np.ndarray]] = field(default_factory=list)  # (caption, first map): the GAN's
+    #                 layout, then every refinement level seen through its field (see refine's ``pictures``)
 
     def __post_init__(self) -> None:
         if self.q is None:
@@ -78,6 +80,10 @@ class MadeTile:
         """Whether the discriminator's Q passes on the written tile (through its layout for a refined GAN tile).
         The discriminator's view only: whether the tile *passed* is the verdict's (:mod:`seamless_usd.verdict`)."""
         return bool(self.q.passed)
+
+
+#: Longest side (px) of the per-level pictures of the refinement.
+LEVEL_PICTURE = 384
 
 
 def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInput]:
@@ -166,7 +172,7 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     use_layout = all(low <= v <= high for v in layout_scale.values())
     layout = [gan.maps[m.name] for m in maps] if use_layout else None
     result = refine([m.pixels for m in maps], layout, out_hw, refine_config,
-                    seed=seed, device=device, progress=lambda info: emit("refine", info))
+                    seed=seed, device=device, progress=lambda info: emit("refine", info), pictures=LEVEL_PICTURE)
     timings["refine"] = time.perf_counter() - t3
     tiles = {m.name: np.ascontiguousarray(t, dtype=np.float32) for m, t in zip(maps, result.maps)}
     model = models[runs.index(chosen)]
@@ -174,11 +180,24 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     # not, and the discriminator judges the refined tile itself
     q = None if use_layout else judge(model, _on_grid(tiles, maps, (f_y, f_x)))
     made = MadeTile(tiles, out_hw, (H, W), (W / out_hw[1], H / out_hw[0]), structure, f, work_hw, gan, True,
-                    layout_scale, use_layout, result.levels, timings, seeds, "gan" if use_layout else "random", q=q)
+                    layout_scale, use_layout, result.levels, timings, seeds, "gan" if use_layout else "random", q=q,
+                    level_pictures=_level_pictures(gan.maps[maps[0].name], use_layout, result))
     t4 = time.perf_counter()
     _try_lattice(made, maps, model, refine_config.lattice and tile_size == "source", keep_alternatives)
     timings["lattice"] = time.perf_counter() - t4
     return made
+
+
+def _level_pictures(layout: np.ndarray, used: bool, result) -> list[tuple[str, np.ndarray]]:
+    """Where a structure breaks, stage by stage: the GAN's layout, then each refinement level's field."""
+    h, w = layout.shape[:2]
+    out = [(f"GAN layout, {w} x {h} px (working resolution)" + ("" if used else "; not used: its scale was off"),
+            np.ascontiguousarray(layout, dtype=np.float32))]
+    for info, pic in zip(result.levels, result.pictures):
+        th, tw = info["tile"]
+        how = "carried (no search)" if info["iterations"] == 0 else f"searched, {info['iterations']} iterations"
+        out.append((f"refinement level {tw} x {th} px, {how}", pic))
+    return out
 
 
 def written_lattice_ratio(lattice: dict, layout_kind: str | None) -> float | None:
@@ -251,6 +270,7 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
         made.maps, made.tile_size, made.q = tiles, tuple(tile_hw), q
         made.uv_scale = (W / tile_hw[1], H / tile_hw[0])
         made.layout_kind, made.refine_levels = "lattice", []  # copied through the cut's field, not refined
+        made.level_pictures = made.level_pictures[:1]  # the GAN's layout only: the cut is not refined
     else:
         loser_kind, loser = "lattice", tiles
     if keep_alternatives:

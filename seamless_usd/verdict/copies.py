@@ -17,7 +17,7 @@ import numpy as np
 from .features import moving_mean
 from .lines import Seam
 
-__all__ = ["COPY_SHARE", "COPY_THRESHOLD", "MAP_THRESHOLD", "copy_origins", "copy_seams"]
+__all__ = ["COPY_SHARE", "COPY_THRESHOLD", "MAP_THRESHOLD", "continuation", "copy_origins", "copy_seams"]
 
 #: Share of a tile's texels that must be found in the source for the tile to be judged as copies.
 COPY_SHARE = 0.9
@@ -82,7 +82,7 @@ def _quantised(img: np.ndarray) -> np.ndarray:
     return np.clip(np.round((img + 1.0) * 127.5), 0, 255).astype(np.int16)
 
 
-def _continuation(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, axis: int, unit: float) -> np.ndarray:
+def continuation(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, axis: int, unit: float) -> np.ndarray:
     """(H, W) continuation error (in ``unit``) across the line before each texel along ``axis`` (1: vertical
     lines). At a join whose continuation lies outside the source on both sides (a window used as its own
     tile joins its last column to its first), the plain step across the line stands in, less one unit (the
@@ -117,7 +117,7 @@ def copy_seams(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, name: s
     found: list[Seam] = []
     strongest = 0.0
     for axis, label in ((1, "x"), (0, "y")):
-        err = _continuation(tile, source, origin, axis, unit)
+        err = continuation(tile, source, origin, axis, unit)
         along = err if axis == 1 else err.T  # rows run along the line; columns are lines
         n = along.shape[0]
         k = min(run, n)

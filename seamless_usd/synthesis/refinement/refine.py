@@ -28,10 +28,11 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from .heal import relax_boundaries, smoothed
 from .patches import PatchSpace, clamp_field, gather, occurrence_bias, patch_cost, patchmatch, vote
 from ..precision import pick_device
 
-__all__ = ["RefineConfig", "RefineResult", "refine", "joint_features", "level_scales", "resize_periodic", "spread"]
+__all__ = ["RefineConfig", "RefineResult", "refine", "field_picture", "joint_features", "level_scales", "resize_periodic", "spread"]
 
 
 @dataclass(frozen=True)
@@ -54,6 +55,10 @@ class RefineConfig:
     #                          default) against the copied texels themselves. On a 512 px wood window the vote's
     #                          averaging made the search pick smooth patches: patch distance 4.9 against 1.2
     #                          without it, and the grain washed out.
+    coarse_patch: int = 0  # patch side at the levels that decide the structure (tile <= coarse_until px); 0: patch
+    coarse_until: int = 256
+    heal: int = 0  # passes of minimum-error boundary relaxation after each level (see .heal); 0: off
+    heal_sigma: float = 1.5  # blur (px at the level) of the features the joins are judged on while healing
     lattice: bool = True  # stacks that repeat on a lattice (bricks, weaves) also get a tile cut to whole periods
     #                       from the source (see .lattice); Q and the fidelity figures choose between the two
 
@@ -64,6 +69,20 @@ class RefineResult:
     maps: list[np.ndarray]  # per map, (h, w, C_i) float32 copied from the source through ``field``
     levels: list[dict] = field(default_factory=list)  # per level: scale, size, seconds, mean cost
     seconds: float = 0.0
+    pictures: list[np.ndarray] = field(default_factory=list)  # per level: the first map through its field (small)
+
+
+def field_picture(source: np.ndarray, fld: torch.Tensor, level_source_hw: tuple[int, int], side: int) -> np.ndarray:
+    """The full-resolution ``source`` seen through a level's field: at most ``side`` px, one texel per sample
+    (nearest), so a block edge or a broken line shows as it is, not smoothed."""
+    h, w = fld.shape[:2]
+    n = max(1, math.ceil(max(h, w) / side))
+    sub = fld[::n, ::n].cpu().numpy()
+    sy = source.shape[0] / level_source_hw[0]
+    sx = source.shape[1] / level_source_hw[1]
+    y = np.clip(np.round(sub[..., 0] * sy).astype(np.int64), 0, source.shape[0] - 1)
+    x = np.clip(np.round(sub[..., 1] * sx).astype(np.int64), 0, source.shape[1] - 1)
+    return np.ascontiguousarray(source[y, x], dtype=np.float32)
 
 
 def spread(m: np.ndarray) -> float:
@@ -140,7 +159,7 @@ def _random_field(tile: tuple[int, int], valid: tuple[int, int], r: int, block: 
 
 def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: tuple[int, int],
            config: RefineConfig = RefineConfig(), *, seed: int = 0, device: str | torch.device | None = None,
-           progress=None) -> RefineResult:
+           progress=None, pictures: int = 0) -> RefineResult:
     """Refine a tileable layout into a full-resolution tile made of source texels.
 
     Parameters
@@ -150,6 +169,7 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
         from a block-random field instead (the "refinement alone" baseline).
     tile_hw : (h, w) of the output tile at the sources' resolution.
     progress : called with a dict per finished level.
+    pictures : when > 0, keep for every level the first map seen through its field, at most this many px.
     """
     t_start = time.perf_counter()
     dev = pick_device(device)
@@ -162,34 +182,41 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
     H, W = src.shape[1:]
     th, tw = tile_hw
     scales = level_scales(tile_hw, config.coarsest)
-    r = config.patch // 2
     levels: list[dict] = []
+    shots: list[np.ndarray] = []
     fld = None
     prev_tile = prev_src = None
     for li, s in enumerate(scales):
         t0 = time.perf_counter()
-        s_hw = (max(config.patch + 1, round(H * s)), max(config.patch + 1, round(W * s)))
         t_hw = (max(config.patch, round(th * s)), max(config.patch, round(tw * s)))
+        patch = config.coarse_patch if config.coarse_patch and max(t_hw) <= config.coarse_until else config.patch
+        r = patch // 2
+        s_hw = (max(patch + 1, round(H * s)), max(patch + 1, round(W * s)))
+        t_hw = (max(patch, t_hw[0]), max(patch, t_hw[1]))
         if li > 0 and max(t_hw) > config.carry_above:  # carry only: no descriptors, no search
             valid = (s_hw[0] - 2 * r, s_hw[1] - 2 * r)
             ratio = (t_hw[0] / prev_tile[0], t_hw[1] / prev_tile[1])
             fld = _carry(fld, t_hw, ratio, (s_hw[0] / prev_src[0], s_hw[1] / prev_src[1]), r, valid)
+            if config.heal:
+                fld = relax_boundaries(smoothed(_resize(src, s_hw), config.heal_sigma), fld, config.heal)
             prev_tile, prev_src = t_hw, s_hw
             info = {"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": 0, "mean_cost": None,
                     "seconds": round(time.perf_counter() - t0, 3)}
             levels.append(info)
+            if pictures:
+                shots.append(field_picture(sources[0], fld, s_hw, pictures))
             if progress is not None:
                 progress(info)
             continue
         level_src = _resize(src, s_hw)
-        space = PatchSpace(level_src, config.patch, config.dims, gen)
+        space = PatchSpace(level_src, patch, config.dims, gen)
         finest_two = li >= len(scales) - 2
         iters = config.iterations if not finest_two or li == 0 else config.fine_iterations
         if fld is None:
             # a coherent block-random start; with a layout, the coarsest level's searches match the layout
             # (PatchMatch with the coherence and occurrence terms: an exact per-pixel search collapses
             # onto the few source patches nearest to a smooth layout and carries a texel grid upward)
-            fld = _random_field(t_hw, space.valid, r, max(4, config.patch), gen, dev)
+            fld = _random_field(t_hw, space.valid, r, max(4, patch), gen, dev)
             guide = space.describe(resize_periodic(lay, t_hw), periodic=True) if layout is not None else None
             radius = None
         else:
@@ -210,16 +237,21 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
             fld = patchmatch(desc, space, fld, bias, config.pm_rounds, gen, radius=radius,
                              coherence=config.coherence, max_jump=None if li == 0 else config.fine_jump)
             cost = patch_cost(desc, space, fld, None)  # without the occurrence term
+        if config.heal:
+            fld = relax_boundaries(smoothed(level_src, config.heal_sigma), fld, config.heal)
         prev_tile, prev_src = t_hw, s_hw
         if cost is None:
             cost = patch_cost(space.describe(gather(level_src, fld), periodic=True), space, fld, None)
-        info = {"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": iters,
+        info = {"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": iters, "patch": patch,
                 "mean_cost": float(cost.mean()),
                 "seconds": round(time.perf_counter() - t0, 3)}
         levels.append(info)
+        if pictures:
+            shots.append(field_picture(sources[0], fld, s_hw, pictures))
         if progress is not None:
             progress(info)
     assert tuple(fld.shape[:2]) == (th, tw), f"field {tuple(fld.shape[:2])} != tile {(th, tw)}"
     field_np = fld.cpu().numpy()
     maps = [np.ascontiguousarray(np.asarray(m)[field_np[..., 0], field_np[..., 1]]) for m in sources]
-    return RefineResult(field=field_np, maps=maps, levels=levels, seconds=time.perf_counter() - t_start)
+    return RefineResult(field=field_np, maps=maps, levels=levels, seconds=time.perf_counter() - t_start,
+                        pictures=shots)

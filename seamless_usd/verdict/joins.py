@@ -1,0 +1,92 @@
+"""Every join inside a tile made of source texels: how many copied blocks meet badly, and how long.
+
+The verdict (:mod:`.judge`) names the strongest seams of a tile, over runs of 32 texels. A refined tile
+is a mosaic of copied blocks, often 10-30 texels across; where two blocks meet badly the join is shorter
+than the verdict's run and a long coherent stretch on the same line can average it away. This module
+counts them all: along every line of the tile (the wrap lines are lines like any other on a torus), a
+*bad join* is a stretch where the continuation error (:func:`.copies.continuation`) averages more than the
+verdict's threshold over :data:`SHORT_RUN` texels. Per map and for the maps together it reports the
+number of such stretches, their total length (texels), and the field's *coherence*: the share of
+neighbouring texel pairs copied together from neighbouring source texels.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .copies import COPY_THRESHOLD, MAP_THRESHOLD, continuation, copy_origins
+from .features import moving_mean
+from .prepare import prepare_maps
+
+__all__ = ["JOIN_SHARE", "SHORT_RUN", "JoinStats", "join_stats", "bad_join_mask"]
+
+#: Share of texels that must be found in the source for the joins to be counted. Lower than the verdict's
+#: :data:`.copies.COPY_SHARE`: a finely cut tile (small blocks, slivers) leaves more texels beside its joins
+#: unplaced, and those are the ones to count, not a reason to give up; ``copied`` says how many were placed.
+JOIN_SHARE = 0.5
+#: Texels a bad join must span: short enough for the 10-30 px blocks of a refined field, long enough that
+#: one odd texel pair is not a join.
+SHORT_RUN = 8
+
+
+def _flagged(err: np.ndarray, threshold: float, run: int) -> np.ndarray:
+    """(along, lines) bool: texels covered by a run of ``run`` whose mean error exceeds ``threshold``."""
+    n = err.shape[0]
+    k = min(run, n)
+    start = moving_mean(err, k, periodic=True) > threshold  # run starting at each texel
+    # a texel is covered when one of the k runs through it is flagged
+    covered = moving_mean(np.roll(start, k - 1, axis=0).astype(np.float64), k, periodic=True) > 0
+    return covered
+
+
+def bad_join_mask(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, threshold: float,
+                  run: int = SHORT_RUN) -> tuple[np.ndarray, np.ndarray]:
+    """Bool masks (H, W) of bad joins on the vertical lines (before each texel along x) and horizontal ones."""
+    unit = float(np.mean(np.linalg.norm(np.diff(source, axis=1), axis=-1))) + 1e-6
+    vx = _flagged(continuation(tile, source, origin, 1, unit), threshold, run)  # runs along y
+    vy = _flagged(continuation(tile, source, origin, 0, unit).T, threshold, run).T  # runs along x
+    return vx, vy
+
+
+def _segments(mask: np.ndarray, axis: int) -> int:
+    """Stretches of consecutive flagged texels along ``axis`` (periodic): a line flagged all the way round
+    is one stretch."""
+    starts = int((mask & ~np.roll(mask, 1, axis=axis)).sum())
+    return starts + int(mask.all(axis=axis).sum())
+
+
+class JoinStats(dict):
+    """``{"copied": share, "coherence": share, "maps": {name: {"count": n, "length": texels, "per_mpx": n}}}``;
+    ``maps`` is None when the tile is not made of source texels (fewer than :data:`JOIN_SHARE` found)."""
+
+
+def join_stats(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list[bool], names: list[str],
+               run: int = SHORT_RUN) -> JoinStats:
+    """Bad joins of a tile made of source texels, per map and for the maps together (``"stack"``).
+
+    ``sources`` must be at the tile's texel scale (see :func:`seamless_usd.verdict.judge`).
+    """
+    t = prepare_maps(tiles, normals)
+    s = prepare_maps(sources, normals)
+    tj, sj = np.concatenate(t, axis=-1), np.concatenate(s, axis=-1)
+    origin, share = copy_origins(tj, sj)
+    out = JoinStats(copied=round(share, 4), coherence=None, maps=None)
+    if share < JOIN_SHARE:
+        return out
+    known = origin[..., 0] >= 0
+    together = []
+    for axis in (0, 1):
+        step = np.array([1, 0]) if axis == 0 else np.array([0, 1])
+        prev = np.roll(origin, 1, axis=axis)
+        pair = known & (prev[..., 0] >= 0)
+        together.append((np.all(origin == prev + step, axis=-1) & pair).sum() / max(1, pair.sum()))
+    out["coherence"] = round(float(np.mean(together)), 4)
+    mpx = tj.shape[0] * tj.shape[1] / 1e6
+    maps = {}
+    parts = [("stack", tj, sj, COPY_THRESHOLD)] + ([(n, a, b, MAP_THRESHOLD) for n, a, b in zip(names, t, s)]
+                                                   if len(t) > 1 else [])
+    for name, tile, source, threshold in parts:
+        vx, vy = bad_join_mask(tile, source, origin, threshold, run)
+        count = _segments(vx, 0) + _segments(vy, 1)
+        maps[name] = {"count": count, "length": int(vx.sum() + vy.sum()), "per_mpx": round(count / mpx, 1)}
+    out["maps"] = maps
+    return out

@@ -1,0 +1,195 @@
+"""The structure figure, the interior join count and the boundary healing, on structured textures whose
+structure is known: stone cells with dark joints and long curved stripes (``benchmarks/synthetic.py``)."""
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from seamless_usd.metrics.structure import STRUCTURE_TARGET, structure_figures
+from seamless_usd.synthesis.refinement.heal import relax_boundaries, seam_cost
+from seamless_usd.verdict.joins import join_stats
+
+_spec = importlib.util.spec_from_file_location(
+    "synthetic", Path(__file__).resolve().parents[1] / "benchmarks" / "synthetic.py")
+synthetic = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(synthetic)
+
+
+def _blocks(img: np.ndarray, block: int, seed: int) -> np.ndarray:
+    """The image rebuilt from ``block`` px squares copied from random places: stones cut and glued to others."""
+    rng = np.random.default_rng(seed)
+    h, w = img.shape[:2]
+    out = np.empty_like(img)
+    for y in range(0, h, block):
+        for x in range(0, w, block):
+            sy, sx = rng.integers(0, h - block), rng.integers(0, w - block)
+            piece = img[sy:sy + block, sx:sx + block]
+            out[y:y + block, x:x + block] = piece[: min(block, h - y), : min(block, w - x)]
+    return out
+
+
+@pytest.fixture(scope="module")
+def stones() -> np.ndarray:
+    return synthetic.cells(384, 48, seed=3)["color"][0]
+
+
+@pytest.fixture(scope="module")
+def lines() -> np.ndarray:
+    return synthetic.stripes(384, 36, seed=4)["color"][0]
+
+
+@pytest.mark.parametrize("texture", ["stones", "lines"])
+def test_cut_and_glued_structure_scores_worse_than_the_sources_own_halves(texture, request):
+    src = request.getfixturevalue(texture)
+    cut = structure_figures(_blocks(src, 36, seed=1), src)
+    # the figure is already divided by the source's half-vs-half spread, scale by scale
+    assert cut["structure"] > STRUCTURE_TARGET * 1.5, cut
+    worst = max(cut["scales"].values(), key=lambda v: v["figure"] / v["spread"])
+    assert worst["figure"] > worst["spread"]
+    assert worst["length"] < 1.0  # the lines were broken into shorter pieces, not merged
+
+
+@pytest.mark.parametrize("texture", ["stones", "lines"])
+def test_the_source_moved_by_a_few_texels_keeps_its_structure(texture, request):
+    src = request.getfixturevalue(texture)
+    assert structure_figures(np.roll(src, (3, 0), (0, 1)), src)["structure"] <= STRUCTURE_TARGET * 1.2
+
+
+def test_another_stone_pattern_of_the_same_kind_reads_near_the_source():
+    a = synthetic.cells(384, 48, seed=3)["color"][0]
+    b = synthetic.cells(384, 48, seed=8)["color"][0]
+    cut = structure_figures(_blocks(a, 36, seed=1), a)["structure"]
+    assert structure_figures(b, a)["structure"] < cut / 2
+
+
+def _glued(src: np.ndarray, offset: int, at: int) -> np.ndarray:
+    """A field: columns before ``at`` copied from the source in place, the others from ``offset`` columns left."""
+    h, w = src.shape[:2]
+    yy, xx = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
+    return np.stack([yy, np.where(xx < at, xx, xx - offset)], -1)
+
+
+def test_joins_are_counted_where_two_copies_meet():
+    from scipy import ndimage
+
+    rng = np.random.default_rng(0)  # smooth noise: a join of two unrelated places is a visible step
+    src = ndimage.gaussian_filter(rng.normal(size=(96, 160)), 3.0)[..., None]
+    src = (0.4 * src / src.std()).astype(np.float32)  # spans many 8-bit codes: each place is found once
+    fld = _glued(src, 40, 90)[:, 40:136]  # a 96 x 96 tile: source columns 40..89, then 50..95 again
+    tile = src[fld[..., 0], fld[..., 1]]
+    stats = join_stats([tile], [src], [False], ["noise"])
+    assert stats["copied"] == 1.0
+    line = stats["maps"]["stack"]
+    # three joins cross the whole tile: the glue line (column 50), the wrap along x (column 0) and the
+    # wrap along y (row 0: the source's last row meets its first)
+    assert line["count"] == 3 and 3 * 96 - 4 <= line["length"] <= 3 * 96  # the crossings may read lower
+    pairs = 2 * 96 * 96
+    assert stats["coherence"] == pytest.approx((pairs - 3 * 96) / pairs, abs=1e-3)
+
+
+def test_a_tile_not_made_of_source_texels_has_no_join_figures():
+    rng = np.random.default_rng(1)
+    src = rng.normal(size=(64, 64, 1))
+    stats = join_stats([rng.normal(size=(64, 64, 1))], [src], [False], ["noise"])
+    assert stats["maps"] is None and stats["copied"] < 0.1
+
+
+def test_healing_absorbs_slivers_and_keeps_every_texel_a_source_texel():
+    """A coherent copy of a smooth source with one-texel slivers copied from elsewhere: the healing gives
+    them back to the copy around them; every texel stays a source position. (A square island whose
+    corners each touch two texels of either copy can stay: the healing is a local method.)"""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(2)
+    src = np.stack([ndimage.gaussian_filter(rng.normal(size=(80, 120)), 2.0) for _ in range(3)]).astype(np.float32)
+    yy, xx = np.meshgrid(np.arange(64), np.arange(64), indexing="ij")
+    fld = np.stack([yy + 8, xx + 20], -1)
+    for y, x in ((10, 10), (30, 44), (50, 20)):  # 1 x 5 slivers from 40 columns further right
+        fld[y, x:x + 5, 1] += 40
+    f = torch.from_numpy(fld).long()
+    s = torch.from_numpy(src)
+    healed = relax_boundaries(s, f, passes=4)
+    inner = (slice(6, -6), slice(6, -6))  # the tile's wrap is a join of its own, free to move
+    assert (healed[inner] == torch.from_numpy(np.stack([yy + 8, xx + 20], -1))[inner]).all()
+    assert seam_cost(s, healed) < 0.5 * seam_cost(s, f)
+    assert healed[..., 0].min() >= 0 and healed[..., 0].max() < 80 and healed[..., 1].max() < 120
+
+
+def test_healing_never_raises_the_seam_cost_of_a_refined_field():
+    from seamless_usd.synthesis import RefineConfig, refine
+    from seamless_usd.synthesis.refinement.heal import smoothed
+    from seamless_usd.synthesis.refinement.refine import joint_features
+
+    stack = synthetic.cells(128, 32, seed=5)
+    maps = [v[0] for v in stack.values()]
+    fld = torch.from_numpy(refine(maps, None, (96, 96), RefineConfig(lattice=False, coarsest=32), seed=0).field)
+    s = smoothed(torch.from_numpy(np.ascontiguousarray(joint_features(maps).transpose(2, 0, 1))), 1.5)
+    healed = relax_boundaries(s, fld, passes=6)
+    assert seam_cost(s, healed) < seam_cost(s, fld)
+    assert (healed != fld).any(-1).float().mean() < 0.25  # boundaries moved; the blocks stayed
+
+
+def _joint_network(img: np.ndarray) -> tuple[float, np.ndarray]:
+    """Share of the darkest fifth of a map (its joints or lines) in the largest connected piece, and the mask."""
+    from scipy import ndimage
+
+    g = img.mean(axis=-1)
+    mask = g < np.quantile(g, 0.2)
+    labels, n = ndimage.label(mask)
+    sizes = np.bincount(labels.ravel())[1:]
+    return float(sizes.max() / sizes.sum()) if n else 0.0, mask
+
+
+@pytest.fixture(scope="module")
+def made_tiles(one_thread):
+    """``make_tile`` (the ``tiny`` preset) on a stone-cell stack and a stripe stack, 160 px, non-periodic."""
+    from seamless_usd.synthesis import MapInput, get_preset, make_tile
+
+    out = {}
+    for name, stack in (("cells", synthetic.cells(160, 40, seed=6)), ("stripes", synthetic.stripes(160, 30, seed=7))):
+        maps = [MapInput(k, v[0], v[1]) for k, v in stack.items()]
+        out[name] = (stack, make_tile(maps, get_preset("tiny"), seed=0))
+    return out
+
+
+@pytest.mark.parametrize("name", ["cells", "stripes"])
+def test_a_structured_tile_is_made_of_source_texels_with_its_maps_aligned(made_tiles, name):
+    from seamless_usd.verdict.copies import copy_origins
+
+    stack, made = made_tiles[name]
+    assert made.refined and made.tile_size == (160, 160)
+    tile = np.concatenate([made.maps[k] for k in stack], -1).astype(np.float64)
+    src = np.concatenate([stack[k][0] for k in stack], -1).astype(np.float64)
+    _, share = copy_origins(tile, src)  # colour and height looked up together: found only if from one place
+    _, colour_share = copy_origins(made.maps["color"].astype(np.float64), stack["color"][0].astype(np.float64))
+    # texels beside a join have a neighbourhood the source lacks and may stay unplaced; the rest is found
+    assert share > 0.8 and share > 0.97 * colour_share, (share, colour_share)
+    # the stages are recorded as pictures: the GAN's layout, then every refinement level
+    assert len(made.level_pictures) == 1 + len(made.refine_levels)
+    assert made.level_pictures[-1][1].shape[:2] == (160, 160)
+
+
+def test_a_stone_tile_keeps_its_joint_network_connected(made_tiles):
+    stack, made = made_tiles["cells"]
+    source_share, _ = _joint_network(stack["color"][0])
+    tile_share, _ = _joint_network(made.maps["color"])
+    assert tile_share >= 0.8 * source_share, (tile_share, source_share)
+
+
+@pytest.mark.xfail(strict=True, reason="issue target missed: refined structured tiles still have interior joins "
+                   "the verdict flags and broken lines (see benchmarks/results/levers.md)")
+@pytest.mark.parametrize("name", ["cells", "stripes"])
+def test_a_structured_tile_has_no_interior_seam_and_keeps_its_structure(made_tiles, name):
+    from seamless_usd.verdict import judge
+
+    stack, made = made_tiles[name]
+    keys = list(stack)
+    v = judge([made.maps[k] for k in keys], [stack[k][0] for k in keys], [False] * len(keys), keys, fidelity=False)
+    assert v.seamless, v.reasons()
+    assert all(structure_figures(made.maps[k], stack[k][0])["structure"] <= STRUCTURE_TARGET for k in keys)
+    source_share, _ = _joint_network(stack["color"][0])  # lines as long and networks as connected
+    assert _joint_network(made.maps["color"])[0] >= 0.8 * source_share
