@@ -37,7 +37,6 @@ LEVERS: dict[str, dict] = {
     "occurrence 0.02": {"occurrence": 0.02},
     "carry above 256": {"carry_above": 256},
     "heal 8": {"heal": 8},
-    "coarse patch 17 + heal 8": {"coarse_patch": 17, "heal": 8},
 }
 STACK_NAMES = ("cells_512", "stripes_512", "rot23_wood_512", "rot23_brick_512")
 

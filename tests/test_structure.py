@@ -115,7 +115,8 @@ def test_healing_absorbs_slivers_and_keeps_every_texel_a_source_texel():
     healed = relax_boundaries(s, f, passes=4)
     inner = (slice(6, -6), slice(6, -6))  # the tile's wrap is a join of its own, free to move
     assert (healed[inner] == torch.from_numpy(np.stack([yy + 8, xx + 20], -1))[inner]).all()
-    assert seam_cost(s, healed) < 0.5 * seam_cost(s, f)
+    clean = torch.from_numpy(np.stack([yy + 8, xx + 20], -1)).long()  # only the wrap's joins
+    assert seam_cost(s, healed) <= seam_cost(s, clean) + 1e-6 < seam_cost(s, f)
     assert healed[..., 0].min() >= 0 and healed[..., 0].max() < 80 and healed[..., 1].max() < 120
 
 
