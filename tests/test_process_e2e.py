@@ -139,6 +139,11 @@ def test_sources_are_untouched_and_report_is_valid(processed):
     pictures = re.findall(r"data:image/(?:png|webp|jpeg);base64,", html)
     assert len(pictures) >= 6 + 1  # 3 maps x (source, tile) + discriminator
     assert "Brick" in html
+    assert "stage by stage" in html and "GAN layout" in html  # the run details show the synthesis stages
+    for stack in on_disk["stacks"]:
+        for m in stack["maps"]:  # what lies inside the tile: joins between copies and the structure figure
+            assert m["metrics"]["structure"] is not None and 0 < m["metrics"]["coherence"] <= 1
+            assert m["metrics"]["bad_joins"] is not None
 
 
 def test_second_run_on_the_output_is_clean(processed_copy, model_cache, capsys):
