@@ -149,11 +149,11 @@ def side_by_side(tile: np.ndarray, source: np.ndarray, is_normal: bool, gap: int
 
 def crops(tile: np.ndarray, source: np.ndarray, is_normal: bool, zoom: int, gap: int = 8) -> np.ndarray:
     """uint8: a window of the tile repeated (across its wrap corner, where a seam would show) beside a window
-    of the source, each ``PICTURE_MAX / 2 / zoom`` texels across, every texel shown ``zoom`` x ``zoom``."""
-    side = PICTURE_MAX // 2 // zoom
+    of the source, each about ``PICTURE_MAX / 2 / zoom`` texels across, every texel shown ``zoom`` x ``zoom``."""
     h, w = tile.shape[:2]
-    rep = M.tile_2x2(tile)[h - side // 2: h + side - side // 2, w - side // 2: w + side - side // 2]
     sh, sw = source.shape[:2]
+    side = min((PICTURE_MAX - gap) // 2 // zoom, h, w, sh, sw)  # the pair fits PICTURE_MAX: shown unshrunk
+    rep = M.tile_2x2(tile)[h - side // 2: h + side - side // 2, w - side // 2: w + side - side // 2]
     win = source[sh // 2 - side // 2: sh // 2 + side - side // 2, sw // 2 - side // 2: sw // 2 + side - side // 2]
     parts = [np.repeat(np.repeat(M.preview_uint8(a, is_normal), zoom, 0), zoom, 1) for a in (rep, win)]
     out = np.full((parts[0].shape[0], 2 * parts[0].shape[1] + gap, 3), 255, np.uint8)
@@ -190,7 +190,8 @@ def inner_figures(res: MethodResult, stack: dict[str, tuple[np.ndarray, bool]]) 
     tiles = [res.tiles[k] for k in names]
     refs = [res.references[k] if res.references else stack[k][0] for k in names]
     normals = [stack[k][1] for k in names]
-    joins = join_stats(tiles, refs, normals, names) if tiles[0].shape == refs[0].shape else {"maps": None}
+    joins = join_stats(tiles, refs, normals, names)  # refs share the tile's texel scale; a tile of other texels
+    #                                                    gives maps None
     out = {}
     for k, t, r in zip(names, tiles, refs):
         mine = (joins["maps"] or {}).get(k if len(names) > 1 else "stack")
@@ -221,6 +222,7 @@ def run(
     log: Callable[[str], None] = _log,
     command: str | None = None,
     update: bool = False,
+    crops_too: bool = False,
 ) -> dict:
     """Run the benchmark and write ``quality.json``, ``quality.md`` and the pictures.
 
@@ -322,7 +324,7 @@ def run(
                     shown = to_source_grid(tile, src, src_full)
                     write_picture(out / "tiles" / name, side_by_side(shown, src_full, is_normal))
                     row["picture"] = f"tiles/{name}"
-                    if max(src_full.shape[:2]) > PICTURE_MAX:  # full resolution: texels as they are, 1x and 3x
+                    if crops_too or max(src_full.shape[:2]) > PICTURE_MAX:  # texels as they are, 1x and 3x
                         for zoom in (1, 3):
                             crop = f"{stack_name}__{map_name}__{method}__{zoom}x.jpg"
                             write_picture(out / "tiles" / crop, crops(shown, src_full, is_normal, zoom))
@@ -381,6 +383,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--threads", type=int, default=None, help="torch CPU threads for SeamlessGAN (default: torch's choice)")
     p.add_argument("--no-gram", action="store_true", help="leave out the Gram distance (no torch needed)")
     p.add_argument("--no-pictures", action="store_true", help="do not write the 2x2 PNGs")
+    p.add_argument("--crops", action="store_true",
+                   help="also write 1x and 3x crops of the texels for stacks of any size (always above 768 px)")
     a = p.parse_args(argv)
     methods = _names(a.methods, METHODS, "method")
     if a.stacks is None:
@@ -421,6 +425,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             max_size=a.max_size,
             gram=not a.no_gram,
             pictures=not a.no_pictures,
+            crops_too=a.crops,
             command=" ".join(["benchmarks/quality.py", *(sys.argv[1:] if argv is None else argv)]),
             update=a.update,
         )
