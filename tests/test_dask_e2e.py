@@ -18,12 +18,13 @@ import time
 from pathlib import Path
 
 import pytest
+from runchecks import PLUMBING
 from test_reliability_inputs import write_scene
 
 from seamless_usd_cli.main import main
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
-ARGS = ("--preset", "tiny", "--max-size", "112", "--json")
+ARGS = (*PLUMBING, "--max-size", "112", "--json")
 
 
 def _library(root: Path) -> Path:
@@ -66,8 +67,19 @@ class Deployment:
         port = self.address.rsplit(":", 1)[1]
         self._spawn("scheduler", "scheduler", "--host", "127.0.0.1", "--port", port, "--no-dashboard")
         for n in range(workers):
-            self._spawn(f"worker{n}", "worker", self.address, "--name", f"worker{n}", "--nthreads", "1",
-                        "--no-nanny", "--no-dashboard", "--host", "127.0.0.1", "--death-timeout", "60")
+            self._spawn_worker(f"worker{n}")
+        self.wait_for_workers(workers)
+
+    def _spawn_worker(self, name: str) -> None:
+        self._spawn(name, "worker", self.address, "--name", name, "--nthreads", "1",
+                    "--no-nanny", "--no-dashboard", "--host", "127.0.0.1", "--death-timeout", "60")
+
+    def ensure_workers(self, workers: int) -> None:
+        """Start again the workers of ``start(workers)`` that are no longer running (a test killed one)."""
+        for n in range(workers):
+            name = f"worker{n}"
+            if self.procs[name].poll() is not None:
+                self._spawn_worker(name)
         self.wait_for_workers(workers)
 
     def client(self):
@@ -83,25 +95,36 @@ class Deployment:
         return "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-1500:]}" for p in self.root.glob("*.log"))
 
     def stop(self) -> None:
-        for proc in self.procs.values():
-            if proc.poll() is None:
-                proc.send_signal(signal.SIGTERM)
-        for proc in self.procs.values():
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(timeout=10)
+        """The workers first (they close at once while their scheduler is there), then the scheduler."""
+        workers = [p for name, p in self.procs.items() if name != "scheduler"]
+        for group in (workers, [self.procs["scheduler"]]):
+            for proc in group:
+                if proc.poll() is None:
+                    proc.send_signal(signal.SIGTERM)
+            for proc in group:
+                try:
+                    proc.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait(timeout=10)
 
 
-@pytest.fixture()
-def deployment(tmp_path):
-    d = Deployment(tmp_path)
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    """One scheduler and two workers for the module (starting them costs seconds of imports)."""
+    d = Deployment(tmp_path_factory.mktemp("dask"))
     try:
         d.start(workers=2)
         yield d
     finally:
         d.stop()
+
+
+@pytest.fixture()
+def deployment(cluster) -> Deployment:
+    """The module's deployment with both workers running (one killed by an earlier test is started again)."""
+    cluster.ensure_workers(2)
+    return cluster
 
 
 def _tiles(folder: Path) -> dict[str, bytes]:

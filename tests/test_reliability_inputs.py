@@ -25,10 +25,11 @@ import pytest
 from pxr import Sdf, Usd
 
 from seamless_usd import fileio
+from runchecks import PLUMBING
 from seamless_usd_cli.main import main
 
 TEX = 112  # just above the 100 px minimum crop: small stacks train in a second with --preset tiny
-PROCESS_ARGS = ("--preset", "tiny", "--max-size", str(TEX))
+PROCESS_ARGS = (*PLUMBING, "--max-size", str(TEX))
 
 
 # real files ------------------------------------------------------------------------------------
@@ -438,7 +439,7 @@ def test_full_disk_real_small_filesystem(tmp_path, capsys, shared_cache):
             pytest.skip("cannot mount a small tmpfs here; the fault-injecting test covers a full disk")
         # the paper's 2c tiles (4x the source's area): the first stack fits in 200 KB, the three do not
         code, report, _ = run_cli(capsys, str(scene), "--output-dir", str(out), "--cache-dir", str(shared_cache),
-                                  "--tile-size", "paper")
+                                  "--tile-size", "paper", "--refine", "on")
         failures = _write_failures(report)
         written = [Path(m["output"]) for s in report["stacks"] if s["status"] != "failed" for m in s["maps"]]
         assert code == 1 and failures and written, report["stacks"]

@@ -26,11 +26,12 @@ from pxr import Sdf, Usd, UsdShade
 from safetensors import safe_open
 
 from fswatch import wait_until
+from runchecks import PLUMBING
 from test_reliability_inputs import hashes, image_size
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
 ITERATIONS = 6  # tiny preset checkpoints every 2 iterations: a kill at the first checkpoint is mid-training
-ARGS = ("--preset", "tiny", "--iterations", str(ITERATIONS), "--max-size", "112")
+ARGS = (*PLUMBING, "--iterations", str(ITERATIONS), "--max-size", "112")
 
 
 @pytest.fixture()
