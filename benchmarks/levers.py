@@ -95,6 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, default=HERE / "results")
     a = p.parse_args(argv)
+    from quality import write_picture
     from stacks import load_stack
 
     from seamless_usd.metrics import preview_uint8
@@ -115,8 +116,6 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps(row), flush=True)
             crop = preview_uint8(first[:200, :200], stack[next(iter(stack))][1])
             crop = np.repeat(np.repeat(crop, 3, 0), 3, 1)
-            from quality import write_picture
-
             write_picture(pictures / f"{stack_name}__{name.replace(' ', '_').replace('+', 'and')}__3x.jpg", crop)
     load += f" At the end: {os.getloadavg()[0]:.2f}."
     (a.out / "levers.json").write_text(json.dumps({"load": load, "rows": rows}, indent=1))

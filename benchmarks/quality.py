@@ -46,9 +46,8 @@ from stacks import (FULLRES_STACKS, QUALITY_STACKS, SHARED_DIR, STACKS, MapFile,
                     load_stack)
 
 from seamless_usd import metrics as M  # noqa: E402
-from seamless_usd.metrics.structure import structure_figures  # noqa: E402
 from seamless_usd.synthesis.lattice.cut import find_lattice, lattice_ratio  # noqa: E402
-from seamless_usd.verdict.joins import join_stats  # noqa: E402
+from seamless_usd.verdict.joins import inside_figures  # noqa: E402
 
 __all__ = [
     "MapFile",
@@ -183,23 +182,12 @@ def write_picture(path: Path, pixels: np.ndarray) -> None:
 
 
 def inner_figures(res: MethodResult, stack: dict[str, tuple[np.ndarray, bool]]) -> dict[str, dict]:
-    """Per map, what lies inside the tile: the bad joins between copied blocks (count, total length in
-    texels, and the field's coherence; None for a tile not made of source texels) and the structure figure
-    against the source (``seamless_usd.metrics.structure``)."""
+    """Per map, what lies inside the tile (``seamless_usd.verdict.joins.inside_figures``): bad joins, the copies'
+    coherence and the structure figure, against the source on the tile's texel grid."""
     names = list(stack)
-    tiles = [res.tiles[k] for k in names]
     refs = [res.references[k] if res.references else stack[k][0] for k in names]
-    normals = [stack[k][1] for k in names]
-    joins = join_stats(tiles, refs, normals, names)  # refs share the tile's texel scale; a tile of other texels
-    #                                                    gives maps None
-    out = {}
-    for k, t, r in zip(names, tiles, refs):
-        mine = (joins["maps"] or {}).get(k if len(names) > 1 else "stack")
-        out[k] = {"bad_joins": None if mine is None else mine["count"],
-                  "join_length": None if mine is None else mine["length"],
-                  "coherence": joins.get("coherence"),
-                  "structure": structure_figures(t, r)["structure"]}
-    return out
+    figures = inside_figures([res.tiles[k] for k in names], refs, [stack[k][1] for k in names], names)
+    return dict(zip(names, figures))
 
 
 def _round(v):

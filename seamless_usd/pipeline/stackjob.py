@@ -23,6 +23,7 @@ from seamless_usd.pipeline.naming import tile_filename
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import judge
+from seamless_usd.verdict.joins import inside_figures
 
 __all__ = ["JobSettings", "StackJob", "StackOutcome", "MapOutcome", "run_stack", "map_identity", "on_tile_grid"]
 
@@ -262,7 +263,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         verdict.failing.append(f"all maps: lattice_ratio {ratio:.3g} (tolerance at least {synthesis.LATTICE_TARGET:.2f})")
         verdict.faithful = False
     timings["verdict"] = time.perf_counter() - t4
-    for m, figures in zip(stack.maps, inside_figures(written_values, sources, stack.maps)):
+    inside = inside_figures(written_values, sources, [m.is_normal for m in stack.maps], [m.asset for m in stack.maps])
+    for m, figures in zip(stack.maps, inside):
         outcomes[map_identity(m)].metrics.update(figures)
     failing = list(verdict.failing)
     previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator,
@@ -339,26 +341,6 @@ def _q_dict(tile) -> dict[str, Any]:
         "band_min": [float(q.band_min_vertical), float(q.band_min_horizontal)],
         "margin": float(q.margin),
     }
-
-
-def inside_figures(tiles: list[np.ndarray], sources: list[np.ndarray], maps: list[TextureMap]) -> list[dict]:
-    """Per map, what lies inside the written tile (figures without a tolerance, for the report): the bad joins
-    between copied blocks (count, total length in texels) and the field's coherence (:mod:`.verdict.joins`;
-    None when the tile is not made of source texels), and the structure figure against the source
-    (:mod:`seamless_usd.metrics.structure`)."""
-    from seamless_usd.metrics.structure import structure_figures
-    from seamless_usd.verdict.joins import join_stats
-
-    names = [m.asset for m in maps]
-    joins = join_stats(tiles, sources, [m.is_normal for m in maps], names)
-    out = []
-    for name, tile, source in zip(names, tiles, sources):
-        mine = (joins["maps"] or {}).get(name if len(maps) > 1 else "stack")
-        out.append({"bad_joins": None if mine is None else float(mine["count"]),
-                    "join_length": None if mine is None else float(mine["length"]),
-                    "coherence": joins["coherence"],
-                    "structure": structure_figures(tile, source)["structure"]})
-    return out
 
 
 def _discriminator_preview(tile) -> np.ndarray | None:

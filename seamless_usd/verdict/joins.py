@@ -17,7 +17,7 @@ from .copies import COPY_THRESHOLD, MAP_THRESHOLD, continuation, copy_origins
 from .features import moving_mean
 from .prepare import prepare_maps
 
-__all__ = ["JOIN_SHARE", "SHORT_RUN", "JoinStats", "join_stats", "bad_join_mask"]
+__all__ = ["JOIN_SHARE", "SHORT_RUN", "JoinStats", "join_stats", "bad_join_mask", "inside_figures"]
 
 #: Share of texels that must be found in the source for the joins to be counted. Lower than the verdict's
 #: :data:`.copies.COPY_SHARE`: a finely cut tile (small blocks, slivers) leaves more texels beside its joins
@@ -89,4 +89,22 @@ def join_stats(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list
         count = _segments(vx, 0) + _segments(vy, 1)
         maps[name] = {"count": count, "length": int(vx.sum() + vy.sum()), "per_mpx": round(count / mpx, 1)}
     out["maps"] = maps
+    return out
+
+
+def inside_figures(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list[bool], names: list[str]
+                   ) -> list[dict]:
+    """Per map, what lies inside a tile (figures without a tolerance): its bad joins (count, total length in
+    texels) and the copies' coherence (None when the tile is not made of source texels), and the structure
+    figure against the source (:mod:`seamless_usd.metrics.structure`). ``sources`` at the tile's texel scale."""
+    from seamless_usd.metrics.structure import structure_figures
+
+    joins = join_stats(tiles, sources, normals, names)
+    out = []
+    for name, tile, source in zip(names, tiles, sources):
+        mine = (joins["maps"] or {}).get(name if len(names) > 1 else "stack")
+        out.append({"bad_joins": None if mine is None else float(mine["count"]),
+                    "join_length": None if mine is None else float(mine["length"]),
+                    "coherence": joins["coherence"],
+                    "structure": structure_figures(tile, source)["structure"]})
     return out

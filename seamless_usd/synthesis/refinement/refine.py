@@ -184,6 +184,14 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
     scales = level_scales(tile_hw, config.coarsest)
     levels: list[dict] = []
     shots: list[np.ndarray] = []
+
+    def finish(info: dict, s_hw: tuple[int, int]) -> None:  # a level is done: record, picture, report
+        levels.append(info)
+        if pictures:
+            shots.append(field_picture(sources[0], fld, s_hw, pictures))
+        if progress is not None:
+            progress(info)
+
     fld = None
     prev_tile = prev_src = None
     for li, s in enumerate(scales):
@@ -200,13 +208,8 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
             if config.heal:
                 fld = relax_boundaries(smoothed(_resize(src, s_hw), config.heal_sigma), fld, config.heal)
             prev_tile, prev_src = t_hw, s_hw
-            info = {"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": 0, "mean_cost": None,
-                    "seconds": round(time.perf_counter() - t0, 3)}
-            levels.append(info)
-            if pictures:
-                shots.append(field_picture(sources[0], fld, s_hw, pictures))
-            if progress is not None:
-                progress(info)
+            finish({"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": 0, "mean_cost": None,
+                    "seconds": round(time.perf_counter() - t0, 3)}, s_hw)
             continue
         level_src = _resize(src, s_hw)
         space = PatchSpace(level_src, patch, config.dims, gen)
@@ -242,14 +245,8 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
         prev_tile, prev_src = t_hw, s_hw
         if cost is None:
             cost = patch_cost(space.describe(gather(level_src, fld), periodic=True), space, fld, None)
-        info = {"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": iters, "patch": patch,
-                "mean_cost": float(cost.mean()),
-                "seconds": round(time.perf_counter() - t0, 3)}
-        levels.append(info)
-        if pictures:
-            shots.append(field_picture(sources[0], fld, s_hw, pictures))
-        if progress is not None:
-            progress(info)
+        finish({"scale": s, "tile": list(t_hw), "source": list(s_hw), "iterations": iters, "patch": patch,
+                "mean_cost": float(cost.mean()), "seconds": round(time.perf_counter() - t0, 3)}, s_hw)
     assert tuple(fld.shape[:2]) == (th, tw), f"field {tuple(fld.shape[:2])} != tile {(th, tw)}"
     field_np = fld.cpu().numpy()
     maps = [np.ascontiguousarray(np.asarray(m)[field_np[..., 0], field_np[..., 1]]) for m in sources]
