@@ -51,7 +51,7 @@ class StepRunner:
 
     def __init__(self, cfg: SynthesisConfig, threads: int):
         self.cfg, self.dev = cfg, torch.device("cpu")
-        self.plan = plan_engine(cfg, "cpu", threads=threads, cpu_bf16=cpu_supports_bf16())
+        self.plan = plan_engine(cfg, "cpu", threads=threads)
         self.G, self.D = build_networks(cfg, CHANNELS, seed=0)
         self.ext = build_feature_extractor(cfg)
         self.opt_g = torch.optim.Adam(self.G.parameters(), lr=cfg.lr, betas=cfg.betas)

@@ -64,8 +64,7 @@ def test_cpu_compile_is_opt_in_and_then_stacked_on_one_worker():
 
 
 def test_precision_choice_per_device():
-    assert choose_precision("auto", "cpu", cpu_bf16=False) == "fp32"
-    assert choose_precision("auto", "cpu", cpu_bf16=True) == "bf16"
+    assert choose_precision("auto", "cpu") == "fp32"  # native bf16 or not: no faster, and thread-dependent
     assert choose_precision("auto", "cuda", cuda_bf16=True) == "bf16"
     assert choose_precision("fp16", "cpu") == "fp16"
 
@@ -176,12 +175,17 @@ def test_compiled_training_matches_eager_and_fills_the_graph_cache(monkeypatch, 
     style, and their backward graphs) runs once, and each g++-built kernel costs seconds, so the network is
     the smallest the package builds. Forward: the step's losses. Backward: Adam's first moment after one
     step is (1 - beta1) x the gradient, so the checkpoints' moments compare the gradients themselves;
-    the weights after the update are compared too."""
+    the weights after the update are compared too. The kernels are built scalar (inductor's ``cpp.simdlen``
+    1): they compile in about three quarters of the time, and which vector ISA inductor picks is its own
+    business, not this package's."""
+    import torch._inductor.config as inductor_config
+
     from seamless_usd.synthesis.gan.checkpoint import CHECKPOINT_NAME, load_checkpoint
 
     monkeypatch.setenv("TORCHINDUCTOR_CACHE_DIR", str(tmp_path / "graphs"))
+    monkeypatch.setattr(inductor_config.cpp, "simdlen", 1)
     maps = [MapInput("albedo", np.random.default_rng(5).uniform(-1, 1, (32, 32, 3)).astype(np.float32), False)]
-    cfg = CONFIG.replace(iterations=1, batch=2, n_res_blocks=1, style_scales=1, checkpoint_every=1)
+    cfg = CONFIG.replace(iterations=1, batch=2, n_res_blocks=1, style_scales=1, checkpoint_every=1, precision="fp32")
     seen: dict[str, list[dict]] = {"off": [], "on": []}
     models = {mode: train(maps, cfg.replace(compile=mode, workers=1), seed=2, checkpoint_dir=tmp_path / mode,
                           progress=lambda p, mode=mode: seen[mode].append(p.losses)) for mode in seen}

@@ -10,7 +10,7 @@ import torch
 
 from seamless_usd.synthesis import get_preset
 from seamless_usd.synthesis.gan.features import build_feature_extractor
-from seamless_usd.synthesis.precision import cpu_supports_bf16, resolve_precision
+from seamless_usd.synthesis.precision import resolve_precision
 from seamless_usd.synthesis.gan.step import Batch, d_loss, g_loss, generate
 from seamless_usd.synthesis.gan.train import build_networks
 
@@ -45,7 +45,7 @@ def _step_gradients(precision: str) -> dict[str, torch.Tensor]:
 
 def test_default_precision_is_resolved_at_run_time():
     cpu = torch.device("cpu")
-    assert resolve_precision("auto", cpu) == ("bf16" if cpu_supports_bf16() else "fp32")
+    assert resolve_precision("auto", cpu) == "fp32"
     assert resolve_precision("fp32", cpu) == "fp32"
 
 

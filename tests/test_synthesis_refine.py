@@ -117,8 +117,12 @@ def test_make_tile_source_sized_and_refine_off():
     assert not raw.refined and raw.working_size == (48, 60) and raw.grid_size == (48, 60)
     h, w = raw.tile_size  # the GAN's own tile, on the 48 x 60 grid that spans the UV unit square
     assert raw.uv_scale == pytest.approx((60 / w, 48 / h))
-    # the paper's tile is 2c x 2c of the whole working stack (c = 48 x 60): 96 x 120 working px, which is
-    # 256 x 320 source px (x 128/48 = 160/60 = 8/3), twice the source along each side: uv scale 1/2
+    # the paper's search starts from the whole working stack (c = 48 x 60) and goes down; the tile is 2c x 2c
+    # of the crop Q chose, brought to source px (x 128/48 = 160/60 = 8/3): the whole stack gives 96 x 120
+    # working px, 256 x 320 source px, uv scale 1/2
     paper = make_tile(maps, get_preset("tiny"), tile_size="paper", seed=0)
-    assert next(iter(paper.gan.maps.values())).shape[:2] == (96, 120)
-    assert paper.tile_size == (256, 320) and paper.uv_scale == pytest.approx((0.5, 0.5))
+    assert paper.gan.candidates[0].crop_size == (48, 60)
+    ch, cw = paper.gan.crop_size
+    assert next(iter(paper.gan.maps.values())).shape[:2] == (2 * ch, 2 * cw)
+    assert paper.tile_size == (round(2 * ch * 8 / 3), round(2 * cw * 8 / 3))
+    assert paper.uv_scale == pytest.approx((160 / paper.tile_size[1], 128 / paper.tile_size[0]))

@@ -152,7 +152,7 @@ def test_style_every_skips_the_style_loss_and_weights_it_when_computed():
         with_style, parts = g_loss(D, ext, fake, batch, channels, cfg, torch.device("cpu"), "fp32", True)
         without, skipped = g_loss(D, ext, fake, batch, channels, cfg, torch.device("cpu"), "fp32", False)
     assert "style" in parts and "style" not in skipped and parts["style"] > 0
-    expect = float(without) + cfg.lambda_style * 3 * parts["style"]  # weighted by the period
+    expect = float(without) + cfg.lambda_style * 3 * float(parts["style"])  # weighted by the period
     assert float(with_style) == pytest.approx(expect, rel=1e-5)
     maps = _maps()
     assert "style_every" not in TINY.training_fields()

@@ -2,6 +2,7 @@
 fidelity tolerance set by the source's own spread."""
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
 
 import numpy as np
@@ -125,3 +126,25 @@ def test_a_gan_tile_at_the_working_resolution_is_measured_on_its_own_grid():
     assert grid.shape[:2] == (64, 64)
     assert scale_ratio(tile, grid) == pytest.approx(1.0, abs=0.15)
     assert scale_ratio(tile, source) > 2.5  # against the full-resolution source: about 4 (the defect)
+
+
+def test_a_source_judged_again_is_not_refitted_and_gets_the_same_verdict(wood, source):
+    """The calibration (classifier and reference) is kept by the content of the image it was fitted on."""
+    judge_module = importlib.import_module("seamless_usd.verdict.judge")  # the package exports the function
+
+    tile = np.roll(wood, (11, 23), (0, 1)).copy()
+    tile[:, 96:160] = _wrap_window(wood, 140, 200, 256)[:, 96:160]
+    tile += np.random.default_rng(3).normal(0, 0.02, tile.shape)  # not source texels: the classifier judges it
+    judge_module._CALIBRATIONS.clear()
+    first = judge([tile], [source], [False], ["wood"]).as_dict()
+    kept = dict(judge_module._CALIBRATIONS)
+    assert len(kept) == 1  # the source's, at the working resolution
+    again = judge([tile], [source.copy()], [False], ["wood"]).as_dict()  # equal content, another array
+    assert again == first and dict(judge_module._CALIBRATIONS) == kept
+    nudged = source.copy()
+    nudged[5, 5, 0] += 0.25  # one texel differs: another calibration
+    judge([tile], [nudged], [False], ["wood"])
+    assert len(judge_module._CALIBRATIONS) == 2
+    assert first["method"] == "classifier" and not first["seamless"]  # the splice is found
+    judge_module._CALIBRATIONS.clear()
+    assert judge([tile], [source], [False], ["wood"]).as_dict() == first  # a fresh fit agrees

@@ -46,7 +46,7 @@ class SynthesisConfig:
     # --- run control ---
     checkpoint_every: int = 500  # iterations between checkpoints (one is always written at the end)
     progress_every: int = 10  # iterations between progress callbacks
-    precision: str = "auto"  # "auto" (CUDA: bf16/fp16, CPU: bf16 if supported else fp32), "fp32", "bf16", "fp16"
+    precision: str = "auto"  # "auto" (CUDA: bf16/fp16, CPU: fp32), "fp32", "bf16", "fp16"
     workers: int = 0  # CPU threads computing the crops of a step in parallel; 0 (auto): one per crop, up to torch's
     #                   threads, and one thread in all for a single crop of a small network; N: N workers sharing
     #                   torch's threads as intra-op threads

@@ -24,14 +24,27 @@ REACH = 2 * max(DISTANCES)
 _EPS = 1e-6
 
 
-def moving_mean(a: np.ndarray, length: int, periodic: bool) -> np.ndarray:
+def moving_mean(a: np.ndarray, length: int, periodic: bool, step: int = 1) -> np.ndarray:
     """Moving mean of ``a`` (along, ...) over ``length`` rows, from cumulative sums: periodic wraps (one
-    mean per row, starting there), else only whole windows."""
+    mean per row, starting there), else only whole windows; every ``step``-th window."""
     if periodic:
         a = np.concatenate([a, a[: length - 1]], axis=0)
-    c = np.cumsum(a, axis=0, dtype=np.float64)
-    c = np.concatenate([np.zeros((1,) + a.shape[1:]), c], axis=0)
-    return (c[length:] - c[:-length]) / length
+    c = np.empty((a.shape[0] + 1,) + a.shape[1:])
+    c[0] = 0
+    np.cumsum(a, axis=0, dtype=np.float64, out=c[1:])
+    return (c[length::step] - c[: c.shape[0] - length: step]) / length
+
+
+def _square_norm(a: np.ndarray) -> np.ndarray:
+    """Sum of squares over the last axis (faster than ``(a ** 2).sum(-1)`` for a few channels)."""
+    return np.einsum("...c,...c->...", a, a)
+
+
+def _window_sums(a: np.ndarray, ends: np.ndarray, d: int) -> np.ndarray:
+    """``sum(a[:, e - d: e])`` for every ``e`` of ``ends`` (columns), from one cumulative sum."""
+    c = np.zeros((a.shape[0], a.shape[1] + 1))
+    np.cumsum(a, axis=1, out=c[:, 1:])
+    return c[:, ends] - c[:, ends - d]
 
 
 def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> np.ndarray:
@@ -51,20 +64,17 @@ def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> 
         lines = np.arange(REACH, w - REACH + 1)
     feats, within_all = [], []
     for d in DISTANCES:
-        sq = moving_mean(((ext[:, d:] - ext[:, :-d]) ** 2).sum(-1), length, periodic)[::step]  # pair (x, x + d)
-        straddle = np.zeros((sq.shape[0], len(lines)))
-        within = np.zeros_like(straddle)
-        for j in range(1, d + 1):
-            straddle += sq[:, lines - j]  # pairs (c - j, c - j + d) cross the line at c
-            within += 0.5 * (sq[:, lines - j - d] + sq[:, lines + j - 1])  # pairs on the left, on the right
-        straddle /= d
-        within /= d
+        sq = moving_mean(_square_norm(ext[:, d:] - ext[:, :-d]), length, periodic, step)  # pair (x, x + d)
+        # pairs (c - j, c - j + d), j = 1..d, cross the line at c; (c - j - d, c - j) lie on its left and
+        # (c + j - 1, c + j - 1 + d) on its right: three windows of d pair positions
+        straddle = _window_sums(sq, lines, d) / d
+        within = 0.5 * (_window_sums(sq, lines - d, d) + _window_sums(sq, lines + d, d)) / d
         feats.append(np.log(straddle + _EPS) - np.log(within + _EPS))
         within_all.append(within)
     for within in within_all:  # local contrast against the image's own
         feats.append(np.log(within + _EPS) - np.log(np.median(within) + _EPS))
     step1 = ext[:, lines] - ext[:, lines - 1]  # (H, lines, C)
-    mean_step = moving_mean(step1.reshape(h, -1), length, periodic)[::step].reshape(-1, len(lines), channels)
-    energy = moving_mean((step1 ** 2).sum(-1), length, periodic)[::step]
-    feats.append((mean_step ** 2).sum(-1) / (energy + _EPS))  # 1: one coherent step along the stretch
+    mean_step = moving_mean(step1.reshape(h, -1), length, periodic, step).reshape(-1, len(lines), channels)
+    energy = moving_mean(_square_norm(step1), length, periodic, step)
+    feats.append(_square_norm(mean_step) / (energy + _EPS))  # 1: one coherent step along the stretch
     return np.stack(feats, axis=-1)

@@ -44,12 +44,11 @@ class EnginePlan:
     reason: str
 
 
-def plan_engine(config: SynthesisConfig, device_type: str, *, threads: int, cuda_bf16: bool = False,
-                cpu_bf16: bool = False) -> EnginePlan:
+def plan_engine(config: SynthesisConfig, device_type: str, *, threads: int, cuda_bf16: bool = False) -> EnginePlan:
     """The engine for ``config`` on a ``device_type`` device.
 
     ``threads`` is the CPU thread budget (``torch.get_num_threads()``: 1 inside a one-thread batch worker),
-    ``cuda_bf16`` / ``cpu_bf16`` what the device can do natively.
+    ``cuda_bf16`` whether the GPU can do bf16 natively.
 
     >>> plan_engine(SynthesisConfig(batch=2), "cpu", threads=2).workers
     2
@@ -58,7 +57,7 @@ def plan_engine(config: SynthesisConfig, device_type: str, *, threads: int, cuda
     ('bf16', True, True)
     """
     assert device_type in ("cpu", "cuda"), f"unknown device type {device_type!r}"
-    precision = choose_precision(config.precision, device_type, cuda_bf16=cuda_bf16, cpu_bf16=cpu_bf16)
+    precision = choose_precision(config.precision, device_type, cuda_bf16=cuda_bf16)
     threads = max(1, int(threads))
     if device_type == "cuda":
         compile_ = config.compile != "off"

@@ -60,9 +60,11 @@ def d_loss(D: Discriminator, fake: torch.Tensor, target: torch.Tensor, device, p
 
 def g_loss(D: Discriminator, extractor: nn.Module, fake: torch.Tensor, batch: Batch, channels: list[int],
            config: SynthesisConfig, device, precision: str, use_style: bool = True
-           ) -> tuple[torch.Tensor, dict[str, float]]:
-    """Adversarial + L1 + style. With ``config.style_every = n`` the style term is computed on every n-th
-    step only (``use_style``), weighted n times, so its expected gradient is unchanged."""
+           ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+    """Adversarial + L1 + style, and the parts as detached 0-d tensors (read as floats by the caller, outside a
+    compiled graph: a ``float()`` here would break the graph). With ``config.style_every = n`` the style term
+    is computed on every n-th step only (``use_style``), weighted n times, so its expected gradient is
+    unchanged."""
     with autocast(device, precision):
         adv = _bce(D.logits(fake), True)
     fakes = torch.split(fake.float(), channels, 1)
@@ -75,9 +77,9 @@ def g_loss(D: Discriminator, extractor: nn.Module, fake: torch.Tensor, batch: Ba
         with autocast(device, precision):
             sty = sum(style_loss(extractor, f, r) for f, r in zip(fakes, reals))
     total = config.lambda_adv * adv + config.lambda_l1 * l1 + config.lambda_style * config.style_every * sty
-    parts = {"g_adv": float(adv.detach()), "l1": float(l1.detach())}
+    parts = {"g_adv": adv.detach(), "l1": l1.detach()}
     if use_style:  # a step without it keeps the latest figure in the run's losses
-        parts["style"] = float(sty.detach())
+        parts["style"] = sty.detach()
     return total, parts
 
 
@@ -142,7 +144,7 @@ def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, 
             with autocast(device, precision):
                 fake = fns.generate(G, crop)
         loss, parts = fns.g_loss(D, extractor, fake, crop, channels, config, device, precision, use_style)
-        return float(loss.detach()), parts, torch.autograd.grad(loss / n, g_params, allow_unused=True)
+        return float(loss.detach()), _floats(parts), torch.autograd.grad(loss / n, g_params, allow_unused=True)
 
     D.requires_grad_(False)  # G's backward goes through D without computing D weight gradients
     g_out = run(g_part, crops, fakes)
@@ -184,7 +186,11 @@ def _stacked_step(G, D, opt_g, opt_d, extractor, batch, channels, config, device
     D.requires_grad_(True)
     if scaler is not None:
         scaler.update()
-    return {**out, "g": float(loss_g.detach()), **parts}
+    return {**out, "g": float(loss_g.detach()), **_floats(parts)}
+
+
+def _floats(parts: dict[str, torch.Tensor]) -> dict[str, float]:
+    return {k: float(v) for k, v in parts.items()}
 
 
 def _backward_step(loss: torch.Tensor, opt: torch.optim.Optimizer, scaler) -> None:
