@@ -172,9 +172,8 @@ def test_the_compiled_step_is_whole_graphs_and_computes_the_eager_step(seam):
     """The compiled step (the GPU default): generate, D's loss and G's loss with style each trace without a
     graph break (a break splits the graph and, on a loss read as a float, recompiles every step), and the step
     through their AOTAutograd forward and backward graphs gives the eager step's losses and gradients. The
-    graphs run
-    without a code generator (``aot_eager``): which kernels inductor emits for them is torch's business and
-    differs between the GPU and this CPU anyway."""
+    graphs run without a code generator (``aot_eager``): which kernels inductor emits for them is torch's
+    business and differs between the GPU and this CPU anyway."""
     g = torch.Generator().manual_seed(0)
     target = torch.rand(2, sum(CHANNELS), 32, 32, generator=g) * 2 - 1  # (N, C, 2k, 2k)
     batch = Batch(target[:, :, 8:16, 8:16] if seam else target[:, :, 4:20, 8:24], target, seam)
