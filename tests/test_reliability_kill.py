@@ -1,6 +1,7 @@
 """Reliability: ``seamless-usd process`` killed with SIGKILL at several points, then run again.
 
-The command runs in a subprocess on a small library (copies of two sample scenes). The test
+The command runs in a subprocess on a small library (two scenes; for the kills, the second is a twin of
+the first, so each run trains and judges one stack but writes two scenes' tiles and layers). The test
 watches the file system and kills the process the moment a checkpoint appears in the cache
 (training), a tile appears in an output folder (writing maps) and an override layer appears
 (saving layers), each at two moments. After every kill: every output image and layer present opens and is complete,
@@ -34,16 +35,29 @@ ITERATIONS = 6  # tiny preset checkpoints every 2 iterations: a kill at the firs
 ARGS = (*PLUMBING, "--iterations", str(ITERATIONS), "--max-size", "112")
 
 
-@pytest.fixture()
-def library(tmp_path) -> Path:
-    lib = tmp_path / "lib with space"
-    for name in ("brick", "orm", "textures"):
-        shutil.copytree(SAMPLES / name, lib / name)
+def _copy(root: Path, folders: dict[str, str]) -> Path:
+    """A library of sample folders (copy name -> sample name) beside the shared textures."""
+    lib = root / "lib with space"
+    for copy, name in {**folders, "textures": "textures"}.items():
+        shutil.copytree(SAMPLES / name, lib / copy)
     return lib
 
 
+@pytest.fixture()
+def library(tmp_path) -> Path:
+    """Two scenes, two different stacks (brick, and packed ORM maps)."""
+    return _copy(tmp_path, {"brick": "brick", "orm": "orm"})
+
+
+@pytest.fixture()
+def twins(tmp_path) -> Path:
+    """Two scenes with one stack: the second scene's is identical, so one training and one verdict per run
+    while each scene still gets its own tiles and its own layer."""
+    return _copy(tmp_path, {"brick": "brick", "brick twin": "brick"})
+
+
 def _scenes(lib: Path) -> list[Path]:
-    return [lib / "brick" / "scene.usda", lib / "orm" / "scene.usda"]
+    return sorted(lib.glob("*/scene.usda"))
 
 
 def _start(lib: Path, cache: Path, *extra: str) -> subprocess.Popen:
@@ -154,7 +168,8 @@ def check_final(lib: Path, report: dict) -> None:
         assert edited, f"{layer} edits no texture"
 
 
-def test_sigkill_during_training_writing_maps_and_saving_layers(library, tmp_path):
+def test_sigkill_during_training_writing_maps_and_saving_layers(twins, tmp_path):
+    library = twins
     cache = tmp_path / "cache"
     originals = hashes(library)
     kills: list[str] = []
@@ -208,9 +223,9 @@ def test_sigkill_during_training_writing_maps_and_saving_layers(library, tmp_pat
     code, report = _finish(_start(library, cache, "--json"))
     counts = check_integrity(library, cache, originals)
     check_final(library, report)
-    assert counts["layers"] == 2 and counts["entries"] == 2
+    assert counts["layers"] == 2 and counts["entries"] == 1 and counts["tiles"] == 6  # 3 maps in each scene
     assert counts["temp"] == 0, "the re-run removes the temporary files the killed runs left"
-    assert {s["origin"] for s in report["stacks"]} <= {"cache", "trained"}
+    assert [s["origin"] for s in report["stacks"]] == ["cache", "duplicate"]
     print(f"\nkill points tested: {len(kills)} ({', '.join(kills)}); files lost or corrupted: 0; "
           "temporary files left: 0")
 
@@ -233,7 +248,8 @@ def test_two_runs_at_once_share_library_and_cache(library, tmp_path):
     assert all(sorted(o) == ["cache", "trained"] for o in origins.values()), origins
 
 
-def test_two_in_place_runs_at_once_keep_the_originals_in_their_backups(library, tmp_path):
+def test_two_in_place_runs_at_once_keep_the_originals_in_their_backups(twins, tmp_path):
+    library = twins
     cache = tmp_path / "cache"
     originals = {scene: scene.read_bytes() for scene in _scenes(library)}
     runs = [_start(library, cache, "--json", "--in-place", "--iterations", "6") for _ in range(2)]
