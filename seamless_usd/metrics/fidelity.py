@@ -6,6 +6,7 @@ from typing import Callable, Iterable
 
 import numpy as np
 
+from ..memo import ContentMemo
 from .common import _prepare, _ratio, as_hwc
 
 __all__ = ["tile_to", "ssim_tiled", "FeatureFn", "gram_matrix", "gram_distance", "mean_log_frequency", "scale_ratio",
@@ -295,8 +296,17 @@ def patch_distance(tile: np.ndarray, source: np.ndarray, is_normal: bool = False
     of the source; the mean over levels. About 1 or below for a tile made of the source's own patches in their variety; blur,
     checkerboards, invented detail and lost variety all raise it.
     """
-    a, b = source_halves(source)
-    own = patch_sw(a, b, is_normal, seed=seed)
+    return _PATCH_DISTANCES.get((tile, source), (is_normal, seed), lambda: _patch_distance(tile, source, is_normal, seed))
+
+
+#: Patch distances, and each source's own half-vs-half figures, kept by the arrays' content: the verdict and
+#: the report measure the same tile, and seeds, candidates and duplicated stacks the same source.
+_PATCH_DISTANCES: ContentMemo[float] = ContentMemo()
+_OWN_SPREAD: ContentMemo[list[float | None]] = ContentMemo()
+
+
+def _patch_distance(tile: np.ndarray, source: np.ndarray, is_normal: bool, seed: int) -> float:
+    own = _OWN_SPREAD.get((source,), (is_normal, seed), lambda: patch_sw(*source_halves(source), is_normal, seed=seed))
     d = patch_sw(tile, source, is_normal, seed=seed)
     ratios = [_ratio(x, o) for x, o in zip(d, own) if x is not None and o is not None]
     if not ratios:

@@ -20,13 +20,11 @@ reference is its own 4th-strongest line (:data:`SELF_RANK`), and there is no fid
 """
 from __future__ import annotations
 
-import hashlib
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..memo import ContentMemo
 from .classifier import SeamClassifier, fit
 from .copies import COPY_SHARE, COPY_THRESHOLD, MAP_THRESHOLD, copy_origins, copy_seams
 from .lines import Seam, runs, seams_from_scores
@@ -128,34 +126,21 @@ def _strongest_run(scores: dict[str, np.ndarray], periodic: bool, rank: int = 1)
     return ranked[min(rank, len(ranked)) - 1]
 
 
-#: Calibrations (fitted classifier, reference run) kept per process, by the content of the image they were
-#: fitted on: a batch judges the same source many times (each map's tile, the scan's own check, duplicated
-#: stacks, ``check`` after ``process``), and the fit is the verdict's dearest part on small maps.
-_CALIBRATIONS: OrderedDict[bytes, tuple[SeamClassifier, float]] = OrderedDict()
-_CALIBRATIONS_KEPT = 64
-_CALIBRATIONS_LOCK = threading.Lock()
+#: Calibrations (fitted classifier, reference run) kept by the content of the image they were fitted on:
+#: a batch judges the same source many times, and the fit is the verdict's dearest part on small maps.
+_CALIBRATIONS: ContentMemo[tuple[SeamClassifier, float]] = ContentMemo()
 
 
 def _calibration(image: np.ndarray, itself: bool, seed: int) -> tuple[SeamClassifier, float]:
     """The classifier fitted on ``image`` and the reference its own lines give: read as it repeats and
     ranked :data:`SELF_RANK` for a texture judged on itself, else the source's strongest run."""
-    digest = hashlib.blake2b(np.ascontiguousarray(image).view(np.uint8), digest_size=20)
-    digest.update(repr((image.shape, image.dtype.str, itself, seed, LENGTH, STEP)).encode())
-    key = digest.digest()
-    with _CALIBRATIONS_LOCK:
-        if key in _CALIBRATIONS:
-            _CALIBRATIONS.move_to_end(key)
-            return _CALIBRATIONS[key]
-    clf = fit(image, LENGTH, STEP, seed=seed)
-    if itself:  # its interior lines (read without wrapping) are the reference
-        reference = _strongest_run(_scores(clf, image, True), True, SELF_RANK)
-    else:
-        reference = _strongest_run(_scores(clf, image, False), False)
-    with _CALIBRATIONS_LOCK:
-        _CALIBRATIONS[key] = clf, reference
-        while len(_CALIBRATIONS) > _CALIBRATIONS_KEPT:
-            _CALIBRATIONS.popitem(last=False)
-    return clf, reference
+    def compute() -> tuple[SeamClassifier, float]:
+        clf = fit(image, LENGTH, STEP, seed=seed)
+        if itself:  # its interior lines (read without wrapping) are the reference
+            return clf, _strongest_run(_scores(clf, image, True), True, SELF_RANK)
+        return clf, _strongest_run(_scores(clf, image, False), False)
+
+    return _CALIBRATIONS.get((image,), (itself, seed, LENGTH, STEP), compute)
 
 
 def _find(tile: np.ndarray, source: np.ndarray | None, factor: float, size: tuple[int, int], name: str, seed: int
