@@ -168,7 +168,19 @@ def check_final(lib: Path, report: dict) -> None:
         assert edited, f"{layer} edits no texture"
 
 
-def test_sigkill_during_training_writing_maps_and_saving_layers(twins, tmp_path):
+def _rerun_completes(library: Path, cache: Path, originals: dict[str, str], kills: list[str]) -> None:
+    """A run after the killed ones completes, and nothing of the interrupted runs is lost or corrupt."""
+    code, report = _finish(_start(library, cache, "--json"))
+    counts = check_integrity(library, cache, originals)
+    check_final(library, report)
+    assert counts["layers"] == 2 and counts["entries"] == 1 and counts["tiles"] == 6  # 3 maps in each scene
+    assert counts["temp"] == 0, "the re-run removes the temporary files the killed runs left"
+    assert [s["origin"] for s in report["stacks"]] == ["cache", "duplicate"]
+    print(f"\nkill points tested: {len(kills)} ({', '.join(kills)}); files lost or corrupted: 0; "
+          "temporary files left: 0")
+
+
+def test_sigkill_during_training_and_writing_maps(twins, tmp_path):
     library = twins
     cache = tmp_path / "cache"
     originals = hashes(library)
@@ -204,30 +216,29 @@ def test_sigkill_during_training_writing_maps_and_saving_layers(twins, tmp_path)
     assert _kill_when(proc, watch=tmp_path, ready=lambda: bool(_tiles(library, with_temp=False)))
     kills.append("writing maps (a tile complete)")
     check_integrity(library, cache, originals)
+    _rerun_completes(library, cache, originals, kills)
 
-    # 4. while saving layers (after every stack is done, before every scene has its layer)
+
+def test_sigkill_while_saving_layers(twins, tmp_path):
+    library = twins
+    cache = tmp_path / "cache"
+    originals = hashes(library)
+    kills: list[str] = []
+
+    # 1. while saving layers (after every stack is done, before every scene has its layer)
     proc = _start(library, cache, "--json")
     assert _kill_when(proc, watch=tmp_path, ready=lambda: bool(_layers(library)))
     kills.append("saving layers")
     check_integrity(library, cache, originals)
 
-    # 5. again while saving layers, later: once one layer is complete, before the other
+    # 2. again while saving layers, later: once one layer is complete, before the other
     for layer in _layers(library):
         layer.unlink()
     proc = _start(library, cache, "--json")
     assert _kill_when(proc, watch=tmp_path, ready=lambda: any(".tmp" not in p.name for p in _layers(library)))
     kills.append("saving layers (one layer complete)")
     check_integrity(library, cache, originals)
-
-    # 6. a re-run completes, and nothing of the interrupted runs is lost or corrupt
-    code, report = _finish(_start(library, cache, "--json"))
-    counts = check_integrity(library, cache, originals)
-    check_final(library, report)
-    assert counts["layers"] == 2 and counts["entries"] == 1 and counts["tiles"] == 6  # 3 maps in each scene
-    assert counts["temp"] == 0, "the re-run removes the temporary files the killed runs left"
-    assert [s["origin"] for s in report["stacks"]] == ["cache", "duplicate"]
-    print(f"\nkill points tested: {len(kills)} ({', '.join(kills)}); files lost or corrupted: 0; "
-          "temporary files left: 0")
+    _rerun_completes(library, cache, originals, kills)
 
 
 def test_two_runs_at_once_share_library_and_cache(library, tmp_path):
