@@ -195,22 +195,29 @@ def test_the_compiled_step_is_whole_graphs_and_computes_the_eager_step(seam):
 
 
 def test_maybe_compile_builds_with_inductor_and_keeps_its_graphs(monkeypatch, tmp_path):
-    """With the plan's compile on, D's loss runs through inductor's real code generator (C++ kernels here,
-    built scalar, ``cpp.simdlen`` 1, to compile faster) with the eager result, and its graphs land in the
-    cache directory, so a second run skips the compile."""
+    """With the plan's compile on, a piece of the step (the adversarial loss on D's logits, forward and
+    backward) runs through inductor's real code generator (C++ kernels here, built scalar, ``cpp.simdlen`` 1,
+    to compile faster) with the eager result and gradient, and its graphs land in the cache directory, so a
+    second run skips the compile. The whole step's graphs are checked above, without a code generator."""
     import torch._inductor.config as inductor_config
+
+    from seamless_usd.synthesis.gan.step import _bce
 
     monkeypatch.setenv("TORCHINDUCTOR_CACHE_DIR", str(tmp_path / "graphs"))
     monkeypatch.setattr(inductor_config.cpp, "simdlen", 1)
+    monkeypatch.setattr(inductor_config, "compile_threads", 1)  # a few kernels: no pool of compile workers
     plan = plan_engine(CONFIG.replace(compile="on"), "cpu", threads=1)
     assert plan.compile and compile_cache_dir() == tmp_path / "graphs"
-    assert maybe_compile(d_loss, plan_engine(CONFIG, "cpu", threads=1)) is d_loss  # compile off: the function
-    _, D = build_networks(CONFIG, CHANNELS, seed=1)
-    g = torch.Generator().manual_seed(2)
-    fake, real = (torch.rand(1, sum(CHANNELS), 32, 32, generator=g) * 2 - 1 for _ in range(2))
-    with torch.no_grad():
-        eager = d_loss(D, fake, real, torch.device("cpu"), "fp32")
-        built = maybe_compile(d_loss, plan)(D, fake, real, torch.device("cpu"), "fp32")
-    assert float(built) == pytest.approx(float(eager), rel=1e-5) and float(eager) > 0
+    assert maybe_compile(_bce, plan_engine(CONFIG, "cpu", threads=1)) is _bce  # compile off: the function itself
+    logits = torch.randn(2, 1, 6, 6, generator=torch.Generator().manual_seed(2))
+    results = []
+    for fn in (_bce, maybe_compile(_bce, plan)):
+        x = logits.clone().requires_grad_(True)
+        loss = fn(x, True)
+        loss.backward()
+        results.append((float(loss), x.grad))
+    (eager, eager_grad), (built, built_grad) = results
+    assert built == pytest.approx(eager, rel=1e-5) and eager > 0
+    assert torch.allclose(built_grad, eager_grad, rtol=1e-5, atol=1e-7) and float(eager_grad.abs().max()) > 0
     assert any(p.suffix == ".cpp" for p in (tmp_path / "graphs").rglob("*")), "no kernel was built"
     assert any(p.is_file() for p in (tmp_path / "graphs" / "fxgraph").rglob("*")), "no compiled graph was cached"

@@ -132,11 +132,12 @@ _CALIBRATIONS: ContentMemo[tuple[SeamClassifier, float]] = ContentMemo()
 
 
 def _calibration(image: np.ndarray, itself: bool, seed: int) -> tuple[SeamClassifier, float]:
-    """The classifier fitted on ``image`` and the reference its own lines give: read as it repeats and
-    ranked :data:`SELF_RANK` for a texture judged on itself, else the source's strongest run."""
+    """The classifier fitted on ``image`` (its lines read without wrapping) and the reference run: for a
+    texture judged on itself, its :data:`SELF_RANK`-th strongest line read as it repeats; else the source's
+    strongest run."""
     def compute() -> tuple[SeamClassifier, float]:
         clf = fit(image, LENGTH, STEP, seed=seed)
-        if itself:  # its interior lines (read without wrapping) are the reference
+        if itself:
             return clf, _strongest_run(_scores(clf, image, True), True, SELF_RANK)
         return clf, _strongest_run(_scores(clf, image, False), False)
 
