@@ -40,11 +40,11 @@ def _square_norm(a: np.ndarray) -> np.ndarray:
     return np.einsum("...c,...c->...", a, a)
 
 
-def _window_sums(a: np.ndarray, ends: np.ndarray, d: int) -> np.ndarray:
-    """``sum(a[:, e - d: e])`` for every ``e`` of ``ends`` (columns), from one cumulative sum."""
+def _column_sums(a: np.ndarray) -> np.ndarray:
+    """Cumulative sums along the columns with a leading zero: ``sum(a[:, i: j])`` is ``c[:, j] - c[:, i]``."""
     c = np.zeros((a.shape[0], a.shape[1] + 1))
     np.cumsum(a, axis=1, out=c[:, 1:])
-    return c[:, ends] - c[:, ends - d]
+    return c
 
 
 def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> np.ndarray:
@@ -67,8 +67,9 @@ def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> 
         sq = moving_mean(_square_norm(ext[:, d:] - ext[:, :-d]), length, periodic, step)  # pair (x, x + d)
         # pairs (c - j, c - j + d), j = 1..d, cross the line at c; (c - j - d, c - j) lie on its left and
         # (c + j - 1, c + j - 1 + d) on its right: three windows of d pair positions
-        straddle = _window_sums(sq, lines, d) / d
-        within = 0.5 * (_window_sums(sq, lines - d, d) + _window_sums(sq, lines + d, d)) / d
+        cs = _column_sums(sq)
+        straddle = (cs[:, lines] - cs[:, lines - d]) / d
+        within = 0.5 * ((cs[:, lines - d] - cs[:, lines - 2 * d]) + (cs[:, lines + d] - cs[:, lines])) / d
         feats.append(np.log(straddle + _EPS) - np.log(within + _EPS))
         within_all.append(within)
     for within in within_all:  # local contrast against the image's own

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from seamless_usd.metrics.structure import structure_figures
+
 from .copies import COPY_THRESHOLD, MAP_THRESHOLD, continuation, copy_origins
 from .features import moving_mean
 from .prepare import prepare_maps
@@ -97,8 +99,6 @@ def inside_figures(tiles: list[np.ndarray], sources: list[np.ndarray], normals: 
     """Per map, what lies inside a tile (figures without a tolerance): its bad joins (count, total length in
     texels) and the copies' coherence (None when the tile is not made of source texels), and the structure
     figure against the source (:mod:`seamless_usd.metrics.structure`). ``sources`` at the tile's texel scale."""
-    from seamless_usd.metrics.structure import structure_figures
-
     joins = join_stats(tiles, sources, normals, names)
     out = []
     for name, tile, source in zip(names, tiles, sources):
