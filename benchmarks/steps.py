@@ -22,6 +22,7 @@ import torch  # noqa: E402
 
 from seamless_usd.synthesis import get_preset  # noqa: E402
 from seamless_usd.synthesis.config import SynthesisConfig  # noqa: E402
+from seamless_usd.synthesis.gan.adam import Adam  # noqa: E402
 from seamless_usd.synthesis.gan.engine import CropWorkers, maybe_compile, plan_engine  # noqa: E402
 from seamless_usd.synthesis.gan.features import build_feature_extractor  # noqa: E402
 from seamless_usd.synthesis.precision import cpu_supports_bf16  # noqa: E402
@@ -54,8 +55,8 @@ class StepRunner:
         self.plan = plan_engine(cfg, "cpu", threads=threads)
         self.G, self.D = build_networks(cfg, CHANNELS, seed=0)
         self.ext = build_feature_extractor(cfg)
-        self.opt_g = torch.optim.Adam(self.G.parameters(), lr=cfg.lr, betas=cfg.betas)
-        self.opt_d = torch.optim.Adam(self.D.parameters(), lr=cfg.lr, betas=cfg.betas)
+        self.opt_g = Adam(self.G.parameters(), lr=cfg.lr, betas=cfg.betas)
+        self.opt_d = Adam(self.D.parameters(), lr=cfg.lr, betas=cfg.betas)
         self.fns = StepFunctions(*(maybe_compile(f, self.plan) for f in (generate, d_loss, g_loss)))
         k = cfg.k
         g = torch.Generator().manual_seed(0)

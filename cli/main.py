@@ -75,7 +75,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def run() -> None:
     """Console-script entry: ``main()``, then a fast exit.
 
-    With torch and colour-science (which loads OpenImageIO) in one process, interpreter shutdown
+    With torch and OpenImageIO in one process, interpreter shutdown
     makes OpenImageIO's bindings print spurious "nanobind: leaked ..." lines. Every file this
     command writes is complete (atomic) and every cluster closed before ``main`` returns, so the
     process ends with ``os._exit`` after flushing its streams.

@@ -73,6 +73,24 @@ def test_srgb_transfer_values() -> None:
     assert np.allclose(to_linear(v, "sRGB", "uint8"), to_linear(np.rint(v * 255) / 255, "sRGB"), atol=1e-12)
     assert np.allclose(from_linear(to_linear(v, "sRGB"), "sRGB"), v, atol=1e-12)
     assert np.array_equal(to_linear(v, "raw"), v)
+
+
+def test_srgb_transfer_matches_colour_science_everywhere() -> None:
+    """The written-out IEC 61966-2-1 pair gives colour-science's numbers: every 16-bit code, values around
+    both knees, below 0 and above 1."""
+    import warnings
+
+    with warnings.catch_warnings():  # colour-science warns about optional plotting packages
+        warnings.simplefilter("ignore")
+        from colour.models import eotf_inverse_sRGB, eotf_sRGB
+    knees = np.array([0.04045, 0.0031308])
+    around = (knees[:, None] + np.linspace(-1e-6, 1e-6, 41)).ravel()
+    v = np.concatenate([np.arange(65536) / 65535, around, np.linspace(-0.5, 1.5, 2001)])
+    assert np.allclose(to_linear(v, "sRGB"), eotf_sRGB(v), rtol=1e-15, atol=1e-17)
+    assert np.allclose(from_linear(v, "sRGB"), eotf_inverse_sRGB(v), rtol=1e-15, atol=1e-17)
+    codes = np.arange(65536) / 65535
+    assert np.allclose(to_linear(codes, "sRGB", "uint16"), eotf_sRGB(codes), rtol=1e-15, atol=1e-17)
+    assert np.array_equal(from_linear(eotf_sRGB(codes), "sRGB", "uint16"), codes)
     with pytest.raises(ValueError, match="unknown colour space"):
         to_linear(v, "ACEScg")
 

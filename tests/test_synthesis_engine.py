@@ -196,15 +196,18 @@ def test_the_compiled_step_is_whole_graphs_and_computes_the_eager_step(seam):
 
 def test_maybe_compile_builds_with_inductor_and_keeps_its_graphs(monkeypatch, tmp_path):
     """With the plan's compile on, a piece of the step (the adversarial loss on D's logits, forward and
-    backward) runs through inductor's real code generator (C++ kernels here, built scalar, ``cpp.simdlen`` 1,
-    to compile faster) with the eager result and gradient, and its graphs land in the cache directory, so a
-    second run skips the compile. The whole step's graphs are checked above, without a code generator."""
+    backward) runs through inductor's real code generator (C++ kernels here, built scalar, to compile faster:
+    no vector instruction set is offered, which also spares the compiler probes inductor runs for each one,
+    10 s of g++) with the eager result and gradient, and its graphs land in the cache directory, so a second
+    run skips the compile. The whole step's graphs are checked above, without a code generator."""
     import torch._inductor.config as inductor_config
+    import torch._inductor.cpu_vec_isa as vec_isa
 
     from seamless_usd.synthesis.gan.step import _bce
 
     monkeypatch.setenv("TORCHINDUCTOR_CACHE_DIR", str(tmp_path / "graphs"))
     monkeypatch.setattr(inductor_config.cpp, "simdlen", 1)
+    monkeypatch.setattr(vec_isa, "supported_vec_isa_list", [])
     monkeypatch.setattr(inductor_config, "compile_threads", 1)  # a few kernels: no pool of compile workers
     plan = plan_engine(CONFIG.replace(compile="on"), "cpu", threads=1)
     assert plan.compile and compile_cache_dir() == tmp_path / "graphs"

@@ -11,7 +11,7 @@ overrides) holds the ``bpy`` package (Blender as a Python module, built for Pyth
 bundles: ``usd-core``, ``MaterialX`` and ``OpenImageIO``. Blender's own ``pxr`` has to be the one in
 use (the stage Blender hands to a hook is of its types), and a second copy of these libraries
 in the same process clashes with the bundled ones. ``bpy`` 5.0 is built against NumPy 1.x, so
-NumPy stays below 2 (and colour-science below 0.4.7, the first release that needs NumPy 2).
+NumPy stays below 2.
 """
 from __future__ import annotations
 
@@ -29,10 +29,8 @@ VENV = Path(os.environ.get("SEAMLESS_USD_BLENDER_VENV", ROOT / ".venv-blender"))
 BPY = os.environ.get("SEAMLESS_USD_BPY", "bpy==5.0.1")  # 4.2's wheel has no pxr; 4.5's hangs at exit
 TORCH = "torch==2.13.0"  # the CPU build, as dev.py installs it
 BUNDLED_BY_BLENDER = {"usd-core", "materialx", "openimageio"}
-CONSTRAINTS = ["numpy<2", "colour-science<0.4.7"]
-# scikit-image: seamless_usd.metrics imports it while processing, but pyproject lists it only
-# under the test extras.
-EXTRA = ["pytest>=8", "scikit-image>=0.22"]
+CONSTRAINTS = ["numpy<2"]
+EXTRA = ["pytest>=8"]
 
 
 def _bin(name: str) -> Path:

@@ -3,7 +3,7 @@
 Pixels in, pixels out; no USD and no torch here.
 
 * :mod:`.io`: OpenImageIO reading (header limit, clean errors) and atomic writing by family.
-* :mod:`.transfer`: sRGB / raw transfer functions (colour-science).
+* :mod:`.transfer`: sRGB (IEC 61966-2-1) / raw transfer functions.
 * :mod:`.normals`: normal-map scale/bias and Y conventions.
 * :mod:`.encoding`: :class:`MapEncoding`, :func:`decode_map`, :func:`encode_map`.
 * :mod:`.finite`: the NaN / inf policy.

@@ -11,7 +11,7 @@ What a map's encoding records, and how each network channel is made:
   (``perceptual=True``, the default): the GAN, its L1 and its Gram losses work best in a
   perceptually uniform domain, as with the paper's ordinary sRGB images, and dark albedo keeps
   its tonal resolution. ``perceptual=False`` decodes them to linear with the sRGB EOTF
-  (colour-science). Raw maps are taken as they are; alpha is always linear.
+  (IEC 61966-2-1). Raw maps are taken as they are; alpha is always linear.
 * **normals**: the xyz channels of a normal map become unit vectors with the map's scale and bias
   (negative Y scale = the other Y convention), and go to the network as they are (already in
   [-1, 1]). Encoding renormalises, then inverts scale and bias.

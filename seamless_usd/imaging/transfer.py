@@ -1,13 +1,15 @@
 """Colour transfer functions: file values <-> linear values, per :class:`ColorSpace`.
 
-The functions come from colour-science (``eotf_sRGB`` / ``eotf_inverse_sRGB``, IEC 61966-2-1).
-They are chosen from one mapping, :data:`TRANSFER_FUNCTIONS`, by colour space. For integer files
-the decoding is a table of the colour-science function sampled at every code (256 or 65536
-entries): the same numbers, without evaluating powers per pixel.
+The sRGB pair is IEC 61966-2-1's piecewise curve (linear toe below 0.04045 / 0.0031308, a 2.4 power
+above), extended to negative values the way colour-science extends it (linear toe, sign-preserving
+power); the tests hold it to colour-science's ``eotf_sRGB`` / ``eotf_inverse_sRGB``. It is written
+out here because importing colour-science costs every run half a second. The functions are chosen
+from one mapping, :data:`TRANSFER_FUNCTIONS`, by colour space. For integer files the decoding is a
+table of the function sampled at every code (256 or 65536 entries): the same numbers, without
+evaluating powers per pixel.
 """
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from functools import lru_cache
 
@@ -15,11 +17,27 @@ import numpy as np
 
 from seamless_usd.discover.types import ColorSpace
 
-with warnings.catch_warnings():  # colour-science warns about optional plotting packages
-    warnings.simplefilter("ignore")
-    from colour.models import eotf_inverse_sRGB, eotf_sRGB
+__all__ = ["TRANSFER_FUNCTIONS", "to_linear", "from_linear", "file_codes", "linear_table", "eotf_srgb",
+           "eotf_inverse_srgb"]
 
-__all__ = ["TRANSFER_FUNCTIONS", "to_linear", "from_linear", "file_codes", "linear_table"]
+_SRGB_LINEAR_KNEE = 0.0031308  # linear value where the toe meets the power curve
+_SRGB_FILE_KNEE = _SRGB_LINEAR_KNEE * 12.92  # the same point as a file value (0.04045)
+
+
+def _signed_power(values: np.ndarray, power: float) -> np.ndarray:
+    return np.sign(values) * np.abs(values) ** power
+
+
+def eotf_srgb(values: np.ndarray) -> np.ndarray:
+    """sRGB file values -> linear values (float64)."""
+    v = np.asarray(values, dtype=np.float64)
+    return np.where(v <= _SRGB_FILE_KNEE, v / 12.92, _signed_power((v + 0.055) / 1.055, 2.4))
+
+
+def eotf_inverse_srgb(values: np.ndarray) -> np.ndarray:
+    """Linear values -> sRGB file values (float64)."""
+    v = np.asarray(values, dtype=np.float64)
+    return np.where(v <= _SRGB_LINEAR_KNEE, v * 12.92, 1.055 * _signed_power(v, 1 / 2.4) - 0.055)
 
 
 def _identity(values: np.ndarray) -> np.ndarray:
@@ -28,7 +46,7 @@ def _identity(values: np.ndarray) -> np.ndarray:
 
 # colour space -> (file value -> linear, linear -> file value)
 TRANSFER_FUNCTIONS: dict[ColorSpace, tuple[Callable[[np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]] = {
-    ColorSpace.SRGB: (eotf_sRGB, eotf_inverse_sRGB),
+    ColorSpace.SRGB: (eotf_srgb, eotf_inverse_srgb),
     ColorSpace.RAW: (_identity, _identity),
 }
 
@@ -78,7 +96,7 @@ def to_linear(values: np.ndarray, color_space: ColorSpace | str, dtype: str | No
     values
         File values, any shape; integer files normalised to [0, 1].
     color_space
-        ``sRGB`` (colour-science sRGB EOTF, extended linearly below 0) or ``raw`` (unchanged).
+        ``sRGB`` (IEC 61966-2-1 EOTF, extended linearly below 0) or ``raw`` (unchanged).
     dtype
         The file's sample type; for ``uint8`` / ``uint16`` values are snapped to their code grid
         and decoded by table.
@@ -121,7 +139,7 @@ def from_linear(values: np.ndarray, color_space: ColorSpace | str, dtype: str | 
     dtype
         The output file's sample type. For ``uint8`` / ``uint16`` the result is already the
         nearest code, ``k / code_max`` in [0, 1]: the code whose interval (between the
-        colour-science EOTF of the code midpoints) holds the value, which is what rounding the
+        EOTF of the code midpoints) holds the value, which is what rounding the
         inverse EOTF gives, found by table search.
 
     Returns

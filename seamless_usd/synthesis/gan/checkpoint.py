@@ -10,8 +10,7 @@ import torch
 from safetensors import SafetensorError
 from safetensors.torch import load_file, save_file
 
-__all__ = ["CHECKPOINT_NAME", "save_checkpoint", "load_checkpoint", "optimizer_tensors", "load_optimizer_tensors",
-           "versions"]
+__all__ = ["CHECKPOINT_NAME", "save_checkpoint", "load_checkpoint", "versions"]
 
 CHECKPOINT_NAME = "checkpoint.safetensors"
 FORMAT_VERSION = 1
@@ -25,26 +24,6 @@ def versions() -> dict[str, str]:
         ours = "unknown"
     return {"seamless_usd": ours, "torch": torch.__version__, "numpy": np.__version__,
             "format": str(FORMAT_VERSION)}
-
-
-def optimizer_tensors(prefix: str, opt: torch.optim.Optimizer) -> dict[str, torch.Tensor]:
-    """Adam state flattened to named tensors: ``{prefix}.{param index}.{exp_avg|exp_avg_sq|step}``."""
-    out = {}
-    for idx, st in opt.state_dict()["state"].items():
-        for name, t in st.items():
-            out[f"{prefix}.{idx}.{name}"] = torch.as_tensor(t).detach().cpu().contiguous()
-    return out
-
-
-def load_optimizer_tensors(prefix: str, opt: torch.optim.Optimizer, tensors: dict[str, torch.Tensor]) -> None:
-    sd = opt.state_dict()
-    state: dict[int, dict[str, torch.Tensor]] = {}
-    for key, t in tensors.items():
-        if key.startswith(prefix + "."):
-            _, idx, name = key.split(".", 2)
-            state.setdefault(int(idx), {})[name] = t
-    sd["state"] = state
-    opt.load_state_dict(sd)
 
 
 def save_checkpoint(path: Path, tensors: dict[str, torch.Tensor], meta: dict) -> None:

@@ -18,6 +18,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from ..config import SynthesisConfig
+from .adam import Adam
 from .engine import CropWorkers
 from .features import style_loss
 from .networks import Discriminator, Generator
@@ -101,7 +102,7 @@ class StepFunctions:
     g_loss: Callable = g_loss
 
 
-def training_step(G: Generator, D: Discriminator, opt_g: torch.optim.Optimizer, opt_d: torch.optim.Optimizer,
+def training_step(G: Generator, D: Discriminator, opt_g: Adam, opt_d: Adam,
                   extractor: nn.Module, batch: Batch, channels: list[int], config: SynthesisConfig,
                   device: torch.device, precision: str, scaler=None, workers: CropWorkers | None = None,
                   stacked: bool = False, fns: StepFunctions | None = None, update_d: bool = True,
@@ -193,7 +194,7 @@ def _floats(parts: dict[str, torch.Tensor]) -> dict[str, float]:
     return {k: float(v) for k, v in parts.items()}
 
 
-def _backward_step(loss: torch.Tensor, opt: torch.optim.Optimizer, scaler) -> None:
+def _backward_step(loss: torch.Tensor, opt: Adam, scaler) -> None:
     if scaler is None:
         loss.backward()
         opt.step()

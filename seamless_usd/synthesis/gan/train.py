@@ -11,8 +11,8 @@ from typing import Callable
 import numpy as np
 import torch
 
-from .checkpoint import (CHECKPOINT_NAME, load_checkpoint, load_optimizer_tensors, optimizer_tensors,
-                         save_checkpoint, versions)
+from .adam import Adam
+from .checkpoint import CHECKPOINT_NAME, load_checkpoint, save_checkpoint, versions
 from ..config import SynthesisConfig
 from .data import effective_k, stack_tensor, training_crops
 from .engine import CropWorkers, EnginePlan, engine_for, maybe_compile
@@ -118,8 +118,8 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
     G, D = build_networks(config, channels, seed)
     G, D = G.to(dev).train(), D.to(dev).train()
     extractor = build_feature_extractor(config).to(dev).eval()
-    opt_g = torch.optim.Adam(G.parameters(), lr=config.lr, betas=config.betas)
-    opt_d = torch.optim.Adam(D.parameters(), lr=config.lr, betas=config.betas)
+    opt_g = Adam(G.parameters(), lr=config.lr, betas=config.betas)
+    opt_d = Adam(D.parameters(), lr=config.lr, betas=config.betas)
     scaler = torch.amp.GradScaler(dev.type) if plan.grad_scaler else None
     fns = StepFunctions(maybe_compile(generate, plan), maybe_compile(d_loss, plan), maybe_compile(g_loss, plan))
 
@@ -132,8 +132,8 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
                              f"(hash {meta.get('hash')} != {key}); use another checkpoint_dir")
         G.load_state_dict({k_[2:]: v for k_, v in tensors.items() if k_.startswith("G.")})
         D.load_state_dict({k_[2:]: v for k_, v in tensors.items() if k_.startswith("D.")})
-        load_optimizer_tensors("optG", opt_g, tensors)
-        load_optimizer_tensors("optD", opt_d, tensors)
+        opt_g.load_state_tensors("optG", tensors)
+        opt_d.load_state_tensors("optD", tensors)
         start = int(meta["step"])
 
     model = TrainedModel(G, D, config, key, [m.name for m in maps], channels, [bool(m.is_normal) for m in maps],
@@ -144,8 +144,8 @@ def train(maps: list[MapInput], config: SynthesisConfig, *, seed: int = 0, devic
             return
         tensors = {f"G.{k_}": v for k_, v in G.state_dict().items()}
         tensors.update({f"D.{k_}": v for k_, v in D.state_dict().items()})
-        tensors.update(optimizer_tensors("optG", opt_g))
-        tensors.update(optimizer_tensors("optD", opt_d))
+        tensors.update(opt_g.state_tensors("optG"))
+        tensors.update(opt_d.state_tensors("optD"))
         model.step = step
         save_checkpoint(ckpt, tensors, model._meta())
 
