@@ -111,3 +111,23 @@ def test_training_does_not_load_the_compiler():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().splitlines()[-1] == "False"
+
+
+def test_a_grad_scaler_steps_it_as_it_steps_torch_adam():
+    """The fp16 path (a GPU's) runs the optimiser through ``torch.amp.GradScaler``: scaled gradients are
+    unscaled, a step with an infinite gradient is skipped, and the parameters follow torch's Adam."""
+    results = []
+    for make in (Adam, torch.optim.Adam):
+        net = _net(3)
+        opt = make(net.parameters(), lr=1e-3)
+        scaler = torch.amp.GradScaler("cpu", init_scale=2.0 ** 8)
+        for step in range(4):
+            x = torch.randn(2, 3, 12, 12, generator=torch.Generator().manual_seed(step))
+            loss = net(x).square().mean() * (float("inf") if step == 2 else 1.0)
+            opt.zero_grad(set_to_none=True)
+            scaler.scale(loss).backward()
+            scaler.step(opt)
+            scaler.update()
+        results.append([p.detach().clone() for p in net.parameters()])
+        assert scaler.get_scale() < 2.0 ** 8  # the infinite step lowered the scale (and was skipped)
+    assert all(torch.equal(a, b) for a, b in zip(*results))
