@@ -172,7 +172,8 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     use_layout = all(low <= v <= high for v in layout_scale.values())
     layout = [gan.maps[m.name] for m in maps] if use_layout else None
     result = refine([m.pixels for m in maps], layout, out_hw, refine_config,
-                    seed=seed, device=device, progress=lambda info: emit("refine", info), pictures=LEVEL_PICTURE)
+                    seed=seed, device=device, progress=lambda info: emit("refine", info), pictures=LEVEL_PICTURE,
+                    normals=[m.is_normal for m in maps])
     timings["refine"] = time.perf_counter() - t3
     tiles = {m.name: np.ascontiguousarray(t, dtype=np.float32) for m, t in zip(maps, result.maps)}
     model = models[runs.index(chosen)]

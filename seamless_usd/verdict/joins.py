@@ -62,15 +62,21 @@ class JoinStats(dict):
 
 
 def join_stats(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list[bool], names: list[str],
-               run: int = SHORT_RUN) -> JoinStats:
+               run: int = SHORT_RUN, origin: np.ndarray | None = None) -> JoinStats:
     """Bad joins of a tile made of source texels, per map and for the maps together (``"stack"``).
 
-    ``sources`` must be at the tile's texel scale (see :func:`seamless_usd.verdict.judge`).
+    ``sources`` must be at the tile's texel scale (see :func:`seamless_usd.verdict.judge`). ``origin``: the
+    source position of every tile texel when it is known (the refinement's field); by default each is looked
+    up. A tile whose texels near the joins were blended (no longer copies) is judged on its field: the
+    continuation error then reads the blended values against what the source continues with.
     """
     t = prepare_maps(tiles, normals)
     s = prepare_maps(sources, normals)
     tj, sj = np.concatenate(t, axis=-1), np.concatenate(s, axis=-1)
-    origin, share = copy_origins(tj, sj)
+    if origin is None:
+        origin, share = copy_origins(tj, sj)
+    else:
+        origin, share = np.asarray(origin, dtype=np.int64), 1.0
     out = JoinStats(copied=round(share, 4), coherence=None, maps=None)
     if share < JOIN_SHARE:
         return out

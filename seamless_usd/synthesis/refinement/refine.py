@@ -28,6 +28,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from .blend import blend_band
 from .heal import relax_boundaries, smoothed
 from .patches import PatchSpace, clamp_field, gather, occurrence_bias, patch_cost, patchmatch, vote
 from ..precision import pick_device
@@ -59,6 +60,8 @@ class RefineConfig:
     coarse_until: int = 256
     heal: int = 0  # passes of minimum-error boundary relaxation after each level (see .heal); 0: off
     heal_sigma: float = 1.5  # blur (px at the level) of the features the joins are judged on while healing
+    blend: int = 0  # width (texels) of the band around every join blended in the gradient domain (see .blend); 0: off,
+    #                 every texel an exact copy
     lattice: bool = True  # stacks that repeat on a lattice (bricks, weaves) also get a tile cut to whole periods
     #                       from the source (see .lattice); Q and the fidelity figures choose between the two
 
@@ -70,6 +73,7 @@ class RefineResult:
     levels: list[dict] = field(default_factory=list)  # per level: scale, size, seconds, mean cost
     seconds: float = 0.0
     pictures: list[np.ndarray] = field(default_factory=list)  # per level: the first map through its field (small)
+    band: np.ndarray | None = None  # (h, w) bool: texels blended across a join (``blend``); None: all are copies
 
 
 def field_picture(source: np.ndarray, fld: torch.Tensor, level_source_hw: tuple[int, int], side: int) -> np.ndarray:
@@ -159,7 +163,7 @@ def _random_field(tile: tuple[int, int], valid: tuple[int, int], r: int, block: 
 
 def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: tuple[int, int],
            config: RefineConfig = RefineConfig(), *, seed: int = 0, device: str | torch.device | None = None,
-           progress=None, pictures: int = 0) -> RefineResult:
+           progress=None, pictures: int = 0, normals: list[bool] | None = None) -> RefineResult:
     """Refine a tileable layout into a full-resolution tile made of source texels.
 
     Parameters
@@ -170,6 +174,7 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
     tile_hw : (h, w) of the output tile at the sources' resolution.
     progress : called with a dict per finished level.
     pictures : when > 0, keep for every level the first map seen through its field, at most this many px.
+    normals : which maps are normal maps (blended as vectors when ``config.blend`` is on).
     """
     t_start = time.perf_counter()
     dev = pick_device(device)
@@ -249,6 +254,10 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
                 "mean_cost": float(cost.mean()), "seconds": round(time.perf_counter() - t0, 3)}, s_hw)
     assert tuple(fld.shape[:2]) == (th, tw), f"field {tuple(fld.shape[:2])} != tile {(th, tw)}"
     field_np = fld.cpu().numpy()
-    maps = [np.ascontiguousarray(np.asarray(m)[field_np[..., 0], field_np[..., 1]]) for m in sources]
+    band = None
+    if config.blend > 0:
+        maps, band = blend_band(sources, field_np, config.blend, normals)
+    else:
+        maps = [np.ascontiguousarray(np.asarray(m)[field_np[..., 0], field_np[..., 1]]) for m in sources]
     return RefineResult(field=field_np, maps=maps, levels=levels, seconds=time.perf_counter() - t_start,
-                        pictures=shots)
+                        pictures=shots, band=band)
