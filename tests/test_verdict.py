@@ -147,3 +147,22 @@ def test_a_source_judged_again_is_not_refitted_and_gets_the_same_verdict(wood, s
     assert first["method"] == "classifier" and not first["seamless"]  # the splice is found
     judge_module._CALIBRATIONS.clear()
     assert judge([tile], [source], [False], ["wood"]).as_dict() == first  # a fresh fit agrees
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_the_classifiers_blur_along_a_line_is_the_binomial_kernel(periodic):
+    """[1 2 1] / 4 twice is [1 4 6 4 1] / 16 along the rows, the ends wrapped round or repeated: checked
+    against numpy's convolution of the padded columns."""
+    from seamless_usd.verdict.classifier import _blur_along
+
+    a = np.random.default_rng(5).standard_normal((9, 4, 2))
+    padded = np.pad(a, ((2, 2), (0, 0), (0, 0)), mode="wrap" if periodic else "edge")
+    kernel = np.array([1, 4, 6, 4, 1]) / 16
+    expected = np.apply_along_axis(lambda col: np.convolve(col, kernel, mode="valid"), 0, padded)
+    got = _blur_along(a, periodic)
+    if periodic:
+        assert np.allclose(got, expected, atol=1e-12)
+    else:  # the end row repeated in each pass: the kernel away from the ends, (10 5 1) / 16 at them
+        assert np.allclose(got[2:-2], expected[2:-2], atol=1e-12)
+        assert np.allclose(got[0], (10 * a[0] + 5 * a[1] + a[2]) / 16, atol=1e-12)
+        assert np.allclose(got[-1], (10 * a[-1] + 5 * a[-2] + a[-3]) / 16, atol=1e-12)

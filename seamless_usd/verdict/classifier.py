@@ -23,11 +23,18 @@ _MAX_TRUE = 6000
 
 
 def _blur_along(a: np.ndarray, periodic: bool) -> np.ndarray:
-    """[1 2 1] / 4 along axis 0 (rows), twice: structures 2-4 px across."""
+    """[1 2 1] / 4 along axis 0 (rows), twice: structures 2-4 px across. The ends wrap round (``periodic``)
+    or repeat the end row; written with slices into one buffer (no rolled copies: it runs on every stretch
+    of every synthetic join the classifier is fitted on)."""
+    if a.shape[0] < 2:
+        return np.asarray(a, dtype=np.result_type(a, np.float32)).copy()
     for _ in range(2):
-        up = np.roll(a, 1, 0) if periodic else np.concatenate([a[:1], a[:-1]], 0)
-        down = np.roll(a, -1, 0) if periodic else np.concatenate([a[1:], a[-1:]], 0)
-        a = 0.25 * up + 0.5 * a + 0.25 * down
+        out = 0.5 * a
+        out[1:] += 0.25 * a[:-1]
+        out[:-1] += 0.25 * a[1:]
+        out[0] += 0.25 * (a[-1] if periodic else a[0])
+        out[-1] += 0.25 * (a[0] if periodic else a[-1])
+        a = out
     return a
 
 
