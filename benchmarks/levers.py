@@ -40,6 +40,7 @@ LEVERS: dict[str, dict] = {
     "blend 3": {"blend": 3},
     "blend 6": {"blend": 6},
     "heal 8 + blend 3": {"heal": 8, "blend": 3},
+    "robust vote 3": {"robust_vote": 3},
 }
 STACK_NAMES = ("cells_512", "stripes_512", "rot23_wood_512", "rot23_brick_512")
 
@@ -64,7 +65,11 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
     seconds = time.perf_counter() - t0
     joins = join_stats(tiles, maps, normals, keys, origin=result.field)  # the field: blended texels keep their place
     verdict = judge(tiles, maps, normals, keys)
-    blended = 0.0 if result.band is None else round(float(result.band.mean()), 3)
+    fy, fx = result.field[..., 0], result.field[..., 1]
+    changed = np.zeros(fy.shape, dtype=bool)  # texels that are not the copy the field names (blended or voted)
+    for tile, source in zip(tiles, maps):
+        changed |= np.abs(tile - source[fy, fx]).max(axis=-1) > 1e-6
+    blended = round(float(changed.mean()), 3)
     row = {"seconds": round(seconds, 1), "coherence": joins["coherence"], "blended": blended,
            "bad_joins": {k: v["count"] for k, v in (joins["maps"] or {}).items()},
            "passed": verdict.passed, "seams": len(verdict.seams),
@@ -82,7 +87,8 @@ def _md(rows: list[dict], load: str) -> str:
            "`benchmarks/levers.py`. Bad joins: stretches of >= 8 texels where two copied blocks meet with a "
            "continuation error above the verdict's threshold, for the maps together (per-map counts in "
            "levers.json), read through the refinement's own field (so blended texels are judged where they "
-           "stand). Blended: share of texels in the gradient-domain band (the rest are exact copies). "
+           "stand). Blended: share of texels that are not the copy the field names (blended or voted; the rest are exact "
+           "copies). "
            f"Structure: the worst map, target <= {STRUCTURE_TARGET}. Scale and patch: the worst map's distance "
            f"from 1 / its value. {load}", "",
            "| stack | lever | bad joins | coherence | blended | verdict seams | structure (worst) | scale (worst) "

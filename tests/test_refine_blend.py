@@ -1,4 +1,5 @@
-"""Gradient-domain blending of the band around a copied tile's joins (``RefineConfig.blend``)."""
+"""What the refinement makes at a copied tile's joins besides copies: gradient-domain blending of a band
+around them (``RefineConfig.blend``) and Kwatra's robust vote (``RefineConfig.robust_vote``)."""
 from __future__ import annotations
 
 import importlib.util
@@ -158,3 +159,53 @@ def test_blending_a_refined_stone_tile_leaves_fewer_bad_joins_and_keeps_the_ston
     assert after < 0.6 * before, (before, after)
     for tile, source, normal in zip(blended.maps, maps, normals):
         assert 0.8 < scale_ratio(tile, source, normal) < 1.25
+
+
+def _as_tensor(img: np.ndarray):
+    import torch
+
+    return torch.from_numpy(np.ascontiguousarray(img.transpose(2, 0, 1)))
+
+
+def test_the_robust_vote_keeps_coherent_copies_and_lets_the_majority_side_win_at_a_join():
+    """Inside a block every overlapping patch copies the same texel: the vote is that texel. At the join of
+    a black and a white block, a texel two columns inside the black block is covered by more patches
+    copying black than white: the robust vote stays near black where the mean vote goes grey."""
+    import torch
+
+    from seamless_usd.synthesis.refinement.patches import robust_vote, vote
+
+    rng = np.random.default_rng(1)
+    source = np.zeros((40, 40, 1), np.float32)
+    source[:, 20:] = 1.0
+    source += rng.normal(0, 0.02, source.shape).astype(np.float32)  # grain, so copies are told apart
+    _, field = _two_blocks(rows=16)
+    fld = torch.from_numpy(field)
+    robust = robust_vote(_as_tensor(source), fld, r=3).numpy()[0]
+    mean = vote(_as_tensor(source), fld, r=3).numpy()[0]
+    copied = source[field[..., 0], field[..., 1], 0]
+    assert np.allclose(robust[8, 3:5], copied[8, 3:5], atol=1e-5)  # 3+ columns from every join: the copy
+    assert np.allclose(robust[8, 11:13], copied[8, 11:13], atol=1e-5)
+    for column, side in ((6, 0.0), (9, 1.0)):  # two columns inside the black block, one inside the white
+        assert abs(robust[8, column] - side) < 0.1, (column, robust[8, column])
+        assert abs(mean[8, column] - side) > 0.2, (column, mean[8, column])
+
+
+@pytest.mark.usefixtures("one_thread")
+def test_the_robust_vote_through_refine_keeps_maps_aligned_and_normals_unit_length():
+    from seamless_usd.synthesis import RefineConfig, refine
+
+    rng = np.random.default_rng(2)
+    colour = rng.uniform(-1, 1, (96, 96, 3)).astype(np.float32)
+    normal = np.concatenate([rng.normal(0, 0.3, (96, 96, 2)), np.ones((96, 96, 1))], -1).astype(np.float32)
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    twin = colour.copy()
+    result = refine([colour, twin, normal], None, (64, 64), RefineConfig(lattice=False, coarsest=32, robust_vote=2),
+                    seed=0, normals=[False, False, True])
+    voted, voted_twin, voted_normal = result.maps
+    assert np.array_equal(voted, voted_twin)  # one set of weights for every map
+    assert np.allclose(np.linalg.norm(voted_normal, axis=-1), 1.0, atol=1e-5)
+    fy, fx = result.field[..., 0], result.field[..., 1]
+    same = np.all(voted == colour[fy, fx], axis=-1)
+    assert 0.05 < same.mean() < 1.0  # exact copies inside the blocks, voted values at the joins
+    assert np.array_equal(voted_normal[same], normal[fy, fx][same])  # the same texels of every map

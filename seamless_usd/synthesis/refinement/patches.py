@@ -10,7 +10,7 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
-__all__ = ["PatchSpace", "patch_cost", "patchmatch", "vote", "gather", "occurrence_bias", "clamp_field"]
+__all__ = ["PatchSpace", "patch_cost", "patchmatch", "vote", "robust_vote", "gather", "occurrence_bias", "clamp_field"]
 
 
 class PatchSpace:
@@ -173,3 +173,32 @@ def vote(source: torch.Tensor, field: torch.Tensor, r: int, stride: int = 1) -> 
             acc += gather(source, pos)
             n += 1
     return acc / n
+
+
+def robust_vote(source: torch.Tensor, field: torch.Tensor, r: int, stride: int = 1, iterations: int = 3,
+                power: float = 0.8) -> torch.Tensor:
+    """Kwatra et al. (2005)'s robust vote: every pixel takes the value that minimises the sum over the patches
+    overlapping it of ``|value - what the patch copies there| ** power`` (``power`` < 1: the value most
+    patches agree on, not their mean), by iteratively reweighted least squares from the mean vote. Where the
+    overlapping patches copy the same texel (inside a coherent block) that texel comes out; at a join, the
+    side more patches copy wins instead of a blend. ``source`` (C, H, W) at the field's resolution."""
+    H, W = source.shape[1:]
+    offs = [(dy, dx) for dy in range(-r, r + 1, stride) for dx in range(-r, r + 1, stride)]
+
+    def candidate(dy: int, dx: int) -> torch.Tensor:
+        nb = torch.roll(field, shifts=(-dy, -dx), dims=(0, 1)) - torch.tensor([dy, dx], device=field.device)
+        pos = torch.stack([nb[..., 0].clamp(0, H - 1), nb[..., 1].clamp(0, W - 1)], -1)
+        return gather(source, pos)
+
+    x = vote(source, field, r, stride)
+    eps = 1e-3 * float(source.std()) + 1e-8
+    for _ in range(iterations):
+        acc = torch.zeros_like(x)
+        total = torch.zeros_like(x[:1])
+        for dy, dx in offs:
+            c = candidate(dy, dx)
+            w = ((c - x).norm(dim=0, keepdim=True) + eps) ** (power - 2)
+            acc += w * c
+            total += w
+        x = acc / total
+    return x

@@ -16,7 +16,8 @@ Kaspar et al. 2015's occurrence penalty) rebuilds it from the source's own patch
 
 The output maps are copied from the source through the final field: one field for every map, so
 the maps stay pixel-aligned and keep real source texels (bit depth, colour space, unit normals),
-and the tile wraps around by construction.
+and the tile wraps around by construction. Two options, off by default, make new values near the
+joins instead (a gradient-domain blend of a band, :mod:`.blend`, or Kwatra's robust vote).
 """
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ import torch.nn.functional as F
 
 from .blend import blend_band
 from .heal import relax_boundaries, smoothed
-from .patches import PatchSpace, clamp_field, gather, occurrence_bias, patch_cost, patchmatch, vote
+from .patches import PatchSpace, clamp_field, gather, occurrence_bias, patch_cost, patchmatch, robust_vote, vote
 from ..precision import pick_device
 
 __all__ = ["RefineConfig", "RefineResult", "refine", "field_picture", "joint_features", "level_scales", "resize_periodic", "spread"]
@@ -60,6 +61,9 @@ class RefineConfig:
     coarse_until: int = 256
     heal: int = 0  # passes of minimum-error boundary relaxation after each level (see .heal); 0: off
     heal_sigma: float = 1.5  # blur (px at the level) of the features the joins are judged on while healing
+    robust_vote: int = 0  # iterations of Kwatra's robust vote (see .patches.robust_vote) making the output from the
+    #                       final field: copies where the overlapping patches agree, voted values near the joins;
+    #                       0: off, every texel an exact copy
     blend: int = 0  # width (texels) of the band around every join blended in the gradient domain (see .blend); 0: off,
     #                 every texel an exact copy
     lattice: bool = True  # stacks that repeat on a lattice (bricks, weaves) also get a tile cut to whole periods
@@ -161,6 +165,31 @@ def _random_field(tile: tuple[int, int], valid: tuple[int, int], r: int, block: 
     return clamp_field(torch.stack([y, x], -1).to(device), valid, r)
 
 
+def _voted(sources: list[np.ndarray], fld: torch.Tensor, config: RefineConfig, normals: list[bool] | None
+           ) -> list[np.ndarray]:
+    """The maps made by the robust vote over the final field, on the joint features (one set of weights for
+    every map, so they stay aligned), back in each map's units; normal maps renormalised."""
+    src = torch.from_numpy(np.ascontiguousarray(joint_features(sources).transpose(2, 0, 1))).to(fld.device)
+    r = config.patch // 2
+    voted = robust_vote(src, fld, r, config.vote_stride, config.robust_vote).cpu().numpy().transpose(1, 2, 0)
+    f = fld.cpu().numpy()
+    parts, copies, at = [], [], 0
+    for m in sources:
+        c = m.shape[2]
+        parts.append(voted[..., at:at + c] * spread(m))
+        copies.append(np.asarray(m, dtype=np.float32)[f[..., 0], f[..., 1]])
+        at += c
+    # where the vote is the copy (every overlapping patch agreed) the texel stays that exact source texel,
+    # not the copy through the feature scaling and back
+    kept = np.all([np.abs(p - q).max(axis=-1) < 1e-5 for p, q in zip(parts, copies)], axis=0)
+    out = []
+    for i, (part, copy) in enumerate(zip(parts, copies)):
+        if normals is not None and normals[i] and part.shape[2] >= 3:
+            part[..., :3] /= np.maximum(np.linalg.norm(part[..., :3], axis=-1, keepdims=True), 1e-8)
+        out.append(np.ascontiguousarray(np.where(kept[..., None], copy, part), dtype=np.float32))
+    return out
+
+
 def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: tuple[int, int],
            config: RefineConfig = RefineConfig(), *, seed: int = 0, device: str | torch.device | None = None,
            progress=None, pictures: int = 0, normals: list[bool] | None = None) -> RefineResult:
@@ -174,7 +203,11 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
     tile_hw : (h, w) of the output tile at the sources' resolution.
     progress : called with a dict per finished level.
     pictures : when > 0, keep for every level the first map seen through its field, at most this many px.
-    normals : which maps are normal maps (blended as vectors when ``config.blend`` is on).
+    normals : which maps are normal maps (blended or voted as vectors, then renormalised, when
+        ``config.blend`` or ``config.robust_vote`` is on).
+
+    With ``config.blend`` or ``config.robust_vote`` (both off by default) the texels near the joins are
+    new values, not copies (``RefineResult.band`` marks the blended ones).
     """
     t_start = time.perf_counter()
     dev = pick_device(device)
@@ -255,7 +288,9 @@ def refine(sources: list[np.ndarray], layout: list[np.ndarray] | None, tile_hw: 
     assert tuple(fld.shape[:2]) == (th, tw), f"field {tuple(fld.shape[:2])} != tile {(th, tw)}"
     field_np = fld.cpu().numpy()
     band = None
-    if config.blend > 0:
+    if config.robust_vote > 0:
+        maps = _voted(sources, fld, config, normals)
+    elif config.blend > 0:
         maps, band = blend_band(sources, field_np, config.blend, normals)
     else:
         maps = [np.ascontiguousarray(np.asarray(m)[field_np[..., 0], field_np[..., 1]]) for m in sources]
