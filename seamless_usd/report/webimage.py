@@ -1,4 +1,4 @@
-"""Compressed pictures for the HTML report: WebP where OpenImageIO writes it, else JPEG, as data URIs.
+"""Compressed pictures for the HTML report: WebP where it can be written, else JPEG, as data URIs.
 
 The report is one self-contained file, so every picture is embedded. Lossy WebP or JPEG keeps a
 page for a 3-map 512 px stack well under 2 MB (PNG previews were about 1 MB per 256 px stack).
@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import base64
 import functools
+import io
 import os
 import tempfile
 
@@ -24,14 +25,19 @@ FORMATS: tuple[str, ...] = ("webp", "jpeg")
 #: Quality of lossy pictures (0-100): block artefacts stay below what a seam looks like.
 QUALITY = 85
 
+#: libwebp's effort for WebP (0-6): its own default. OpenImageIO's WebP writer always uses 6, which took
+#: 62 ms for a 384 px texture picture against 17 ms here, for files 8 % smaller; Pillow writes WebP
+#: with the effort chosen (OpenImageIO stays the writer when Pillow lacks WebP, and for JPEG).
+WEBP_METHOD = 4
+
 MIME = {"webp": "image/webp", "jpeg": "image/jpeg", "png": "image/png"}
 _EXTENSION = {"webp": "webp", "jpeg": "jpg"}
 
 
 def _writes(fmt: str) -> bool:
-    """Whether this OpenImageIO build writes ``fmt`` (an 8x8 trial image is written and read back)."""
+    """Whether ``fmt`` can be written here (an 8x8 trial image is encoded)."""
     try:
-        data = _encode_oiio(np.full((8, 8, 3), 128, np.uint8), fmt, QUALITY)
+        data = _encode_lossy(np.full((8, 8, 3), 128, np.uint8), fmt, QUALITY)
     except (ImportError, RuntimeError, OSError):
         return False
     return len(data) > 0
@@ -79,6 +85,27 @@ def _encode_oiio(rgb: np.ndarray, fmt: str, quality: int) -> bytes:
             return f.read()
 
 
+def _encode_pillow_webp(rgb: np.ndarray, quality: int) -> bytes | None:
+    """WebP at :data:`WEBP_METHOD` through Pillow; None when Pillow has no WebP."""
+    try:
+        from PIL import Image, features
+    except ImportError:
+        return None
+    if not features.check("webp"):
+        return None
+    buf = io.BytesIO()
+    Image.fromarray(rgb, "RGB").save(buf, "WEBP", quality=int(quality), method=WEBP_METHOD)
+    return buf.getvalue()
+
+
+def _encode_lossy(rgb: np.ndarray, fmt: str, quality: int) -> bytes:
+    if fmt == "webp":
+        data = _encode_pillow_webp(rgb, quality)
+        if data is not None:
+            return data
+    return _encode_oiio(rgb, fmt, quality)
+
+
 def encode_image(pixels: np.ndarray, fmt: str | None = None, quality: int = QUALITY) -> tuple[str, bytes]:
     """Encode uint8 pixels ``(H, W)`` or ``(H, W, C)`` for the web; returns ``(mime type, bytes)``.
 
@@ -98,7 +125,7 @@ def encode_image(pixels: np.ndarray, fmt: str | None = None, quality: int = QUAL
         return MIME["png"], encode_png(np.asarray(pixels))
     if fmt not in _EXTENSION:
         raise ValueError(f"unknown picture format {fmt!r}; valid: webp, jpeg, png")
-    return MIME[fmt], _encode_oiio(_rgb(pixels), fmt, quality)
+    return MIME[fmt], _encode_lossy(_rgb(pixels), fmt, quality)
 
 
 def image_data_uri(pixels: np.ndarray, fmt: str | None = None, quality: int = QUALITY) -> str:
