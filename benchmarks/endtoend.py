@@ -22,13 +22,19 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 TEXTURES = HERE.parent.parent / "shared" / "textures"
+if str(HERE.parent / "sample_assets") not in sys.path:  # the scene builders of the sample assets
+    sys.path.insert(0, str(HERE.parent / "sample_assets"))
 MAPS = (("brick_base_gray", "diffuseColor", "sRGB"), ("brick_normal", "normal", "raw"),
         ("brick_roughness", "roughness", "raw"))
 
 
 def build_scene(folder: Path, size: int, textures: Path = TEXTURES) -> Path:
+    """The maps written at ``size`` px beside a scene made with the sample assets' builders: a plane whose
+    UVs span one period, bound to a UsdPreviewSurface reading them (the normal map with scale 2, bias -1)."""
     import OpenImageIO as oiio
-    from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade
+    from pxr import Gf, Sdf, UsdShade
+
+    from make_scenes import bind, new_layer, plane, preview_material
 
     folder.mkdir(parents=True, exist_ok=True)
     for name, _, _ in MAPS:
@@ -37,42 +43,16 @@ def build_scene(folder: Path, size: int, textures: Path = TEXTURES) -> Path:
             buf = oiio.ImageBufAlgo.resize(buf, "lanczos3", roi=oiio.ROI(0, size, 0, size, 0, 1, 0, buf.nchannels))
         if not buf.write(str(folder / f"{name}_{size}.png"), "uint8"):
             raise SystemExit(f"error: cannot write @{folder / name}_{size}.png@: {buf.geterror()}")
-    stage = Usd.Stage.CreateNew(str(folder / "scene.usda"))
-    stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/World").GetPrim())
-    mesh = UsdGeom.Mesh.Define(stage, "/World/Wall")
-    mesh.CreatePointsAttr([(0, 0, 0), (4, 0, 0), (4, 4, 0), (0, 4, 0)])
-    mesh.CreateFaceVertexCountsAttr([4])
-    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
-    UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
-                                            UsdGeom.Tokens.varying).Set([(0, 0), (1, 0), (1, 1), (0, 1)])
+    stage = new_layer(folder / "scene.usda", "World")
+    stage.DefinePrim("/World", "Xform")
     look = "/World/Looks/Brick"
-    material = UsdShade.Material.Define(stage, look)
-    surface = UsdShade.Shader.Define(stage, f"{look}/Surface")
-    surface.CreateIdAttr("UsdPreviewSurface")
-    material.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
-    reader = UsdShade.Shader.Define(stage, f"{look}/UV")
-    reader.CreateIdAttr("UsdPrimvarReader_float2")
-    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
-    uv = reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
-    for name, role, space in MAPS:
-        tex = UsdShade.Shader.Define(stage, f"{look}/{role}")
-        tex.CreateIdAttr("UsdUVTexture")
-        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(f"./{name}_{size}.png")
-        tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set(space)
-        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(uv)
-        if role == "roughness":
-            out = tex.CreateOutput("r", Sdf.ValueTypeNames.Float)
-            surface.CreateInput(role, Sdf.ValueTypeNames.Float).ConnectToSource(out)
-            continue
-        out = tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
-        if role == "normal":
-            tex.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(2, 2, 2, 1))
-            tex.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(-1, -1, -1, 0))
-            surface.CreateInput(role, Sdf.ValueTypeNames.Normal3f).ConnectToSource(out)
-        else:
-            surface.CreateInput(role, Sdf.ValueTypeNames.Color3f).ConnectToSource(out)
-    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
-    stage.GetRootLayer().Save()
+    bind(plane(stage, "/World/Wall", 4.0, 1.0, cells=1).GetPrim(), look)
+    preview_material(stage, look, {role: (f"./{name}_{size}.png", "r" if role == "roughness" else "rgb", space)
+                                   for name, role, space in MAPS})
+    normal = UsdShade.Shader(stage.GetPrimAtPath(f"{look}/normalTex"))
+    normal.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(2, 2, 2, 1))
+    normal.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(-1, -1, -1, 0))
+    stage.Save()
     return folder / "scene.usda"
 
 

@@ -2,28 +2,19 @@
 with the colour spaces and the normal map's scale and bias the scene states."""
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import OpenImageIO as oiio
 
-ENDTOEND = Path(__file__).resolve().parents[1] / "benchmarks" / "endtoend.py"
+from benchscripts import load_benchmark
+
 TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
-
-
-def _endtoend():
-    spec = importlib.util.spec_from_file_location("benchmark_endtoend", ENDTOEND)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def test_the_scene_holds_one_tiling_stack_of_three_maps_at_the_size_asked(tmp_path):
     import seamless_usd
 
-    bench = _endtoend()
+    bench = load_benchmark("endtoend")
     textures = tmp_path / "textures"
     textures.mkdir()
     for name, source in (("brick_base_gray", "brick_albedo.png"), ("brick_normal", "brick_normal.png"),

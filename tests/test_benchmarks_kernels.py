@@ -1,26 +1,14 @@
 """The convolution benchmark finds the step's layers and counts their work right."""
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 import time
-from pathlib import Path
 
-KERNELS = Path(__file__).resolve().parents[1] / "benchmarks" / "kernels.py"
-
-
-def _kernels():
-    sys.path.insert(0, str(KERNELS.parent))
-    spec = importlib.util.spec_from_file_location("benchmark_kernels", KERNELS)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
+from benchscripts import load_benchmark
 
 
 def test_every_convolution_of_a_step_is_timed_with_its_work(tmp_path):
-    k = _kernels()
+    k = load_benchmark("kernels")
     began = time.perf_counter()
     assert k.main(["--preset", "tiny", "--seconds", "0.01", "--out", str(tmp_path)]) == 0
     wall_ms = (time.perf_counter() - began) * 1e3

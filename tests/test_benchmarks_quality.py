@@ -1,28 +1,17 @@
 """Smoke test of the quality benchmark: the baselines on a small real stack."""
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-QUALITY = Path(__file__).resolve().parents[1] / "benchmarks" / "quality.py"
-
-
-def _quality():
-    spec = importlib.util.spec_from_file_location("benchmark_quality", QUALITY)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod  # dataclasses look their module up there
-    spec.loader.exec_module(mod)
-    return mod
+from benchscripts import load_benchmark
 
 
 def test_baselines_on_a_small_real_stack(tmp_path, capsys):
-    q = _quality()
+    q = load_benchmark("quality")
     code = q.main(["--methods", "naive,crossfade", "--stacks", "wood", "--max-size", "64", "--out", str(tmp_path), "--no-gram"])
     assert code == 0
     data = json.loads((tmp_path / "quality.json").read_text())
@@ -45,7 +34,7 @@ def test_baselines_on_a_small_real_stack(tmp_path, capsys):
 
 
 def test_unknown_names_and_missing_textures_are_clean_errors(tmp_path, capsys):
-    q = _quality()
+    q = load_benchmark("quality")
     with pytest.raises(SystemExit, match="unknown stack marble"):
         q.main(["--stacks", "marble", "--methods", "naive", "--out", str(tmp_path)])
     code = q.main(["--stacks", "mx_wood", "--methods", "naive", "--textures-dir", str(tmp_path / "absent"), "--out", str(tmp_path)])
@@ -54,7 +43,7 @@ def test_unknown_names_and_missing_textures_are_clean_errors(tmp_path, capsys):
 
 
 def test_gram_distance_with_the_engine_extractor():
-    q = _quality()
+    q = load_benchmark("quality")
     features, note = q.default_features()
     if features is None:  # torch or the engine missing in this environment
         pytest.skip(note)

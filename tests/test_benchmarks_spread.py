@@ -1,27 +1,16 @@
 """The spread benchmark on a small real stack: the seam figures of one torus tile over its origins."""
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-SPREAD = Path(__file__).resolve().parents[1] / "benchmarks" / "spread.py"
-
-
-def _spread():
-    spec = importlib.util.spec_from_file_location("benchmark_spread", SPREAD)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
+from benchscripts import load_benchmark
 
 
 def test_origin_spread_reads_every_origin_of_the_same_tile():
-    s = _spread()
+    s = load_benchmark("spread")
     rng = np.random.default_rng(0)
     tile = rng.uniform(size=(40, 48))
     tile[:, 10] += 3.0  # one strong vertical line, at column 10 | 11
@@ -36,7 +25,7 @@ def test_origin_spread_reads_every_origin_of_the_same_tile():
 def test_the_figure_at_each_origin_is_the_seam_ratio_of_the_rolled_tile():
     from seamless_usd import metrics as M
 
-    s = _spread()
+    s = load_benchmark("spread")
     rng = np.random.default_rng(1)
     for tile, is_normal in ((rng.uniform(size=(30, 37, 3)), False), (rng.normal(size=(26, 33, 3)), True)):
         for axis, label in ((1, "x"), (0, "y")):
@@ -49,7 +38,7 @@ def test_the_figure_at_each_origin_is_the_seam_ratio_of_the_rolled_tile():
 
 
 def test_the_script_writes_its_tables_for_a_real_stack(tmp_path):
-    s = _spread()
+    s = load_benchmark("spread")
     assert s.main(["--stacks", "cloth", "--max-size", "96", "--out", str(tmp_path)]) == 0
     data = json.loads((tmp_path / "spread.json").read_text())
     cloth = data["stacks"]["cloth"]

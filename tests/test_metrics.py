@@ -1,7 +1,6 @@
 """Seam, periodic-plus-smooth, detail and fidelity metrics on synthetic and real textures."""
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -10,15 +9,9 @@ import pytest
 
 from seamless_usd import metrics as M
 
+from benchscripts import load_benchmark
+
 TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
-
-
-def _load_baselines():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "baselines.py"
-    spec = importlib.util.spec_from_file_location("quality_baselines", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def periodic_noise(h=128, w=128, c=3, sigma=2.0, seed=0) -> np.ndarray:
@@ -108,7 +101,7 @@ def test_tiling_a_window_periodically_makes_it_seamless():
 @pytest.mark.parametrize("name", ["brick_albedo.png", "brick_roughness.png", "wood_color.png", "cloth.png"])
 def test_crossfade_blurs_the_seam_bands(name):
     src = load(name)
-    tile = _load_baselines().crossfade_tile(src)
+    tile = load_benchmark("baselines").crossfade_tile(src)
     assert M.detail_ratio(tile) < 0.99
     assert M.detail_ratio(tile) < M.detail_ratio(src)
     assert M.ps_score(tile) < 0.5 * M.ps_score(src)
@@ -116,7 +109,7 @@ def test_crossfade_blurs_the_seam_bands(name):
 
 def test_crossfade_of_noise_has_detail_ratio_well_below_one():
     noise = np.random.default_rng(3).uniform(-1, 1, size=(160, 160, 1))
-    tile = _load_baselines().crossfade_tile(noise)
+    tile = load_benchmark("baselines").crossfade_tile(noise)
     # Linear crossfade of uncorrelated noise: RMS factor sqrt(a^2 + (1-a)^2) over the blend.
     assert 0.75 < M.detail_ratio(tile) < 0.95
 

@@ -2,19 +2,15 @@
 around them (``RefineConfig.blend``) and Kwatra's robust vote (``RefineConfig.robust_vote``)."""
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from seamless_usd.synthesis.refinement.blend import band_mask, blend_band, join_edges
 from seamless_usd.verdict.joins import join_stats
 
-_spec = importlib.util.spec_from_file_location(
-    "synthetic", Path(__file__).resolve().parents[1] / "benchmarks" / "synthetic.py")
-synthetic = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(synthetic)
+from benchscripts import load_benchmark
+
+synthetic = load_benchmark("synthetic")
 
 
 def _two_blocks(rows: int = 8) -> tuple[np.ndarray, np.ndarray]:

@@ -2,9 +2,6 @@
 structure is known: stone cells with dark joints and long curved stripes (``benchmarks/synthetic.py``)."""
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 import torch
@@ -13,10 +10,9 @@ from seamless_usd.metrics.structure import STRUCTURE_TARGET, structure_figures
 from seamless_usd.synthesis.refinement.heal import relax_boundaries, seam_cost
 from seamless_usd.verdict.joins import join_stats
 
-_spec = importlib.util.spec_from_file_location(
-    "synthetic", Path(__file__).resolve().parents[1] / "benchmarks" / "synthetic.py")
-synthetic = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(synthetic)
+from benchscripts import load_benchmark
+
+synthetic = load_benchmark("synthetic")
 
 
 def _blocks(img: np.ndarray, block: int, seed: int) -> np.ndarray:

@@ -37,16 +37,18 @@ def join_edges(field: np.ndarray) -> list[np.ndarray]:
 
 def band_mask(edges: list[np.ndarray], width: int) -> np.ndarray:
     """(h, w) bool: texels within ``width`` texels (city-block, on the torus) of a join line, on both sides."""
+    if width <= 0:
+        return np.zeros_like(edges[0])
     touched = np.zeros_like(edges[0])
     for axis, edge in enumerate(edges):
         touched |= edge | np.roll(edge, -1, axis=axis)  # both texels of the joined pair
     band = touched.copy()
-    for _ in range(max(0, width - 1)):
+    for _ in range(width - 1):
         grown = band.copy()
         for axis in (0, 1):
             grown |= np.roll(band, 1, axis=axis) | np.roll(band, -1, axis=axis)
         band = grown
-    return band if width > 0 else np.zeros_like(touched)
+    return band
 
 
 def _pair_guidance(source: np.ndarray, field: np.ndarray, a: np.ndarray, b: np.ndarray, step: np.ndarray) -> np.ndarray:
@@ -83,13 +85,12 @@ def _neighbours(band: np.ndarray) -> tuple[np.ndarray, list[tuple[np.ndarray, np
     return here, out
 
 
-def _solve(tile: np.ndarray, source: np.ndarray, field: np.ndarray, band: np.ndarray, iterations: int,
-           tol: float) -> np.ndarray:
+def _solve(tile: np.ndarray, source: np.ndarray, field: np.ndarray, here: np.ndarray,
+           axes: list[tuple[np.ndarray, np.ndarray, np.ndarray]], iterations: int, tol: float) -> np.ndarray:
     """Least squares over the band: every pair with a band texel should differ by its guidance. The normal
     equations (a 4-neighbour Laplacian over the band texels, Dirichlet values from the texels around it)
     are solved by conjugate gradients from the copied values, all channels at once, on the band alone."""
     h, w, c = tile.shape
-    here, axes = _neighbours(band)
     n = len(here)
     flat_tile = tile.reshape(-1, c).astype(np.float64)
     order = np.full(h * w, n, dtype=np.int64)  # band texel -> its row; others -> n (a zero row)
@@ -139,8 +140,8 @@ def blend_band(sources: list[np.ndarray], field: np.ndarray, width: int, normals
     others are exact copies). ``normals[i]`` marks a normal map: its first three channels are renormalised.
     """
     field = np.asarray(field, dtype=np.int64)
-    edges = join_edges(field)
-    band = band_mask(edges, width)
+    band = band_mask(join_edges(field), width)
+    here, axes = _neighbours(band)  # the same system for every map
     out = []
     for i, src in enumerate(sources):
         src = np.asarray(src, dtype=np.float32)
@@ -148,7 +149,7 @@ def blend_band(sources: list[np.ndarray], field: np.ndarray, width: int, normals
         if not band.any():
             out.append(np.ascontiguousarray(tile))
             continue
-        solved = _solve(tile, src, field, band, iterations, tol)
+        solved = _solve(tile, src, field, here, axes, iterations, tol)
         if normals is not None and normals[i] and solved.shape[2] >= 3:
             xyz = solved[..., :3]
             solved[..., :3] = xyz / np.maximum(np.linalg.norm(xyz, axis=-1, keepdims=True), 1e-8)

@@ -157,22 +157,27 @@ def gather(source: torch.Tensor, field: torch.Tensor) -> torch.Tensor:
     return source.reshape(c, -1)[:, flat].reshape(c, *field.shape[:2])
 
 
+def _offsets(r: int, stride: int) -> list[tuple[int, int]]:
+    return [(dy, dx) for dy in range(-r, r + 1, stride) for dx in range(-r, r + 1, stride)]
+
+
+def _copied_at(source: torch.Tensor, field: torch.Tensor, dy: int, dx: int) -> torch.Tensor:
+    """(C, h, w): what the patch centred at ``p + d`` copies onto every pixel ``p`` (``d = (dy, dx)``): pixel
+    ``p`` lies at offset ``-d`` in it, so the source pixel ``field(p + d) - d``, clamped to the source."""
+    H, W = source.shape[1:]
+    pos = torch.roll(field, shifts=(-dy, -dx), dims=(0, 1)) - torch.tensor([dy, dx], device=field.device)
+    pos = torch.stack([pos[..., 0].clamp(0, H - 1), pos[..., 1].clamp(0, W - 1)], -1)
+    return gather(source, pos)
+
+
 def vote(source: torch.Tensor, field: torch.Tensor, r: int, stride: int = 1) -> torch.Tensor:
     """Texture-optimisation vote (Kwatra et al. 2005): every pixel averages what the overlapping
-    patches copy onto it. Pixel ``p`` lies at offset ``-d`` in the patch centred at ``p + d``, which
-    copies source pixel ``field(p + d) - d``. ``stride`` > 1 samples the offsets sparsely."""
-    c, H, W = source.shape
-    acc = torch.zeros((c,) + tuple(field.shape[:2]), device=source.device)
-    n = 0
-    offs = range(-r, r + 1, stride)
-    for dy in offs:
-        for dx in offs:
-            nb = torch.roll(field, shifts=(-dy, -dx), dims=(0, 1))  # field(p + d)
-            pos = nb - torch.tensor([dy, dx], device=field.device)
-            pos = torch.stack([pos[..., 0].clamp(0, H - 1), pos[..., 1].clamp(0, W - 1)], -1)
-            acc += gather(source, pos)
-            n += 1
-    return acc / n
+    patches copy onto it (see :func:`_copied_at`). ``stride`` > 1 samples the offsets sparsely."""
+    acc = torch.zeros((source.shape[0],) + tuple(field.shape[:2]), device=source.device)
+    offs = _offsets(r, stride)
+    for dy, dx in offs:
+        acc += _copied_at(source, field, dy, dx)
+    return acc / len(offs)
 
 
 def robust_vote(source: torch.Tensor, field: torch.Tensor, r: int, stride: int = 1, iterations: int = 3,
@@ -182,21 +187,13 @@ def robust_vote(source: torch.Tensor, field: torch.Tensor, r: int, stride: int =
     patches agree on, not their mean), by iteratively reweighted least squares from the mean vote. Where the
     overlapping patches copy the same texel (inside a coherent block) that texel comes out; at a join, the
     side more patches copy wins instead of a blend. ``source`` (C, H, W) at the field's resolution."""
-    H, W = source.shape[1:]
-    offs = [(dy, dx) for dy in range(-r, r + 1, stride) for dx in range(-r, r + 1, stride)]
-
-    def candidate(dy: int, dx: int) -> torch.Tensor:
-        nb = torch.roll(field, shifts=(-dy, -dx), dims=(0, 1)) - torch.tensor([dy, dx], device=field.device)
-        pos = torch.stack([nb[..., 0].clamp(0, H - 1), nb[..., 1].clamp(0, W - 1)], -1)
-        return gather(source, pos)
-
     x = vote(source, field, r, stride)
     eps = 1e-3 * float(source.std()) + 1e-8
     for _ in range(iterations):
         acc = torch.zeros_like(x)
         total = torch.zeros_like(x[:1])
-        for dy, dx in offs:
-            c = candidate(dy, dx)
+        for dy, dx in _offsets(r, stride):
+            c = _copied_at(source, field, dy, dx)
             w = ((c - x).norm(dim=0, keepdim=True) + eps) ** (power - 2)
             acc += w * c
             total += w
