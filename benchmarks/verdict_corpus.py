@@ -12,12 +12,18 @@ Seamless by construction
     ``refined``     the product's toroidal refinement of a window (random start), looked at and judged:
                     seamless on the wood roughness, blocky (broken courses, threads, grain cut
                     by hard block ends at 3x) on the bricks, the weave and the wood colour.
+    ``lattice-blended`` the lattice cut with a band of 3 texels around its joins blended in the
+                    gradient domain (the refinement's ``blend``): a seamless cut stays seamless.
+    ``blended``     the refined tile's field with its joins blended the same way, looked at and judged
+                    (3 x 3 repeats at 1x and 3x).
 Seamed by construction
     ``naive``       an off-grid window used as its own tile (a seam at the wrap);
     ``splice``      a tileable texture with a strip from elsewhere spliced in (two interior seams);
     ``half-roll``   an off-grid window rolled by half its size (seams on the centre lines);
     ``crossfade``   the linear border crossfade of a window (a ghosted band);
     ``blocky``      a mosaic of 12-40 px blocks copied from the source with no care for their edges.
+    ``blocky-blended`` the same mosaic with a band of 3 texels around its blocks' edges blended: the
+                    tone steps go, the structure stays cut.
 
 The source of each item is an off-grid window of the same texture at the tile's texel scale, 1.15-1.4
 periods long, so it holds every texel of a tile made from the texture and does not tile itself.
@@ -50,7 +56,12 @@ SEAMLESS = ("rolled", "noise", "lattice", "refined")
 #: copied blocks' edges, and the wood colour shows the blocks' hard vertical ends across its grain at 3x:
 #: blocky refinements, labelled seamed.
 REFINED_SEAMLESS = frozenset({"wood_roughness"})
-SEAMED = ("naive", "splice", "half-roll", "crossfade", "blocky")
+#: The same refinements with their joins blended, looked at the same way and judged seamless.
+BLENDED_SEAMLESS = frozenset({"wood_roughness"})
+#: Width (texels) of the blended band in the ``*-blended`` items: the refinement's ``blend`` lever as measured.
+BAND = 3
+SEAMLESS = SEAMLESS + ("lattice-blended",)
+SEAMED = ("naive", "splice", "half-roll", "crossfade", "blocky", "blocky-blended")
 
 
 @dataclass
@@ -122,20 +133,35 @@ def _splice(t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return out
 
 
-def _blocky(src: np.ndarray, side: int, rng: np.random.Generator) -> np.ndarray:
+def _blocky_field(shape: tuple[int, int], side: int, rng: np.random.Generator) -> np.ndarray:
+    """The (side, side, 2) field of a mosaic of square blocks copied from random places of a ``shape`` source."""
     block = int(rng.integers(max(12, side // 40), max(16, side // 12)))
-    out = np.empty((side, side, src.shape[-1]), np.float32)
-    hs, ws = src.shape[:2]
+    field = np.empty((side, side, 2), np.int64)
+    hs, ws = shape
+    r, c = np.meshgrid(np.arange(block), np.arange(block), indexing="ij")
     for y in range(0, side, block):
         for x in range(0, side, block):
             sy, sx = rng.integers(0, hs - block), rng.integers(0, ws - block)
             h, w = min(block, side - y), min(block, side - x)
-            out[y:y + h, x:x + w] = src[sy:sy + h, sx:sx + w]
-    return out
+            field[y:y + h, x:x + w, 0] = (r + sy)[:h, :w]
+            field[y:y + h, x:x + w, 1] = (c + sx)[:h, :w]
+    return field
 
 
-def _product(kind: str, sources: list[np.ndarray], normals: list[bool], seed: int) -> list[np.ndarray] | None:
-    """The product's lattice cut or random-start refinement of ``sources`` (None when no lattice)."""
+def _through(sources: list[np.ndarray], field: np.ndarray) -> list[np.ndarray]:
+    return [np.ascontiguousarray(s[field[..., 0], field[..., 1]], np.float32) for s in sources]
+
+
+def _blended(sources: list[np.ndarray], field: np.ndarray, normals: list[bool]) -> list[np.ndarray]:
+    from seamless_usd.synthesis.refinement.blend import blend_band
+
+    return blend_band(sources, field, BAND, normals)[0]
+
+
+def _product(kind: str, sources: list[np.ndarray], normals: list[bool], seed: int
+             ) -> tuple[list[np.ndarray], np.ndarray] | None:
+    """The product's lattice cut or random-start refinement of ``sources`` and its field (None when no
+    lattice)."""
     from seamless_usd.synthesis.lattice.cut import find_lattice, lattice_cut, lattice_tile_size
     from seamless_usd.synthesis.refinement.refine import RefineConfig, refine
 
@@ -145,9 +171,9 @@ def _product(kind: str, sources: list[np.ndarray], normals: list[bool], seed: in
         if sizes is None:
             return None
         fld, _ = lattice_cut(sources, *sizes)
-        return [np.ascontiguousarray(s[fld[..., 0], fld[..., 1]]) for s in sources]
+        return _through(sources, fld), fld
     result = refine(sources, None, sources[0].shape[:2], RefineConfig(lattice=False), seed=seed)
-    return [np.asarray(m, np.float32) for m in result.maps]
+    return [np.asarray(m, np.float32) for m in result.maps], result.field
 
 
 def _families(side: int):
@@ -204,10 +230,19 @@ def _texture_items(family, maps, normals, split, side, rng, products, tileable=T
     yield make("half-roll", False, [np.roll(w, (size // 2, size // 2), (0, 1)) for w in wins])
     yield make("crossfade", False, [crossfade_tile(w, n) for w, n in zip(wins, normals)])
     bl_state = rng.integers(1 << 30)
-    yield make("blocky", False, [_blocky(w, size, np.random.default_rng(bl_state)) for w in wins])
+    blocks = _blocky_field(wins[0].shape[:2], size, np.random.default_rng(bl_state))
+    yield make("blocky", False, _through(wins, blocks))
+    yield make("blocky-blended", False, _blended(wins, blocks, normals))
     if products:
         for kind in ("lattice", "refined"):
-            tile = _product(kind, wins, normals, int(rng.integers(1 << 16)))
-            if tile is not None:
-                seamless = kind == "lattice" or family in REFINED_SEAMLESS
-                yield make(kind, seamless, tile, judged="by eye, 3 x 3 repeats")
+            made = _product(kind, wins, normals, int(rng.integers(1 << 16)))
+            if made is None:
+                continue
+            tile, fld = made
+            seamless = kind == "lattice" or family in REFINED_SEAMLESS
+            yield make(kind, seamless, tile, judged="by eye, 3 x 3 repeats")
+            if kind == "lattice":
+                yield make("lattice-blended", True, _blended(wins, fld, normals))
+            else:
+                yield make("blended", family in BLENDED_SEAMLESS, _blended(wins, fld, normals),
+                           judged="by eye, 3 x 3 repeats")

@@ -15,7 +15,7 @@ import numpy as np
 
 from seamless_usd.metrics.structure import structure_figures
 
-from .copies import COPY_THRESHOLD, MAP_THRESHOLD, continuation, copy_origins
+from .copies import COPY_THRESHOLD, INFER, MAP_THRESHOLD, continuation, copy_origins, step_unit
 from .features import moving_mean
 from .prepare import prepare_maps
 
@@ -43,9 +43,8 @@ def _flagged(err: np.ndarray, threshold: float, run: int) -> np.ndarray:
 def bad_join_mask(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, threshold: float,
                   run: int = SHORT_RUN) -> tuple[np.ndarray, np.ndarray]:
     """Bool masks (H, W) of bad joins on the vertical lines (before each texel along x) and horizontal ones."""
-    unit = float(np.mean(np.linalg.norm(np.diff(source, axis=1), axis=-1))) + 1e-6
-    vx = _flagged(continuation(tile, source, origin, 1, unit), threshold, run)  # runs along y
-    vy = _flagged(continuation(tile, source, origin, 0, unit).T, threshold, run).T  # runs along x
+    vx = _flagged(continuation(tile, source, origin, 1, step_unit(source, 1)), threshold, run)  # runs along y
+    vy = _flagged(continuation(tile, source, origin, 0, step_unit(source, 0)).T, threshold, run).T  # along x
     return vx, vy
 
 
@@ -74,7 +73,7 @@ def join_stats(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list
     s = prepare_maps(sources, normals)
     tj, sj = np.concatenate(t, axis=-1), np.concatenate(s, axis=-1)
     if origin is None:
-        origin, share = copy_origins(tj, sj)
+        origin, share = copy_origins(tj, sj, INFER)
     else:
         origin, share = np.asarray(origin, dtype=np.int64), 1.0
     out = JoinStats(copied=round(share, 4), coherence=None, maps=None)

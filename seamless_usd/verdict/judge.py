@@ -5,8 +5,9 @@ USD provenance and ``seamless-usd check``):
 
 * **seamless**: no line of the tile, read as it repeats (the wrap lines, the centre lines and every
   interior line), is a join the texture would not make, for the maps together and for each map. A
-  tile made of the source's own texels (refined, lattice-cut, or a window used as its tile) is judged
-  by the continuation error at its joins (:mod:`.copies`); any other tile (the GAN's own, a blend) by a
+  tile made of the source's own texels (refined, lattice-cut, or a window used as its tile, with or
+  without a blended band at its joins) is judged by the continuation error at its joins
+  (:mod:`.copies`); any other tile (the GAN's own, a crossfade) by a
   classifier fitted on the source's own juxtapositions (:mod:`.classifier`): a run of 64
   working-resolution px scoring more than :data:`SEAM_MARGIN` above the strongest run of the source's
   own lines is a seam;
@@ -26,7 +27,7 @@ import numpy as np
 
 from ..memo import ContentMemo
 from .classifier import SeamClassifier, fit
-from .copies import COPY_SHARE, COPY_THRESHOLD, MAP_THRESHOLD, copy_origins, copy_seams
+from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, INFER, MAP_THRESHOLD, copy_origins, copy_seams
 from .lines import Seam, runs, seams_from_scores
 from .prepare import WORK_SIDE, joint, map_weights, prepare_maps, to_working
 from .tolerance import faithfulness
@@ -92,10 +93,11 @@ class Verdict:
 
 def _copied(t: list[np.ndarray], s: list[np.ndarray], names: list[str]) -> tuple[list[Seam], float] | None:
     """Seams of a tile made of the source's own texels (:mod:`.copies`), for the maps together and each map;
-    None when fewer than :data:`.copies.COPY_SHARE` of its texels are found in the source."""
+    None when fewer than :data:`.copies.EXACT_SHARE` of its texels are found in the source, or fewer than
+    :data:`.copies.COPY_SHARE` found or inferred beside found ones (a blended band)."""
     tj, sj = np.concatenate(t, axis=-1), np.concatenate(s, axis=-1)
-    origin, share = copy_origins(tj, sj)
-    if share < COPY_SHARE:
+    origin, share = copy_origins(tj, sj, INFER)
+    if share < EXACT_SHARE or (origin[..., 0] >= 0).mean() < COPY_SHARE:
         return None
     seams, strongest = copy_seams(tj, sj, origin, "stack", COPY_RUN)
     if len(t) > 1:
