@@ -1,16 +1,22 @@
 #!/usr/bin/env python3
-"""Refinement levers, before and after: each setting of ``RefineConfig`` against the product's default.
+"""Refinement levers, before and after: each setting of ``RefineConfig`` against the product's default,
+and the window cut (``seamless_usd.synthesis.lattice.window``: one window of the source, cut across its
+wraps), the candidate that ``make_tile`` now weighs against the refined tile for a stack with no lattice.
 
 The refinement alone (a random start, no GAN training: what the levers change is the same either way)
 runs on structured 512 px stacks whose structure breaks visibly when copied blocks meet badly: stone cells
-and curved stripes (``benchmarks/synthetic.py``), and the MaterialX wood and brick turned 23 degrees.
+and curved stripes (``benchmarks/synthetic.py``), and the MaterialX wood and brick turned 23 degrees;
+``--stacks`` takes the full-resolution ones too (``stacks.FULLRES_STACKS``: 2048 and 4096 px).
 For every lever and stack it measures, against the source: the bad joins inside the tile (count, per
 map and for the maps together; ``seamless_usd.verdict.joins``), the field's coherence, the verdict
 (``passed``, seams named), the structure figure (``seamless_usd.metrics.structure``; target <= 1.5), feature
-scale and patch distance, and the time. Pictures: the first map's tile at 3x, ``results/levers/``.
+scale and patch distance, and the time. Pictures: the first map's tile at 3x (its top-left corner, and
+the corner where its wraps meet, the tile repeated), ``results/levers/``.
 
     .venv/bin/python benchmarks/levers.py            # every lever, writes results/levers.md and levers.json
     .venv/bin/python benchmarks/levers.py --levers "default,coarse patch 17" --stacks cells_512
+    .venv/bin/python benchmarks/levers.py --levers "default,window cut" --name levers_fullres \
+        --stacks rot23_wood_2048,rot61_wood_2048,rot23_brick_2048,rot61_brick_2048,cells_2048,stripes_2048,rot23_wood_4096,rot23_brick_4096
 """
 from __future__ import annotations
 
@@ -41,6 +47,7 @@ LEVERS: dict[str, dict] = {
     "blend 6": {"blend": 6},
     "heal 8 + blend 3": {"heal": 8, "blend": 3},
     "robust vote 3": {"robust_vote": 3},
+    "window cut": {"window": True},  # not a refinement: one window of the source cut across its wraps
 }
 STACK_NAMES = ("cells_512", "stripes_512", "rot23_wood_512", "rot23_brick_512")
 
@@ -58,19 +65,28 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
     keys = list(stack)
     maps = [stack[k][0] for k in keys]
     normals = [stack[k][1] for k in keys]
-    config = dataclasses.replace(RefineConfig(lattice=False), **lever)
     t0 = time.perf_counter()
-    result = refine(maps, None, maps[0].shape[:2], config, seed=seed, normals=normals)
-    tiles = result.maps
+    if lever.get("window"):
+        from seamless_usd.synthesis.lattice.cut import lattice_cut
+        from seamless_usd.synthesis.lattice.window import window_tile_size
+
+        tile_hw, band, _ = window_tile_size(maps)
+        field, _ = lattice_cut(maps, tile_hw, band)
+        tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
+    else:
+        config = dataclasses.replace(RefineConfig(lattice=False), **lever)
+        result = refine(maps, None, maps[0].shape[:2], config, seed=seed, normals=normals)
+        tiles, field = result.maps, result.field
     seconds = time.perf_counter() - t0
-    joins = join_stats(tiles, maps, normals, keys, origin=result.field)  # the field: blended texels keep their place
+    joins = join_stats(tiles, maps, normals, keys, origin=field)  # the field: blended texels keep their place
     verdict = judge(tiles, maps, normals, keys)
-    fy, fx = result.field[..., 0], result.field[..., 1]
+    fy, fx = field[..., 0], field[..., 1]
     changed = np.zeros(fy.shape, dtype=bool)  # texels that are not the copy the field names (blended or voted)
     for tile, source in zip(tiles, maps):
         changed |= np.abs(tile - source[fy, fx]).max(axis=-1) > 1e-6
     blended = round(float(changed.mean()), 3)
-    row = {"seconds": round(seconds, 1), "coherence": joins["coherence"], "blended": blended,
+    row = {"seconds": round(seconds, 1), "tile": list(tiles[0].shape[:2]), "coherence": joins["coherence"],
+           "blended": blended,
            "bad_joins": {k: v["count"] for k, v in (joins["maps"] or {}).items()},
            "passed": verdict.passed, "seams": len(verdict.seams),
            "structure": {k: structure_figures(t, m)["structure"] for k, t, m in zip(keys, tiles, maps)},
@@ -83,20 +99,24 @@ def _md(rows: list[dict], load: str) -> str:
     from seamless_usd.metrics.structure import STRUCTURE_TARGET
 
     out = ["# Refinement levers", "",
-           "The refinement alone (random start, seed 0, one thread) on 512 px structured stacks; "
-           "`benchmarks/levers.py`. Bad joins: stretches of >= 8 texels where two copied blocks meet with a "
+           "The refinement alone (random start, seed 0, one thread) on structured stacks, and the window cut "
+           "(one window of the source cut across its wraps; its tile is smaller, its UV transform keeps the texel "
+           "density); `benchmarks/levers.py`. Verdict: passed, or the seams it names (at most 6 per direction "
+           "and map). Bad joins: stretches of >= 8 texels where two copied blocks meet with a "
            "continuation error above the verdict's threshold, for the maps together (per-map counts in "
            "levers.json), read through the refinement's own field (so blended texels are judged where they "
            "stand). Blended: share of texels that are not the copy the field names (blended or voted; the rest are exact "
            "copies). "
            f"Structure: the worst map, target <= {STRUCTURE_TARGET}. Scale and patch: the worst map's distance "
            f"from 1 / its value. {load}", "",
-           "| stack | lever | bad joins | coherence | blended | verdict seams | structure (worst) | scale (worst) "
-           "| patch (worst) | s |", "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+           "| stack | lever | tile | bad joins | coherence | blended | verdict | structure (worst) | scale (worst) "
+           "| patch (worst) | s |", "|---|---|---|---:|---:|---:|---|---:|---:|---:|---:|"]
     for r in rows:
         scale = max(r["scale"].values(), key=lambda v: abs(v - 1))
-        out.append(f"| {r['stack']} | {r['lever']} | {r['bad_joins'].get('stack', '–')} | {r['coherence']} | {r['blended']:.0%} | "
-                   f"{r['seams']} | {max(r['structure'].values()):.2f} | {scale:.2f} | "
+        size = "x".join(str(v) for v in r.get("tile", []))
+        verdict = "passed" if r["passed"] else f"{r['seams']} seams" if r["seams"] else "not faithful"
+        out.append(f"| {r['stack']} | {r['lever']} | {size} | {r['bad_joins'].get('stack', '–')} | {r['coherence']} | "
+                   f"{r['blended']:.0%} | {verdict} | {max(r['structure'].values()):.2f} | {scale:.2f} | "
                    f"{max(r['patch'].values()):.2f} | {r['seconds']} |")
     return "\n".join(out) + "\n"
 
@@ -107,6 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--stacks", default=",".join(STACK_NAMES), help="comma-separated stacks of benchmarks/stacks.py")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, default=HERE / "results")
+    p.add_argument("--name", default="levers", help="base name of the .md / .json written and of the pictures' folder")
     a = p.parse_args(argv)
     from quality import write_picture
     from stacks import load_stack
@@ -118,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     stacks = a.stacks.split(",")
     load = f"Load average at the start: {os.getloadavg()[0]:.2f}."
     rows = []
-    pictures = a.out / "levers"
+    pictures = a.out / a.name
     pictures.mkdir(parents=True, exist_ok=True)
     for stack_name in stacks:
         stack = load_stack(stack_name)
@@ -127,13 +148,16 @@ def main(argv: list[str] | None = None) -> int:
             row = {"stack": stack_name, "lever": name, **row}
             rows.append(row)
             print(json.dumps(row), flush=True)
-            crop = preview_uint8(first[:200, :200], stack[next(iter(stack))][1])
-            crop = np.repeat(np.repeat(crop, 3, 0), 3, 1)
-            write_picture(pictures / f"{stack_name}__{name.replace(' ', '_').replace('+', 'and')}__3x.jpg", crop)
+            label = f"{stack_name}__{name.replace(' ', '_').replace('+', 'and')}"
+            h, w = first.shape[:2]
+            wrap = np.tile(first, (2, 2, 1))[h - 100: h + 100, w - 100: w + 100]  # the wraps' corner, repeated
+            for part, img in (("3x", first[:200, :200]), ("wrap_3x", wrap)):
+                crop = preview_uint8(img, stack[next(iter(stack))][1])
+                write_picture(pictures / f"{label}__{part}.jpg", np.repeat(np.repeat(crop, 3, 0), 3, 1))
     load += f" At the end: {os.getloadavg()[0]:.2f}."
-    (a.out / "levers.json").write_text(json.dumps({"load": load, "rows": rows}, indent=1))
-    (a.out / "levers.md").write_text(_md(rows, load))
-    print(f"wrote @{a.out / 'levers.md'}@")
+    (a.out / f"{a.name}.json").write_text(json.dumps({"load": load, "rows": rows}, indent=1))
+    (a.out / f"{a.name}.md").write_text(_md(rows, load))
+    print(f"wrote @{a.out / f'{a.name}.md'}@")
     return 0
 
 

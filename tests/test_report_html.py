@@ -155,6 +155,17 @@ def test_run_details_say_what_seeded_the_refinement():
                         resampled={"gan": {"layout": "gan", "lattice": {"period_px": [None, None]}}})
     page = render_html(Report(sources=["s.usda"], stacks=[plain]))
     assert "tile made from" in page and "the SeamlessGAN tile, refined" in page and "repeats every" not in page
+    window = {"period_px": [None, None], "strength": [None, None], "cut": "window", "tile": [364, 386],
+              "band": [51, 51], "offset": [5, 9], "q_passed": False, "passes": True, "score": 0.91,
+              "score_random": 2.07, "q_passed_random": False, "passes_random": False, "chosen": True,
+              "lag_difference": {"y": 0.73, "x": 0.78}}
+    cut = StackReport(id="M-3", material="</M3>", source="s.usda", status=StackStatus.PASSED,
+                      resampled={"gan": {"layout": "window", "lattice": window}})
+    page = render_html(Report(sources=["s.usda"], stacks=[cut]))
+    assert "one window of the source, joined across its wraps along minimum-error cuts" in page
+    assert "repeats every" not in page
+    assert ("window cut 364x386 px scored 0.91 (Q not passed, passes) against 2.07 from random (Q not passed)"
+            in page)
 
 
 def test_run_details_show_each_synthesis_stage_as_a_picture():
@@ -272,7 +283,7 @@ def test_a_high_seam_ratio_is_a_figure_not_a_verdict():
     m = MapReport(node="/M/R", asset="r.png", output=None, roles=["roughness"], channels="r", color_space="raw",
                   metrics={"scale_ratio": 1.03, "patch_distance": 0.89, "seam_ratio_x": 1.53, "seam_ratio_y": 0.83,
                            "centre_seam_x": 1.06, "centre_seam_y": 0.92})
-    for layout in ("lattice", "gan", "random", None):
+    for layout in ("lattice", "window", "gan", "random", None):
         stack = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.PASSED, maps=[m],
                             resampled={"gan": {"layout": layout} if layout else {}},
                             verdict={"passed": True, "seamless": True, "faithful": True, "seams": [], "size": [64, 64]})

@@ -149,8 +149,42 @@ def made_tiles(one_thread):
     out = {}
     for name, stack in (("cells", synthetic.cells(160, 40, seed=6)), ("stripes", synthetic.stripes(160, 30, seed=7))):
         maps = [MapInput(k, v[0], v[1]) for k, v in stack.items()]
-        out[name] = (stack, make_tile(maps, get_preset("tiny"), seed=0))
+        out[name] = (stack, make_tile(maps, get_preset("tiny"), seed=0, keep_alternatives=True))
     return out
+
+
+@pytest.mark.parametrize("name", ["cells", "stripes"])
+def test_a_structured_stack_without_a_lattice_is_cut_as_one_window(made_tiles, name):
+    """Neither stack repeats: the tile written is one window of the source, whole inside, with its only joins
+    on the wrap's cuts, and it breaks far less than the refined tile it was chosen over."""
+    from seamless_usd.verdict import judge
+    from seamless_usd.verdict.copies import copy_origins
+
+    stack, made = made_tiles[name]
+    keys = list(stack)
+    assert made.layout_kind == "window" and made.lattice["cut"] == "window" and made.lattice["chosen"], made.lattice
+    (th, tw), (bh, bw) = made.tile_size, made.lattice["band"]
+    assert made.uv_scale == (160 / tw, 160 / th)  # the window keeps the source's texel density
+    tile = np.concatenate([made.maps[k] for k in keys], -1).astype(np.float64)
+    src = np.concatenate([stack[k][0] for k in keys], -1).astype(np.float64)
+    origin, share = copy_origins(tile, src)
+    assert share > 0.97
+    # every texel inside the window continues its neighbour as the source does; the joins lie on the cuts,
+    # which run in the first band of columns (the x wrap's) and the first band of rows (the y wrap's)
+    rows, cols = np.meshgrid(np.arange(th), np.arange(tw), indexing="ij")
+    for axis in (0, 1):
+        nxt = np.roll(origin, 1, axis=axis) + (np.array([1, 0]) if axis == 0 else np.array([0, 1]))
+        known = (origin[..., 0] >= 0) & (nxt[..., 0] >= 1) & (nxt[..., 0] < 160) & (nxt[..., 1] < 160)
+        continued = src[np.clip(nxt[..., 0], 0, 159), np.clip(nxt[..., 1], 0, 159)]
+        joined = known & (np.abs(continued - tile).max(-1) > 1e-6)  # not what the source has next
+        assert joined.any() and np.all((rows[joined] <= bh) | (cols[joined] <= bw)), axis
+    refined_kind = next(iter(made.alternatives))
+    refined = made.alternatives[refined_kind]
+    worst = lambda tiles: max(structure_figures(tiles[k], stack[k][0])["structure"] for k in keys)
+    assert worst(made.maps) < 0.8 * worst(refined)
+    seams = lambda tiles: len(judge([tiles[k] for k in keys], [stack[k][0] for k in keys], [False] * len(keys),
+                                    keys, fidelity=False).seams)
+    assert seams(made.maps) < seams(refined) / 3
 
 
 @pytest.mark.parametrize("name", ["cells", "stripes"])
@@ -158,16 +192,20 @@ def test_a_structured_tile_is_made_of_source_texels_with_its_maps_aligned(made_t
     from seamless_usd.verdict.copies import copy_origins
 
     stack, made = made_tiles[name]
-    assert made.refined and made.tile_size == (160, 160)
+    if made.layout_kind == "window":  # one window of the source, at least WINDOW_MIN of it along each side
+        assert made.tile_size == tuple(made.lattice["tile"]) and min(made.tile_size) >= 0.7 * 160, made.lattice
+    else:
+        assert made.refined and made.tile_size == (160, 160)
     tile = np.concatenate([made.maps[k] for k in stack], -1).astype(np.float64)
     src = np.concatenate([stack[k][0] for k in stack], -1).astype(np.float64)
     _, share = copy_origins(tile, src)  # colour and height looked up together: found only if from one place
     _, colour_share = copy_origins(made.maps["color"].astype(np.float64), stack["color"][0].astype(np.float64))
     # texels beside a join have a neighbourhood the source lacks and may stay unplaced; the rest is found
     assert share > 0.8 and share > 0.97 * colour_share, (share, colour_share)
-    # the stages are recorded as pictures: the GAN's layout, then every refinement level
+    # the stages are recorded as pictures: the GAN's layout, then every refinement level (none for a cut)
     assert len(made.level_pictures) == 1 + len(made.refine_levels)
-    assert made.level_pictures[-1][1].shape[:2] == (160, 160)
+    if made.refine_levels:
+        assert made.level_pictures[-1][1].shape[:2] == (160, 160)
 
 
 def test_a_stone_tile_keeps_its_joint_network_connected(made_tiles):
@@ -177,8 +215,8 @@ def test_a_stone_tile_keeps_its_joint_network_connected(made_tiles):
     assert tile_share >= 0.8 * source_share, (tile_share, source_share)
 
 
-@pytest.mark.xfail(strict=True, reason="issue target missed: refined structured tiles still have interior joins "
-                   "the verdict flags and broken lines (see benchmarks/results/levers.md)")
+@pytest.mark.xfail(strict=True, reason="issue target missed: the window cut's wrap still cuts a few stones (height "
+                   "structure 1.6) and jumps a stripe (a seam); refined tiles break far more (benchmarks/results/levers.md)")
 @pytest.mark.parametrize("name", ["cells", "stripes"])
 def test_a_structured_tile_has_no_interior_seam_and_keeps_its_structure(made_tiles, name):
     from seamless_usd.verdict import judge

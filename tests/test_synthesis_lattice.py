@@ -181,3 +181,22 @@ def test_the_lattice_candidate_can_be_turned_off(brick_stack):
     assert "tile" not in made.lattice and made.alternatives == {}  # measured, not cut
     assert made.lattice["period_px"][1] == pytest.approx(32, rel=0.03)
     assert made.lattice[f"lattice_ratio_{made.layout_kind}"] < LATTICE_TARGET  # the tiny GAN breaks the bond
+
+
+def test_a_window_tile_of_a_stack_that_does_not_repeat():
+    """Sides between WINDOW_MIN of the source and the longest that leaves room for the band and the margins,
+    bands a tenth of the side; a stack too small for a window gets none."""
+    from seamless_usd.synthesis.lattice.cut import CUT_MARGIN
+    from seamless_usd.synthesis.lattice.window import WINDOW_BAND, WINDOW_MIN, window_tile_size
+
+    rng = np.random.default_rng(4)
+    noise = rng.normal(size=(200, 240, 3)).astype(np.float32)
+    (th, tw), (bh, bw), figures = window_tile_size([noise])
+    assert (bh, bw) == (round(200 * WINDOW_BAND), round(240 * WINDOW_BAND))
+    assert WINDOW_MIN * 200 <= th <= 200 - bh - 2 * CUT_MARGIN and WINDOW_MIN * 240 <= tw <= 240 - bw - 2 * CUT_MARGIN
+    assert 0.8 < figures["y"] < 1.1 and 0.8 < figures["x"] < 1.1  # white noise never continues itself
+    # a texture that continues itself 180 px on along x (and nowhere along y): that lag is found
+    period = np.tile(rng.normal(size=(200, 180, 1)), (1, 2, 1))[:, :240].astype(np.float32)
+    (_, tw), _, figures = window_tile_size([period])
+    assert tw == 180 and figures["x"] < 0.01 and figures["y"] > 0.8
+    assert window_tile_size([noise[:40, :40]]) is None

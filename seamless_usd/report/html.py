@@ -66,11 +66,12 @@ def _seeds_text(seeds: list[dict] | None) -> str | None:
 
 _LAYOUTS = {"gan": "the SeamlessGAN tile, refined",
             "random": "a random start, refined (the GAN tile's feature scale was implausible)",
-            "lattice": "a cut of whole lattice periods from the source"}
+            "lattice": "a cut of whole lattice periods from the source",
+            "window": "one window of the source, joined across its wraps along minimum-error cuts"}
 
 
 def _layout_text(gan: dict) -> str | None:
-    """What the tile was made from, and the lattice the stack repeats on (with both candidates' figures)."""
+    """What the tile was made from, the lattice the stack repeats on, and both candidates' figures."""
     kind = gan.get("layout")
     if kind is None:
         return None
@@ -80,18 +81,19 @@ def _layout_text(gan: dict) -> str | None:
     if any(p is not None for p in periods):
         axes = " x ".join("none" if p is None else f"{p:g}" for p in periods)
         text += f"; repeats every {axes} px (y x x)"
-        if "score" in lattice:
-            def verdict(suffix: str) -> str:
-                q = "Q passed" if lattice.get("q_passed" + suffix) else "Q not passed"
-                ratio = lattice.get("lattice_ratio" + suffix)
-                return (q + (f", lattice ratio {ratio:.2f}" if ratio is not None else "")
-                        + (", passes" if lattice.get("passes" + suffix) else ""))
-            rival = next((k[len("score_"):] for k in lattice if k.startswith("score_")), None)
-            text += (f"; lattice cut {lattice['tile'][0]}x{lattice['tile'][1]} px scored {lattice['score']:.2f}"
-                     f" ({verdict('')})")
-            if rival is not None:
-                text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)});"
-                         " worst figure / its target")
+    if "score" in lattice:
+        def verdict(suffix: str) -> str:
+            q = "Q passed" if lattice.get("q_passed" + suffix) else "Q not passed"
+            ratio = lattice.get("lattice_ratio" + suffix)
+            return (q + (f", lattice ratio {ratio:.2f}" if ratio is not None else "")
+                    + (", passes" if lattice.get("passes" + suffix) else ""))
+        rival = next((k[len("score_"):] for k in lattice if k.startswith("score_")), None)
+        name = "window cut" if lattice.get("cut") == "window" else "lattice cut"
+        text += (f"; {name} {lattice['tile'][0]}x{lattice['tile'][1]} px scored {lattice['score']:.2f}"
+                 f" ({verdict('')})")
+        if rival is not None:
+            text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)});"
+                     " worst figure / its target")
     return text
 
 
@@ -102,7 +104,7 @@ def _map_name(m: MapReport) -> str:
 def made_on_a_torus(stack: StackReport) -> bool:
     """Whether the stack's tile was refined or cut from the source (every line of it is a line of the
     texture), rather than sampled from SeamlessGAN alone (whose latent copies meet at its centre lines)."""
-    return stack.resampled.get("gan", {}).get("layout") in ("gan", "random", "lattice")
+    return stack.resampled.get("gan", {}).get("layout") in ("gan", "random", "lattice", "window")
 
 
 def map_verdicts(m: MapReport, torus: bool = False, tolerances: dict | None = None

@@ -28,6 +28,7 @@ from .gan.data import effective_k
 from .gan.sample import judge, sample
 from .gan.seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
 from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
+from .lattice.window import window_tile_size
 from .refinement.refine import RefineConfig, refine, resize_periodic
 from .scale import structure_size, working_factor
 from .types import MapInput, QResult, TileResult, stack_shape
@@ -64,7 +65,8 @@ class MadeTile:
     refine_levels: list[dict] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     seeds: list[dict] = field(default_factory=list)  # with config.seeds > 1: each seed's figures and which won
-    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice": a cut (see .lattice)
+    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice" or "window": a cut (see
+    #                           .lattice)
     lattice: dict = field(default_factory=dict)  # the stack's lattice, and each layout candidate's figures
     q: QResult | None = None  # Q of the written tile: the GAN sample's, else D's verdict on the tile itself
     alternatives: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)  # the candidate not written
@@ -121,10 +123,11 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
        ``tile_size`` deciding its pixel size (the source's, or the paper's 2c brought to full
        resolution). Without it, the GAN tile at the working resolution is the result.
     4. For a stack that repeats on a lattice, the tile's lattice ratio is measured; with
-       ``refine_config.lattice`` and source-sized tiles, the stack also gets a tile cut to whole
-       periods of the source (:mod:`.lattice`), and the written tile is the one that
-       passes (the verdict: no seam and fidelity inside the source's tolerances; the lattice ratio,
-       which sees a broken bond), then the one with the lower score.
+       ``refine_config.lattice`` and source-sized tiles, the stack also gets a tile cut from the source:
+       whole lattice periods when it repeats (:mod:`.lattice.cut`), else one window of it joined across
+       its wraps (:mod:`.lattice.window`); the written tile is the one that passes (the verdict: no
+       seam and fidelity inside the source's tolerances; the lattice ratio, which sees a broken bond),
+       then the one with the lower score.
        ``keep_alternatives`` keeps the candidate not written in ``MadeTile.alternatives``.
     """
     assert tile_size in TILE_SIZES, f"tile_size must be one of {TILE_SIZES}, got {tile_size!r}"
@@ -217,31 +220,45 @@ def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[f
     return out
 
 
-def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice) -> tuple[float, bool, float]:
+def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice) -> tuple[float, bool, float | None]:
     """(score, passes, lattice ratio) of a candidate tile.
 
-    The score is :func:`.seeds.fidelity_score`, and the lattice ratio in the same units ((1 - r) over
-    (1 - LATTICE_TARGET)): none of the fidelity and seam figures sees a broken bond, the lattice ratio
-    does. The tile passes as a stack would (the verdict: no seam, fidelity inside the source's
-    tolerances) and keeps the repeat."""
+    The score is :func:`.seeds.fidelity_score`, and for a stack that repeats, the lattice ratio in the same
+    units ((1 - r) over (1 - LATTICE_TARGET)): none of the fidelity and seam figures sees a broken bond,
+    the lattice ratio does. The tile passes as a stack would (the verdict: no seam, fidelity inside the
+    source's tolerances) and keeps the repeat."""
     score, _, _ = fidelity_score(tiles, maps)
     ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
-    score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
+    if ratio is not None:
+        score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
     verdict = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
                     [m.name for m in maps])
-    return score, bool(verdict.passed and ratio >= LATTICE_TARGET), ratio
+    return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
+
+
+def _cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int):
+    """The cut tile for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
+    else one window of the source (:mod:`.lattice.window`). Returns (kind, tile size, band, figures) or None."""
+    if lattice.found:
+        sizes = lattice_tile_size((H, W), lattice)
+        if sizes is not None:
+            return "lattice", sizes[0], sizes[1], {}
+    sizes = window_tile_size([m.pixels for m in maps])
+    return None if sizes is None else ("window", sizes[0], sizes[1], {"lag_difference": sizes[2]})
 
 
 def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_alternatives: bool) -> None:
-    """For a stack that repeats on a lattice, measure the written tile's lattice ratio and, with ``cut``,
-    cut a tile of whole periods (:func:`.lattice.lattice_cut`), kept in ``made`` when it wins: the
-    candidate that passes (the verdict: no seam, fidelity inside the source's tolerances; the lattice
-    ratio) before one that does not, then the lower score (see
-    :func:`_judged`). The figures are taken on the source's grid, halved down to SCORE_SIDE."""
+    """Measure the written tile against a tile cut from the source and, with ``cut``, keep the cut when it
+    wins: the candidate that passes (the verdict: no seam, fidelity inside the source's tolerances; for a
+    stack that repeats, the lattice ratio) before one that does not, then the lower score (see
+    :func:`_judged`). A stack that repeats on a lattice is cut to whole periods
+    (:func:`.lattice.lattice_cut`); any other to one window of the source joined across its wraps
+    (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down to SCORE_SIDE."""
     H, W = made.grid_size
     lattice = find_lattice([m.pixels for m in maps])
     made.lattice = lattice.as_dict()
-    if not lattice.found:
+    candidate = _cut_candidate(maps, lattice, H, W) if cut else None
+    if not lattice.found and candidate is None:
         return
     halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
     # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
@@ -252,27 +269,30 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     current, current_passes, current_ratio = _judged(_on_grid(made.maps, maps, (1 / halve, 1 / halve)), grid,
                                                      grid_lattice)
     kind = made.layout_kind
-    made.lattice.update({f"q_passed_{kind}": made.q_passed, f"lattice_ratio_{kind}": round(current_ratio, 3),
-                         f"passes_{kind}": current_passes, f"score_{kind}": round(current, 3)})
-    sizes = lattice_tile_size((H, W), lattice) if cut else None
-    if sizes is None:
+    made.lattice.update({f"q_passed_{kind}": made.q_passed, f"passes_{kind}": current_passes,
+                         f"score_{kind}": round(current, 3)})
+    if current_ratio is not None:
+        made.lattice[f"lattice_ratio_{kind}"] = round(current_ratio, 3)
+    if candidate is None:
         return
-    tile_hw, band = sizes
+    cut_kind, tile_hw, band, figures = candidate
     field_, offset = lattice_cut([m.pixels for m in maps], tile_hw, band)
     tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
     q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
     score, passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
     wins = (not passes, score) < (not current_passes, current)
-    made.lattice.update({"tile": list(tile_hw), "band": list(band), "offset": list(offset),
-                         "q_passed": bool(q.passed), "lattice_ratio": round(ratio, 3), "passes": passes,
-                         "score": round(score, 3), "chosen": wins})
+    made.lattice.update({"cut": cut_kind, "tile": list(tile_hw), "band": list(band), "offset": list(offset),
+                         "q_passed": bool(q.passed), "passes": passes, "score": round(score, 3), "chosen": wins,
+                         **figures})
+    if ratio is not None:
+        made.lattice["lattice_ratio"] = round(ratio, 3)
     if wins:
         loser_kind, loser = made.layout_kind, dict(made.maps)
         made.maps, made.tile_size, made.q = tiles, tuple(tile_hw), q
         made.uv_scale = (W / tile_hw[1], H / tile_hw[0])
-        made.layout_kind, made.refine_levels = "lattice", []  # copied through the cut's field, not refined
+        made.layout_kind, made.refine_levels = cut_kind, []  # copied through the cut's field, not refined
         made.level_pictures = made.level_pictures[:1]  # the GAN's layout only: the cut is not refined
     else:
-        loser_kind, loser = "lattice", tiles
+        loser_kind, loser = cut_kind, tiles
     if keep_alternatives:
         made.alternatives[loser_kind] = loser

@@ -66,8 +66,9 @@ class RefineConfig:
     #                       0: off, every texel an exact copy
     blend: int = 0  # width (texels) of the band around every join blended in the gradient domain (see .blend); 0: off,
     #                 every texel an exact copy
-    lattice: bool = True  # stacks that repeat on a lattice (bricks, weaves) also get a tile cut to whole periods
-    #                       from the source (see .lattice); Q and the fidelity figures choose between the two
+    lattice: bool = True  # every stack also gets a tile cut from the source: whole periods when it repeats on a
+    #                       lattice (bricks, weaves), else one window joined across its wraps (see .lattice); the
+    #                       verdict and the fidelity figures choose between the two
 
 
 @dataclass
