@@ -102,19 +102,20 @@ def copy_origins(tile: np.ndarray, source: np.ndarray, infer: int = 0) -> tuple[
         if not placed:
             break
     share = float((origin[..., 0] >= 0).mean())
+    reach = INFER_UNITS * 0.5 * (step_unit(source, 0) + step_unit(source, 1)) if infer else 0.0
     for _ in range(infer):  # then the rest, from certain neighbours: the origin whose value is nearest the texel's
-        origin, certain, placed = _spread(origin, certain, tile, source, None)
+        origin, certain, placed = _spread(origin, certain, tile, source, None, reach)
         if not placed:
             break
     return origin, share
 
 
 def _spread(origin: np.ndarray, certain: np.ndarray, tile: np.ndarray, source: np.ndarray,
-            exact: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray, int]:
+            exact: tuple[np.ndarray, np.ndarray] | None, reach: float = 0.0) -> tuple[np.ndarray, np.ndarray, int]:
     """One step of placing unplaced texels from their placed neighbours (origin moved by one): with ``exact``
     (the tile and source quantised) only where the source has exactly the texel's value there (a certain
     neighbour makes a certain texel); else from certain neighbours only, the candidate whose source value is
-    nearest the texel's, if within :data:`INFER_UNITS` of the source's steps. Returns the origins, which are
+    nearest the texel's, if within ``reach`` of it (:data:`INFER_UNITS` source steps). Returns the origins, which are
     certain, and how many were placed. Works on the unplaced texels alone (a few per cent of a tile)."""
     h, w = origin.shape[:2]
     hs, ws = source.shape[:2]
@@ -124,7 +125,6 @@ def _spread(origin: np.ndarray, certain: np.ndarray, tile: np.ndarray, source: n
         return origin, certain, 0
     ty, tx = todo // w, todo % w
     here = (exact[0].reshape(-1, exact[0].shape[-1]) if exact is not None else tile.reshape(-1, tile.shape[-1]))[todo]
-    reach = INFER_UNITS * 0.5 * (step_unit(source, 0) + step_unit(source, 1))
     best = np.full(len(todo), np.inf)
     placed = np.full((len(todo), 2), -1, dtype=origin.dtype)
     placed_sure = np.zeros(len(todo), dtype=bool)

@@ -168,6 +168,12 @@ def lattice_tile_size(hw: tuple[int, int], lattice: Lattice) -> tuple[tuple[int,
     return (sizes[0][0], sizes[1][0]), (sizes[0][1], sizes[1][1])
 
 
+def box_sums(d: np.ndarray, sy: int, sx: int) -> np.ndarray:
+    """Sums of every ``sy`` x ``sx`` window of ``d`` (summed-area table): ``(H - sy + 1, W - sx + 1)``."""
+    c = np.pad(d.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
+    return c[sy:, sx:] - c[:-sy, sx:] - c[sy:, :-sx] + c[:-sy, :-sx]
+
+
 def _best_offset(maps: list[np.ndarray], spreads: list[float], tile: tuple[int, int], band: tuple[int, int],
                  margin: int) -> tuple[int, int]:
     """(y, x) of the crop whose bands differ least from their one-tile-on copies (searched on the joint
@@ -183,13 +189,9 @@ def _best_offset(maps: list[np.ndarray], spreads: list[float], tile: tuple[int, 
     if ny <= 0 or nx <= 0:
         return m[0], m[1]
 
-    def box(d: np.ndarray, sy: int, sx: int) -> np.ndarray:  # sums of sy x sx windows, (ny, nx)
-        c = np.pad(d.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
-        return (c[sy: sy + ny, sx: sx + nx] - c[:ny, sx: sx + nx] - c[sy: sy + ny, :nx] + c[:ny, :nx])
-
     dx = ((u[:, tw:] - u[:, :-tw]) ** 2).sum(-1)  # column x against column x + tile width
     dy = ((u[th:] - u[:-th]) ** 2).sum(-1)
-    cost = box(dx, th + bh, bw) / bw + box(dy, bh, tw + bw) / bh
+    cost = box_sums(dx, th + bh, bw) / bw + box_sums(dy, bh, tw + bw) / bh  # (ny, nx)
     y, x = np.unravel_index(int(np.argmin(cost)), cost.shape)
     return (m[0] + min(int(y) * factor, H - 2 * m[0] - tile[0] - band[0]),
             m[1] + min(int(x) * factor, W - 2 * m[1] - tile[1] - band[1]))

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..refinement.refine import spread
-from .cut import CUT_MARGIN, _joint_small
+from .cut import CUT_MARGIN, _joint_small, box_sums
 
 __all__ = ["WINDOW_MIN", "WINDOW_BAND", "window_tile_size"]
 
@@ -44,12 +44,9 @@ def _lag_costs(u: np.ndarray, axis: int, lags: np.ndarray, band: int, length: in
     out = np.full(len(lags), np.inf)
     for k, lag in enumerate(lags):
         d = ((v[:, lag:] - v[:, :-lag]) ** 2).sum(-1)  # (h, w - lag)
-        ny, nx = h - length + 1, d.shape[1] - band + 1
-        if ny <= 0 or nx <= 0:
+        if h < length or d.shape[1] < band:
             continue
-        c = np.pad(d.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
-        box = c[length:length + ny, band:band + nx] - c[:ny, band:band + nx] - c[length:length + ny, :nx] + c[:ny, :nx]
-        out[k] = float(box.min()) / (band * length)
+        out[k] = float(box_sums(d, length, band).min()) / (band * length)
     return out
 
 
