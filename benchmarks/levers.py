@@ -68,15 +68,17 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
     t0 = time.perf_counter()
     if lever.get("window"):
         from seamless_usd.synthesis.lattice.cut import lattice_cut
-        from seamless_usd.synthesis.lattice.window import window_tile_size
+        from seamless_usd.synthesis.lattice.window import continues_itself, window_tile_size
 
-        tile_hw, band, _ = window_tile_size(maps)
+        tile_hw, band, lags = window_tile_size(maps)
+        offered = continues_itself(lags)  # whether make_tile offers this cut (see window_gate.py)
         field, _ = lattice_cut(maps, tile_hw, band)
         tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
     else:
         config = dataclasses.replace(RefineConfig(lattice=False), **lever)
         result = refine(maps, None, maps[0].shape[:2], config, seed=seed, normals=normals)
         tiles, field = result.maps, result.field
+        offered = True
     seconds = time.perf_counter() - t0
     joins = join_stats(tiles, maps, normals, keys, origin=field)  # the field: blended texels keep their place
     verdict = judge(tiles, maps, normals, keys)
@@ -88,7 +90,7 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
     row = {"seconds": round(seconds, 1), "tile": list(tiles[0].shape[:2]), "coherence": joins["coherence"],
            "blended": blended,
            "bad_joins": {k: v["count"] for k, v in (joins["maps"] or {}).items()},
-           "passed": verdict.passed, "seams": len(verdict.seams),
+           "passed": verdict.passed, "seams": len(verdict.seams), "offered": offered,
            "structure": {k: structure_figures(t, m)["structure"] for k, t, m in zip(keys, tiles, maps)},
            "scale": {k: round(scale_ratio(t, m, n), 3) for k, t, m, n in zip(keys, tiles, maps, normals)},
            "patch": {k: round(patch_distance(t, m, n), 3) for k, t, m, n in zip(keys, tiles, maps, normals)}}
@@ -101,7 +103,8 @@ def _md(rows: list[dict], load: str) -> str:
     out = ["# Refinement levers", "",
            "The refinement alone (random start, seed 0, one thread) on structured stacks, and the window cut "
            "(one window of the source cut across its wraps; its tile is smaller, its UV transform keeps the texel "
-           "density); `benchmarks/levers.py`. Verdict: passed, or the seams it names (at most 6 per direction "
+           "density; *not offered*: the texture does not continue itself at the window's lags, so `make_tile` does "
+           "not weigh this cut, `benchmarks/results/window_gate.md`); `benchmarks/levers.py`. Verdict: passed, or the seams it names (at most 6 per direction "
            "and map). Bad joins: stretches of >= 8 texels where two copied blocks meet with a "
            "continuation error above the verdict's threshold, for the maps together (per-map counts in "
            "levers.json), read through the refinement's own field (so blended texels are judged where they "
@@ -113,7 +116,7 @@ def _md(rows: list[dict], load: str) -> str:
            "| patch (worst) | s |", "|---|---|---|---:|---:|---:|---|---:|---:|---:|---:|"]
     for r in rows:
         scale = max(r["scale"].values(), key=lambda v: abs(v - 1))
-        size = "x".join(str(v) for v in r.get("tile", []))
+        size = "x".join(str(v) for v in r.get("tile", [])) + ("" if r.get("offered", True) else ", not offered")
         verdict = "passed" if r["passed"] else f"{r['seams']} seams" if r["seams"] else "not faithful"
         out.append(f"| {r['stack']} | {r['lever']} | {size} | {r['bad_joins'].get('stack', '–')} | {r['coherence']} | "
                    f"{r['blended']:.0%} | {verdict} | {max(r['structure'].values()):.2f} | {scale:.2f} | "

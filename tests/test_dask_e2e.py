@@ -151,12 +151,17 @@ def reference(tmp_path_factory) -> tuple[dict[str, bytes], float]:
     return tiles, seconds
 
 
-def _check_run(payload: dict, scene: Path, expected: dict[str, bytes]) -> None:
+def _check_run(payload: dict, scene: Path, expected: dict[str, bytes], origins: frozenset = frozenset({"trained"})
+               ) -> None:
+    """The run wrote every tile of the in-process run and nothing else; each stack's origin is one of
+    ``origins``, and at least one stack was trained in this run."""
     assert not [f for f in payload["findings"] if f["severity"] == "error"], payload["findings"]
     statuses = sorted(s["status"] for s in payload["stacks"])
     assert len(statuses) == 2 and "failed" not in statuses, payload["stacks"]
-    assert {s["origin"] for s in payload["stacks"]} == {"trained"}
-    assert payload["counts"]["trained"] == 2
+    found = [s["origin"] for s in payload["stacks"]]
+    assert set(found) <= origins and "trained" in found, payload["stacks"]
+    assert payload["counts"]["trained"] == found.count("trained")
+    assert payload["counts"]["from_cache"] == found.count("cache")
     # nothing lost, nothing extra (no second copy, no temporary file), every byte the in-process run's
     assert _tiles(scene.parent / "tileable") == expected
     written = [m["output"] for s in payload["stacks"] for m in s["maps"]]
@@ -196,7 +201,9 @@ def test_a_worker_killed_in_the_middle_of_a_stack_loses_nothing(deployment, refe
             client_proc.wait()
     assert client_proc.returncode in (0, 1), err.decode(errors="replace")[-3000:] + deployment.logs()
     assert deployment.procs[victim].poll() is not None, "the killed worker stays dead"
-    _check_run(json.loads(out), scene, expected)
+    # the worker is killed while it runs a stack and a training checkpoint exists; when the stack it ran had
+    # just stored its result, the retry reads it from the cache (origin "cache"): nothing lost either way
+    _check_run(json.loads(out), scene, expected, frozenset({"trained", "cache"}))
 
 
 def _kill_a_worker_mid_stack(deployment: Deployment, cache: Path, timeout: float = 120.0) -> str:

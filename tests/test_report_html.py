@@ -166,6 +166,14 @@ def test_run_details_say_what_seeded_the_refinement():
     assert "repeats every" not in page
     assert ("window cut 364x386 px scored 0.91 (Q not passed, passes) against 2.07 from random (Q not passed)"
             in page)
+    refused = {"period_px": [None, None], "strength": [None, None], "score_random": 2.07, "passes_random": False,
+               "window_refused": {"lag_difference": {"y": 0.64, "x": 0.68}, "most": 0.05}}
+    plain = StackReport(id="M-4", material="</M4>", source="s.usda", status=StackStatus.NOT_PASSED,
+                        resampled={"gan": {"layout": "random", "lattice": refused}})
+    page = render_html(Report(sources=["s.usda"], stacks=[plain]))
+    assert ("a random start, refined (the GAN tile&#x27;s feature scale was implausible); no window cut: the texture "
+            "does not continue itself at any window&#x27;s lags (difference y 0.64, x 0.68; a cut is offered at 0.05 "
+            "or less)") in page
 
 
 def test_run_details_show_each_synthesis_stage_as_a_picture():

@@ -154,23 +154,23 @@ def made_tiles(one_thread):
 
 
 @pytest.mark.parametrize("name", ["cells", "stripes"])
-def test_a_structured_stack_without_a_lattice_is_cut_as_one_window(made_tiles, name):
-    """Neither stack repeats: the tile written is one window of the source, whole inside, with its only joins
-    on the wrap's cuts, and it breaks far less than the refined tile it was chosen over."""
-    from seamless_usd.verdict import judge
+def test_a_window_cut_joins_only_across_its_wraps(name):
+    """One window of the source, whole inside: every texel continues its neighbour as the source does, except
+    on the cuts, which run in the first band of columns (the x wrap's) and the first band of rows (the y
+    wrap's)."""
+    from seamless_usd.synthesis.lattice.cut import lattice_cut
+    from seamless_usd.synthesis.lattice.window import continues_itself, window_tile_size
     from seamless_usd.verdict.copies import copy_origins
 
-    stack, made = made_tiles[name]
-    keys = list(stack)
-    assert made.layout_kind == "window" and made.lattice["cut"] == "window" and made.lattice["chosen"], made.lattice
-    (th, tw), (bh, bw) = made.tile_size, made.lattice["band"]
-    assert made.uv_scale == (160 / tw, 160 / th)  # the window keeps the source's texel density
-    tile = np.concatenate([made.maps[k] for k in keys], -1).astype(np.float64)
-    src = np.concatenate([stack[k][0] for k in keys], -1).astype(np.float64)
+    stack = synthetic.cells(160, 40, seed=6) if name == "cells" else synthetic.stripes(160, 30, seed=7)
+    maps = [v[0] for v in stack.values()]
+    (th, tw), (bh, bw), figures = window_tile_size(maps)
+    assert not continues_itself(figures)  # neither repeats: make_tile does not offer this cut (see below)
+    field, _ = lattice_cut(maps, (th, tw), (bh, bw))
+    tile = np.concatenate([m[field[..., 0], field[..., 1]] for m in maps], -1).astype(np.float64)
+    src = np.concatenate(maps, -1).astype(np.float64)
     origin, share = copy_origins(tile, src)
     assert share > 0.97
-    # every texel inside the window continues its neighbour as the source does; the joins lie on the cuts,
-    # which run in the first band of columns (the x wrap's) and the first band of rows (the y wrap's)
     rows, cols = np.meshgrid(np.arange(th), np.arange(tw), indexing="ij")
     for axis in (0, 1):
         nxt = np.roll(origin, 1, axis=axis) + (np.array([1, 0]) if axis == 0 else np.array([0, 1]))
@@ -178,13 +178,47 @@ def test_a_structured_stack_without_a_lattice_is_cut_as_one_window(made_tiles, n
         continued = src[np.clip(nxt[..., 0], 0, 159), np.clip(nxt[..., 1], 0, 159)]
         joined = known & (np.abs(continued - tile).max(-1) > 1e-6)  # not what the source has next
         assert joined.any() and np.all((rows[joined] <= bh) | (cols[joined] <= bw)), axis
-    refined_kind = next(iter(made.alternatives))
-    refined = made.alternatives[refined_kind]
-    worst = lambda tiles: max(structure_figures(tiles[k], stack[k][0])["structure"] for k in keys)
-    assert worst(made.maps) < 0.8 * worst(refined)
-    seams = lambda tiles: len(judge([tiles[k] for k in keys], [stack[k][0] for k in keys], [False] * len(keys),
-                                    keys, fidelity=False).seams)
-    assert seams(made.maps) < seams(refined) / 3
+
+
+@pytest.mark.parametrize("name", ["cells", "stripes"])
+def test_a_stack_that_does_not_continue_itself_gets_no_window_cut(made_tiles, name):
+    """Neither stack repeats, nor continues itself at any lag: a window of it is joined where stones and
+    stripes visibly break, and the verdict misses some such joins (benchmarks/results/window_gate.md), so no
+    window is offered. The refined tile is written, and the verdict does not pass it."""
+    from seamless_usd.synthesis.lattice.window import WINDOW_MAX_DIFFERENCE
+    from seamless_usd.verdict import judge
+
+    stack, made = made_tiles[name]
+    keys = list(stack)
+    refused = made.lattice["window_refused"]
+    assert refused["most"] == WINDOW_MAX_DIFFERENCE and max(refused["lag_difference"].values()) > 0.3, refused
+    assert made.layout_kind in ("gan", "random") and "cut" not in made.lattice and made.alternatives == {}
+    assert made.refined and made.tile_size == (160, 160)
+    v = judge([made.maps[k] for k in keys], [stack[k][0] for k in keys], [False] * len(keys), keys, fidelity=False)
+    assert not v.seamless
+
+
+def test_a_stack_that_repeats_once_without_a_lattice_is_cut_as_one_window(one_thread):
+    """A pattern that repeats once across the source (1.3 periods: too few for a lattice) continues itself at
+    the window's lags: the window cut is offered, chosen over the refined tile and written whole, one period
+    with the source's texel density, and it passes."""
+    from scipy.ndimage import gaussian_filter
+
+    from seamless_usd.synthesis import MapInput, get_preset, make_tile
+    from seamless_usd.verdict import judge
+
+    rng = np.random.default_rng(8)
+    block = gaussian_filter(rng.normal(size=(150, 150, 3)), (2, 2, 0), mode="wrap")
+    block = np.clip(block / (3 * block.std()), -1, 1).astype(np.float32)
+    src = np.tile(block, (2, 2, 1))[:200, :200]
+    made = make_tile([MapInput("color", src, False)], get_preset("tiny"), seed=0, keep_alternatives=True)
+    assert made.lattice["period_px"] == [None, None] and "window_refused" not in made.lattice
+    assert made.layout_kind == "window" and made.lattice["chosen"] and made.tile_size == (150, 150), made.lattice
+    assert made.uv_scale == (200 / 150, 200 / 150)  # the window keeps the source's texel density
+    tile = made.maps["color"]
+    ys, xs = np.nonzero(np.all(block == tile[0, 0], axis=-1))  # where the tile starts in the period
+    assert len(ys) == 1 and np.array_equal(np.roll(block, (-ys[0], -xs[0]), (0, 1)), tile)  # one whole period
+    assert judge([tile], [src], [False], ["color"]).passed
 
 
 @pytest.mark.parametrize("name", ["cells", "stripes"])
@@ -215,8 +249,9 @@ def test_a_stone_tile_keeps_its_joint_network_connected(made_tiles):
     assert tile_share >= 0.8 * source_share, (tile_share, source_share)
 
 
-@pytest.mark.xfail(strict=True, reason="issue target missed: the window cut's wrap still cuts a few stones (height "
-                   "structure 1.6) and jumps a stripe (a seam); refined tiles break far more (benchmarks/results/levers.md)")
+@pytest.mark.xfail(strict=True, reason="issue target missed: the refined tile cuts stones and jumps stripes along its "
+                   "copied blocks' edges (benchmarks/results/levers.md); a window cut of stacks that do not continue "
+                   "themselves breaks them at its wraps and is not offered (benchmarks/results/window_gate.md)")
 @pytest.mark.parametrize("name", ["cells", "stripes"])
 def test_a_structured_tile_has_no_interior_seam_and_keeps_its_structure(made_tiles, name):
     from seamless_usd.verdict import judge

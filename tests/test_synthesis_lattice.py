@@ -185,9 +185,10 @@ def test_the_lattice_candidate_can_be_turned_off(brick_stack):
 
 def test_a_window_tile_of_a_stack_that_does_not_repeat():
     """Sides between WINDOW_MIN of the source and the longest that leaves room for the band and the margins,
-    bands a tenth of the side; a stack too small for a window gets none."""
+    bands a tenth of the side; a stack too small for a window gets none. The cut is offered only where the
+    texture continues itself at the lags on both axes."""
     from seamless_usd.synthesis.lattice.cut import CUT_MARGIN
-    from seamless_usd.synthesis.lattice.window import WINDOW_BAND, WINDOW_MIN, window_tile_size
+    from seamless_usd.synthesis.lattice.window import WINDOW_BAND, WINDOW_MIN, continues_itself, window_tile_size
 
     rng = np.random.default_rng(4)
     noise = rng.normal(size=(200, 240, 3)).astype(np.float32)
@@ -199,4 +200,10 @@ def test_a_window_tile_of_a_stack_that_does_not_repeat():
     period = np.tile(rng.normal(size=(200, 180, 1)), (1, 2, 1))[:, :240].astype(np.float32)
     (_, tw), _, figures = window_tile_size([period])
     assert tw == 180 and figures["x"] < 0.01 and figures["y"] > 0.8
+    assert not continues_itself(figures)  # along x only: the y wrap would join unrelated places
+    # one block repeated on both axes, 1.3 times in the source: too few periods for a lattice, a window of it
+    # continues itself at both wraps
+    block = rng.normal(size=(150, 160, 2)).astype(np.float32)
+    (th, tw), _, figures = window_tile_size([np.tile(block, (2, 2, 1))[:200, :210]])
+    assert (th, tw) == (150, 160) and continues_itself(figures)
     assert window_tile_size([noise[:40, :40]]) is None

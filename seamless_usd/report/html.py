@@ -81,6 +81,11 @@ def _layout_text(gan: dict) -> str | None:
     if any(p is not None for p in periods):
         axes = " x ".join("none" if p is None else f"{p:g}" for p in periods)
         text += f"; repeats every {axes} px (y x x)"
+    refused = lattice.get("window_refused")
+    if refused:
+        lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
+        text += (f"; no window cut: the texture does not continue itself at any window's lags (difference {lags};"
+                 f" a cut is offered at {refused['most']:.2f} or less)")
     if "score" in lattice:
         def verdict(suffix: str) -> str:
             q = "Q passed" if lattice.get("q_passed" + suffix) else "Q not passed"

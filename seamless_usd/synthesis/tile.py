@@ -28,7 +28,7 @@ from .gan.data import effective_k
 from .gan.sample import judge, sample
 from .gan.seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
 from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
-from .lattice.window import window_tile_size
+from .lattice.window import WINDOW_MAX_DIFFERENCE, continues_itself, window_tile_size
 from .refinement.refine import RefineConfig, refine, resize_periodic
 from .scale import structure_size, working_factor
 from .types import MapInput, QResult, TileResult, stack_shape
@@ -124,8 +124,8 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
        resolution). Without it, the GAN tile at the working resolution is the result.
     4. For a stack that repeats on a lattice, the tile's lattice ratio is measured; with
        ``refine_config.lattice`` and source-sized tiles, the stack also gets a tile cut from the source:
-       whole lattice periods when it repeats (:mod:`.lattice.cut`), else one window of it joined across
-       its wraps (:mod:`.lattice.window`); the written tile is the one that passes (the verdict: no
+       whole lattice periods when it repeats (:mod:`.lattice.cut`), else, when it continues itself at
+       some lags, one window of it joined across its wraps (:mod:`.lattice.window`); the written tile is the one that passes (the verdict: no
        seam and fidelity inside the source's tolerances; the lattice ratio, which sees a broken bond),
        then the one with the lower score.
        ``keep_alternatives`` keeps the candidate not written in ``MadeTile.alternatives``.
@@ -236,15 +236,22 @@ def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice
     return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
 
 
-def _cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int):
+def _cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict):
     """The cut tile for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
-    else one window of the source (:mod:`.lattice.window`). Returns (kind, tile size, band, figures) or None."""
+    else one window of the source when the texture continues itself at the window's lags
+    (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``). Returns (kind,
+    tile size, band, figures) or None."""
     if lattice.found:
         sizes = lattice_tile_size((H, W), lattice)
         if sizes is not None:
             return "lattice", sizes[0], sizes[1], {}
     sizes = window_tile_size([m.pixels for m in maps])
-    return None if sizes is None else ("window", sizes[0], sizes[1], {"lag_difference": sizes[2]})
+    if sizes is None:
+        return None
+    if not continues_itself(sizes[2]):
+        notes["window_refused"] = {"lag_difference": sizes[2], "most": WINDOW_MAX_DIFFERENCE}
+        return None
+    return "window", sizes[0], sizes[1], {"lag_difference": sizes[2]}
 
 
 def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_alternatives: bool) -> None:
@@ -252,12 +259,12 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     wins: the candidate that passes (the verdict: no seam, fidelity inside the source's tolerances; for a
     stack that repeats, the lattice ratio) before one that does not, then the lower score (see
     :func:`_judged`). A stack that repeats on a lattice is cut to whole periods
-    (:func:`.lattice.lattice_cut`); any other to one window of the source joined across its wraps
-    (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down to SCORE_SIDE."""
+    (:func:`.lattice.lattice_cut`); any other that continues itself to one window of the source joined
+    across its wraps (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down to SCORE_SIDE."""
     H, W = made.grid_size
     lattice = find_lattice([m.pixels for m in maps])
     made.lattice = lattice.as_dict()
-    candidate = _cut_candidate(maps, lattice, H, W) if cut else None
+    candidate = _cut_candidate(maps, lattice, H, W, made.lattice) if cut else None
     if not lattice.found and candidate is None:
         return
     halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))

@@ -15,7 +15,13 @@ mean difference, over all places of a band, between the texels that the wrap wou
 has lags where its lines fall on lines; a stochastic one has no such lag, and the cut hides the join.
 
 Like the lattice cut, this is one more candidate beside the refined tile (see :mod:`..tile`): the
-verdict (no seam, fidelity) and the fidelity score choose between them.
+verdict (no seam, fidelity) and the fidelity score choose between them. It is offered only for a texture
+that *continues itself* at the chosen lags (:func:`continues_itself`): where it does not, the cut cannot
+hide the join. Looked at along both wraps (2x), every window cut of a texture that does not repeat
+(rotated wood and brick photographs, stone cells, stripes) showed tone patches with stair-stepped edges,
+mortar lines ending at the cut, threads cut in half, while the verdict passed many of them: the minimum-error
+cut meanders, so a straight line of the tile crosses a broken stretch for a few texels only
+(``benchmarks/window_gate.py``, ``benchmarks/results/window_gate.md``).
 """
 from __future__ import annotations
 
@@ -26,7 +32,7 @@ import numpy as np
 from ..refinement.refine import spread
 from .cut import CUT_MARGIN, _joint_small, box_sums
 
-__all__ = ["WINDOW_MIN", "WINDOW_BAND", "window_tile_size"]
+__all__ = ["WINDOW_MIN", "WINDOW_BAND", "WINDOW_MAX_DIFFERENCE", "continues_itself", "window_tile_size"]
 
 #: The shortest tile side, as a share of the source's: a window keeps the source's texel scale, and its
 #: UV transform keeps the texel density, but a much smaller tile repeats its features more often.
@@ -34,6 +40,11 @@ WINDOW_MIN = 0.7
 #: The band across each wrap, as a share of the side: where the minimum-error cut may run.
 WINDOW_BAND = 0.1
 _ANALYSIS = 256  # longest side (px) the lags are compared at
+#: The most a chosen lag's difference (see :func:`window_tile_size`) may be, on either axis, for the window
+#: cut to be offered. Window cuts looked at along their wraps: the clean ones (a weave whose windows repeat
+#: exactly) read at most 0.003 on their worse axis, the broken ones 0.27 and more
+#: (``benchmarks/results/window_gate.md``).
+WINDOW_MAX_DIFFERENCE = 0.05
 
 
 def _lag_costs(u: np.ndarray, axis: int, lags: np.ndarray, band: int, length: int) -> np.ndarray:
@@ -86,3 +97,13 @@ def window_tile_size(maps: list[np.ndarray], margin: int = CUT_MARGIN
         bands.append(band)
         figures["yx"[axis]] = round(float(costs[best]) / unrelated, 4)
     return (sides[0], sides[1]), (bands[0], bands[1]), figures
+
+
+def continues_itself(figures: dict) -> bool:
+    """Whether a texture continues itself at a window's lags closely enough for its cut to hide the joins:
+    ``figures`` (from :func:`window_tile_size`) at most :data:`WINDOW_MAX_DIFFERENCE` on both axes.
+
+    >>> continues_itself({"y": 0.003, "x": 0.0006}), continues_itself({"y": 0.003, "x": 0.34})
+    (True, False)
+    """
+    return max(figures.values()) <= WINDOW_MAX_DIFFERENCE
