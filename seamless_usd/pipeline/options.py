@@ -6,7 +6,9 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-__all__ = ["Options", "ProgressEvent", "REFINE_MODES", "TILE_SIZES"]
+from seamless_usd.errors import UsageError
+
+__all__ = ["Options", "ProgressEvent", "REFINE_MODES", "TILE_SIZES", "check_device"]
 
 
 @dataclass(frozen=True)
@@ -84,3 +86,20 @@ class Options:
                 value = value.value
             out[name] = value
         return out
+
+
+def check_device(name: str) -> None:
+    """A usage error, before any work, for a device that does not exist here."""
+    import torch
+
+    try:
+        device = torch.device(name)
+    except RuntimeError:
+        raise UsageError(f"--device {name!r} is not a device name; use cpu, cuda or cuda:N") from None
+    if device.type == "cuda":
+        if not torch.cuda.is_available():
+            raise UsageError(f"--device {name}: this machine has no usable CUDA device; use --device cpu or leave it out")
+        if device.index is not None and device.index >= torch.cuda.device_count():
+            raise UsageError(f"--device {name}: only {torch.cuda.device_count()} CUDA device(s) here")
+    elif device.type != "cpu":
+        raise UsageError(f"--device {name}: only cpu and cuda devices are supported")

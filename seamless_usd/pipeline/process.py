@@ -23,9 +23,9 @@ from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 from seamless_usd.pipeline.cache import JobIndex, job_fingerprint
 from seamless_usd.pipeline.executors import Executor, InProcessExecutor, make_executor
-from seamless_usd.pipeline.options import Options, ProgressEvent
+from seamless_usd.pipeline.options import Options, ProgressEvent, check_device
 from seamless_usd.pipeline.inputs import expand_inputs
-from seamless_usd.pipeline.naming import tile_filename
+from seamless_usd.pipeline.planned import planned_result, wrap_only_result
 from seamless_usd.pipeline.stackjob import JobSettings, StackJob, StackOutcome, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 
@@ -131,14 +131,14 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
                               "--force or --force-materials to process it anyway")
             if stack.intent == ALREADY_TILEABLE:
                 report.message = f"already tileable, kept as is (wrap set to repeat): {stack.intent_reason}"
-                results.append(_wrap_only_result(stack))
+                results.append(wrap_only_result(stack))
             run.report.findings.append(Finding(Severity.SKIPPED, stack.intent, where, report.message, stack.material))
         elif (source_label, stack.id) in run.blocked:
             report.message = run.blocked[(source_label, stack.id)]
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
         elif dry:
             report.status = StackStatus.PLANNED
-            planned = _planned_result(stack, out_dir, run.options)
+            planned = planned_result(stack, out_dir, run.options)
             report.maps = [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps]
             report.uv_scale = planned.uv_scale
             report.duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
@@ -177,17 +177,6 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
     return results, handed
 
 
-def _wrap_only_result(stack: TextureStack):
-    """Authoring input for an already-tileable stack: its own maps, wrap = repeat, no UV change."""
-    from seamless_usd.authoring import MapResult, Provenance, StackResult
-
-    prov = Provenance(source_asset="", crop_size=(0, 0), uv_scale=(1.0, 1.0), q_passed=None, q_tau=0.0,
-                      q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__, passed=True,
-                      verdict=f"already seamless, judged against itself ({stack.intent_reason})")
-    maps = [MapResult(map=m, output_path=Path(m.resolved)) for m in stack.maps if m.resolved]
-    return StackResult(stack=stack, maps=maps, uv_scale=(1.0, 1.0), provenance=prov, wrap_only=True)
-
-
 def _check_written(run: Run, handed, edit, failure: str | None = None) -> None:
     """The report agrees with the disk: a stack whose edits were not written is failed."""
     unwritten = edit.unwritten_nodes() if edit is not None else {}
@@ -202,32 +191,6 @@ def _check_written(run: Run, handed, edit, failure: str | None = None) -> None:
             why = "; ".join(f"{node}: {reason}" for node, reason in missing)
         report.status = StackStatus.FAILED
         report.message = f"tiles written but the stage edits were not: {why}"
-
-
-def _planned_result(stack: TextureStack, out_dir: Path, options: Options):
-    """What a dry run shows authoring: the tile paths that would be written, and the UV scale if the
-    first candidate passes Q: a source-sized refined tile keeps the UVs (scale 1); the paper's tile
-    of the whole texture (c = working size) halves them. A dry run reads no pixels, so it cannot
-    tell a repeating stack whose written tile will be a lattice cut (smaller, with a larger scale)."""
-    from seamless_usd.authoring import MapResult, Provenance, StackResult, uv_scale_for
-    from seamless_usd.imaging import WorkingResolution, output_extension
-
-    sizes = [(m.image.width, m.image.height) for m in stack.maps if m.image is not None]
-    working = WorkingResolution(max_size=options.max_size).working_size(sizes) if sizes else (1, 1)
-    if options.tile_size == "source" and options.refine != "off":
-        uv, crop = (1.0, 1.0), (working[0] // 2, working[1] // 2)
-    else:
-        uv, crop = uv_scale_for(working, working), working
-    maps = [
-        MapResult(map=m, output_path=out_dir / tile_filename(m.asset, stack.id, output_extension(m.image)))
-        for m in stack.maps
-        if m.image is not None
-    ]
-    prov = Provenance(
-        source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=None,
-        q_tau=0.0, q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__,
-    )
-    return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov)
 
 
 def _place(run: Run, stack: TextureStack, out_dir: Path) -> StackOutcome | Exception:
@@ -338,23 +301,6 @@ def _finish(run: Run, started: float) -> Report:
     return report
 
 
-def _check_device(name: str) -> None:
-    """A usage error, before any work, for a device that does not exist here."""
-    import torch
-
-    try:
-        device = torch.device(name)
-    except RuntimeError:
-        raise UsageError(f"--device {name!r} is not a device name; use cpu, cuda or cuda:N") from None
-    if device.type == "cuda":
-        if not torch.cuda.is_available():
-            raise UsageError(f"--device {name}: this machine has no usable CUDA device; use --device cpu or leave it out")
-        if device.index is not None and device.index >= torch.cuda.device_count():
-            raise UsageError(f"--device {name}: only {torch.cuda.device_count()} CUDA device(s) here")
-    elif device.type != "cpu":
-        raise UsageError(f"--device {name}: only cpu and cuda devices are supported")
-
-
 def _new_run(options: Options) -> Run:
     authoring = _authoring()
     from seamless_usd.synthesis import get_preset
@@ -370,7 +316,7 @@ def _new_run(options: Options) -> Run:
             f"--max-size {options.max_size} is below the {MIN_IMAGE_SIZE} px minimum crop; use {MIN_IMAGE_SIZE} or more"
         )
     if options.device is not None:
-        _check_device(options.device)
+        check_device(options.device)
     if options.mode is None:
         options = options.with_(mode=authoring.WriteMode.NEW_LAYER)
     return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
