@@ -11,10 +11,12 @@ For every lever and stack it measures, against the source: the bad joins inside 
 map and for the maps together; ``seamless_usd.verdict.joins``), the field's coherence, the verdict
 (``passed``, seams named), the structure figure (``seamless_usd.metrics.structure``; target <= 1.5), feature
 scale and patch distance, and the time. Pictures: the first map's tile at 3x (its top-left corner, and
-the corner where its wraps meet, the tile repeated), ``results/levers/``.
+the corner where its wraps meet, the tile repeated), ``results/levers/``. The ``guide`` levers match a
+guidance channel with the maps (the distance to the texture's lines; Kaspar et al. 2015), not written.
 
     .venv/bin/python benchmarks/levers.py            # every lever, writes results/levers.md and levers.json
     .venv/bin/python benchmarks/levers.py --levers "default,coarse patch 17" --stacks cells_512
+    .venv/bin/python benchmarks/levers.py --levers "default,guide dark lines 1,guide edges 2" --name levers_guide
     .venv/bin/python benchmarks/levers.py --levers "default,window cut" --name levers_fullres \
         --stacks rot23_wood_2048,rot61_wood_2048,rot23_brick_2048,rot61_brick_2048,cells_2048,stripes_2048,rot23_wood_4096,rot23_brick_4096
 """
@@ -48,8 +50,31 @@ LEVERS: dict[str, dict] = {
     "heal 8 + blend 3": {"heal": 8, "blend": 3},
     "robust vote 3": {"robust_vote": 3},
     "window cut": {"window": True},  # not a refinement: one window of the source cut across its wraps
+    # a guidance channel matched with the maps and not written (Kaspar et al. 2015, self-tuning texture
+    # optimisation): the distance to the texture's lines, clipped at 16 px, as ``weight`` extra maps
+    "guide dark lines 1": {"guide": ("dark", 1)},
+    "guide edges 2": {"guide": ("edge", 2)},
 }
 STACK_NAMES = ("cells_512", "stripes_512", "rot23_wood_512", "rot23_brick_512")
+
+
+def line_guide(pixels: np.ndarray, kind: str, clip: float = 16.0) -> np.ndarray:
+    """(H, W, 1) distance (px, clipped at ``clip``, mapped to [-1, 1]) to the map's lines: its darkest fifth
+    after a 4 px high-pass (``"dark"``: joints, gaps, grain), or its strongest edges (``"edge"``: the top 15 %
+    of the gradient magnitude at 2 px)."""
+    from scipy import ndimage
+
+    from seamless_usd.metrics.structure import _channel
+
+    u, _ = _channel(pixels, None)
+    if kind == "edge":
+        g = ndimage.gaussian_gradient_magnitude(u, 2.0)
+        lines = g > np.quantile(g, 0.85)
+    else:
+        hp = u - ndimage.gaussian_filter(u, 4.0, mode="reflect")
+        lines = ndimage.binary_opening(hp < np.quantile(hp, 0.2))
+    d = ndimage.distance_transform_edt(~lines)
+    return (np.minimum(d, clip) / clip * 2 - 1).astype(np.float32)[..., None]
 
 
 def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
@@ -75,9 +100,11 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
         field, _ = lattice_cut(maps, tile_hw, band)
         tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
     else:
-        config = dataclasses.replace(RefineConfig(lattice=False), **lever)
-        result = refine(maps, None, maps[0].shape[:2], config, seed=seed, normals=normals)
-        tiles, field = result.maps, result.field
+        guide_kind, weight = lever.get("guide", (None, 0))
+        extra = [line_guide(maps[0], guide_kind)] * weight  # matched, then dropped
+        config = dataclasses.replace(RefineConfig(lattice=False), **{k: v for k, v in lever.items() if k != "guide"})
+        result = refine(maps + extra, None, maps[0].shape[:2], config, seed=seed, normals=normals + [False] * weight)
+        tiles, field = result.maps[:len(maps)], result.field
         offered = True
     seconds = time.perf_counter() - t0
     joins = join_stats(tiles, maps, normals, keys, origin=field)  # the field: blended texels keep their place
