@@ -13,7 +13,9 @@ tile's columns and rows across each wrap (its texels 16 before the wrap to 16 pa
 by side, enlarged 2x (1x at 2K), which is how the labels were given.
 
 The *tuning* items were looked at before the gate's threshold was chosen; the *held-back* ones (other
-angles, other windows of the weave, the 2048 px stacks) after it was fixed.
+angles, other windows of the weave, the 2048 px stacks, and the repeating brick made to repeat less
+exactly, by a tone ramp or a drifting scale, whose figures fall on both sides of the threshold) after it
+was fixed.
 
     .venv/bin/python benchmarks/window_gate.py            # writes results/window_gate.md and .json
     .venv/bin/python benchmarks/window_gate.py --items cloth,wood_37_512 --out /tmp/gate
@@ -76,13 +78,44 @@ LABELS: dict[str, tuple[str, bool, str]] = {
     "weave_250_20_380_320": ("held-back", True, "threads continue across both wraps"),
     "rot61_wood_2048": ("held-back", False, "a dark tone patch with a stepped edge"),
     "rot61_brick_2048": ("held-back", False, "a brick-tone patch with a straight edge; a corner joint broken"),
+    # the MaterialX brick (it repeats) over 1.3 periods, made to repeat less and less exactly: an added tone ramp
+    # (network units across the window) or a scale that drifts across it (perspective-like, share of the scale)
+    "ramp_0.02": ("held-back", True, "mortar and bricks continue, no tone step seen"),
+    "ramp_0.05": ("held-back", False, "a faint tone step inside a brick (seen at 3x)"),
+    "ramp_0.1": ("held-back", False, "a darker patch with a jagged edge"),
+    "ramp_0.2": ("held-back", False, "tone patches with jagged edges"),
+    "drift_0.005": ("held-back", True, "mortar lines continue across both wraps"),
+    "drift_0.01": ("held-back", False, "mortar lines jog a few texels at the cut"),
+    "drift_0.02": ("held-back", False, "mortar lines jog at the cut"),
+    "drift_0.04": ("held-back", False, "mortar lines jog and end at the cut"),
 }
+
+
+def _perturbed(kind: str, amount: float) -> np.ndarray:
+    """The MaterialX brick's base colour (one period at 512 px) over 1.3 periods, with a tone ramp of
+    ``amount`` (network units across the window, half that down it) or a scale drifting by ``amount`` across
+    it: a texture that repeats less exactly as ``amount`` grows."""
+    from scipy import ndimage
+
+    import verdict_corpus
+
+    base = verdict_corpus.texture("brick_base_gray", 512)
+    n = int(512 * 1.3)
+    yy, xx = np.mgrid[0:n, 0:n].astype(np.float64)
+    scale = 1 + amount * xx / n if kind == "drift" else 1.0
+    out = np.stack([ndimage.map_coordinates(base[..., c], [yy * scale, xx * scale], order=3, mode="wrap")
+                    for c in range(base.shape[2])], -1)
+    if kind == "ramp":
+        out = np.clip(out + ((xx / n - 0.5) * 2 * amount + (yy / n - 0.5) * amount)[..., None], -1, 1)
+    return out.astype(np.float32)
 
 
 def stack_for(name: str) -> dict:
     """The maps of item ``name`` in the network domain (see :data:`LABELS` for the names it builds)."""
+    kind, *numbers = name.split("_")
+    if kind in ("ramp", "drift"):
+        return {"base_gray": (_perturbed(kind, float(numbers[0])), False)}
     if name not in stacks.STACKS:
-        kind, *numbers = name.split("_")
         if kind == "weave":
             x, y, size, out = (int(v) for v in numbers)
             stacks.STACKS[name] = stacks.StackSpec("shared", WEAVE, window=(x, y, size, out))
