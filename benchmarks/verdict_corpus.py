@@ -16,6 +16,9 @@ Seamless by construction
                     gradient domain (the refinement's ``blend``): a seamless cut stays seamless.
     ``blended``     the refined tile's field with its joins blended the same way, looked at and judged
                     (3 x 3 repeats at 1x and 3x).
+    ``lattice-lit`` the lattice cut of the brick lit unevenly (a tone ramp across the source), looked at
+                    (join bands at 3x): seamless at a ramp of 0.02, seamed at 0.05, where the cut crosses
+                    bricks of two tones (held back: the verdict was not tuned on it).
 Seamed by construction
     ``naive``       an off-grid window used as its own tile (a seam at the wrap);
     ``splice``      a tileable texture with a strip from elsewhere spliced in (two interior seams);
@@ -58,6 +61,10 @@ SEAMLESS = ("rolled", "noise", "lattice", "refined")
 REFINED_SEAMLESS = frozenset({"wood_roughness"})
 #: The same refinements with their joins blended, looked at the same way and judged seamless.
 BLENDED_SEAMLESS = frozenset({"wood_roughness"})
+#: Tone ramps (network units across the source) of the unevenly lit brick whose lattice cuts were looked at:
+#: at 0.02 the bricks along the cut keep one tone; at 0.05 the cut crosses bricks and splits their tone
+#: diagonally (seen at 3x).
+LIT_LATTICE = {0.02: True, 0.05: False}
 #: Width (texels) of the blended band in the ``*-blended`` items: the refinement's ``blend`` lever as measured.
 BAND = 3
 SEAMLESS = SEAMLESS + ("lattice-blended",)
@@ -92,6 +99,23 @@ def texture(name: str, side: int) -> np.ndarray:
         a = a.reshape(side, k, side, k, spec.nchannels).mean(axis=(1, 3))
         _CACHE[key] = (2.0 * a - 1.0).astype(np.float32)
     return _CACHE[key]
+
+
+def lit_brick(kind: str, amount: float) -> np.ndarray:
+    """The MaterialX brick's base colour (one period at 512 px) over 1.3 periods, with a tone ramp of
+    ``amount`` (network units across the window, half that down it: a wall lit unevenly) or a scale drifting
+    by ``amount`` across it (perspective-like): a texture that repeats less exactly as ``amount`` grows."""
+    from scipy import ndimage
+
+    base = texture("brick_base_gray", 512)
+    n = int(512 * 1.3)
+    yy, xx = np.mgrid[0:n, 0:n].astype(np.float64)
+    scale = 1 + amount * xx / n if kind == "drift" else 1.0
+    out = np.stack([ndimage.map_coordinates(base[..., c], [yy * scale, xx * scale], order=3, mode="wrap")
+                    for c in range(base.shape[2])], -1)
+    if kind == "ramp":
+        out = np.clip(out + ((xx / n - 0.5) * 2 * amount + (yy / n - 0.5) * amount)[..., None], -1, 1)
+    return out.astype(np.float32)
 
 
 def noise(side: int, beta: float, aniso: float, seed: int) -> np.ndarray:
@@ -206,6 +230,12 @@ def items(sides: tuple[int, ...] = (256, 512), products: bool = True, seed: int 
     for side in (320, 640):
         yield from _texture_items("cloth", [texture("cloth", side)], [False], "held-back", side, rng,
                                   products and side == 320, tileable=False)
+    if products:  # a wall lit unevenly: the lattice cut joins bricks of two tones (looked at, 3x)
+        for amount, seamless in LIT_LATTICE.items():
+            src = [lit_brick("ramp", amount)]
+            tile, _ = _product("lattice", src, [False], 0)
+            yield Item(f"brick_lit-{amount}-lattice", "brick_lit", "lattice-lit", seamless, tile, src, [False],
+                       "held-back", {"judged": "by eye, join bands at 3x"})
 
 
 def _texture_items(family, maps, normals, split, side, rng, products, tileable=True):

@@ -91,30 +91,13 @@ LABELS: dict[str, tuple[str, bool, str]] = {
 }
 
 
-def _perturbed(kind: str, amount: float) -> np.ndarray:
-    """The MaterialX brick's base colour (one period at 512 px) over 1.3 periods, with a tone ramp of
-    ``amount`` (network units across the window, half that down it) or a scale drifting by ``amount`` across
-    it: a texture that repeats less exactly as ``amount`` grows."""
-    from scipy import ndimage
-
-    import verdict_corpus
-
-    base = verdict_corpus.texture("brick_base_gray", 512)
-    n = int(512 * 1.3)
-    yy, xx = np.mgrid[0:n, 0:n].astype(np.float64)
-    scale = 1 + amount * xx / n if kind == "drift" else 1.0
-    out = np.stack([ndimage.map_coordinates(base[..., c], [yy * scale, xx * scale], order=3, mode="wrap")
-                    for c in range(base.shape[2])], -1)
-    if kind == "ramp":
-        out = np.clip(out + ((xx / n - 0.5) * 2 * amount + (yy / n - 0.5) * amount)[..., None], -1, 1)
-    return out.astype(np.float32)
-
-
 def stack_for(name: str) -> dict:
     """The maps of item ``name`` in the network domain (see :data:`LABELS` for the names it builds)."""
     kind, *numbers = name.split("_")
     if kind in ("ramp", "drift"):
-        return {"base_gray": (_perturbed(kind, float(numbers[0])), False)}
+        import verdict_corpus
+
+        return {"base_gray": (verdict_corpus.lit_brick(kind, float(numbers[0])), False)}
     if name not in stacks.STACKS:
         if kind == "weave":
             x, y, size, out = (int(v) for v in numbers)
