@@ -125,9 +125,9 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     4. For a stack that repeats on a lattice, the tile's lattice ratio is measured; with
        ``refine_config.lattice`` and source-sized tiles, the stack also gets a tile cut from the source:
        whole lattice periods when it repeats (:mod:`.lattice.cut`), else, when it continues itself at
-       some lags, one window of it joined across its wraps (:mod:`.lattice.window`); the written tile is the one that passes (the verdict: no
-       seam and fidelity inside the source's tolerances; the lattice ratio, which sees a broken bond),
-       then the one with the lower score.
+       some lags, one window of it joined across its wraps (:mod:`.lattice.window`); the written tile
+       is the one that passes (the verdict: no seam and fidelity inside the source's tolerances; the
+       lattice ratio, which sees a broken bond), then the one with the lower score.
        ``keep_alternatives`` keeps the candidate not written in ``MadeTile.alternatives``.
     """
     assert tile_size in TILE_SIZES, f"tile_size must be one of {TILE_SIZES}, got {tile_size!r}"
@@ -260,7 +260,8 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     stack that repeats, the lattice ratio) before one that does not, then the lower score (see
     :func:`_judged`). A stack that repeats on a lattice is cut to whole periods
     (:func:`.lattice.lattice_cut`); any other that continues itself to one window of the source joined
-    across its wraps (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down to SCORE_SIDE."""
+    across its wraps (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down
+    to SCORE_SIDE."""
     H, W = made.grid_size
     lattice = find_lattice([m.pixels for m in maps])
     made.lattice = lattice.as_dict()
