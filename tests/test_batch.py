@@ -175,7 +175,7 @@ def test_make_executor_validates_names():
         make_executor(None, 0)
 
 
-def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, cache, capsys):
+def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, cache, capsys, monkeypatch):
     lib = _library(tmp_path)
     report = tmp_path / "out" / "library.html"
     code, first = _run(str(lib), "--cache-dir", str(tmp_path / "cold"), "--report", str(report), capsys=capsys)
@@ -201,6 +201,13 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
     _assert_all_written(code, second)
     assert second["counts"]["trained"] == 0
     assert second["counts"]["from_cache"] == 3
+    # entries made by code that made other tiles from the same inputs are not reused
+    from seamless_usd.pipeline import cache as cache_module
+
+    monkeypatch.setattr(cache_module, "TILE_REVISION", cache_module.TILE_REVISION + 1)
+    code, third = _run(str(lib), "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    _assert_all_written(code, third)
+    assert third["counts"]["trained"] == 3 and third["counts"]["from_cache"] == 0
 
 
 def test_two_stacks_editing_one_layer_in_place_both_land(tmp_path, two_stacks, capsys):

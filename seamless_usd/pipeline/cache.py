@@ -1,9 +1,10 @@
 """Content-addressed cache of trained stacks: checkpoints while training, tiles when done.
 
 An entry is keyed by a hash of the stack's working pixels, the maps' channels and roles, the
-synthesis config, the seed and the code version, so the same stack found in several files (or
-in a re-run) is trained once. A finished entry holds the sampled tiles and a manifest with the
-SHA-256 of every file; entries are verified before use and a corrupt one is discarded and redone.
+synthesis config, the seed, the code version and the tiles' revision (:data:`TILE_REVISION`), so the
+same stack found in several files (or in a re-run) is trained once. A finished entry holds the sampled
+tiles and a manifest with the SHA-256 of every file; entries are verified before use and a corrupt one is
+discarded and redone.
 Writers hold a file lock per entry, so two processes never train or write the same entry at once.
 """
 from __future__ import annotations
@@ -31,6 +32,10 @@ __all__ = ["StackCache", "CacheEntry", "JobIndex", "stack_key", "job_fingerprint
 MANIFEST = "manifest.json"
 TILES = "tiles.safetensors"
 CACHE_FORMAT = 1  # bump when the entry layout changes
+#: Bump whenever the same inputs and settings make a different tile (a candidate added or refused, a cut
+#: changed): entries made before are then not reused. 2: the window cut is offered only where the texture
+#: continues itself (``synthesis.lattice.window.continues_itself``).
+TILE_REVISION = 2
 
 
 def default_cache_dir() -> Path:
@@ -46,7 +51,7 @@ def stack_key(pixels: Iterable[tuple[str, np.ndarray, str]], config: Mapping[str
     the same pixels used differently are a different stack.
     """
     h = hashlib.sha256()
-    h.update(f"seamless-usd {__version__} cache {CACHE_FORMAT}\n".encode())
+    h.update(f"seamless-usd {__version__} cache {CACHE_FORMAT} tiles {TILE_REVISION}\n".encode())
     for name, array, descriptor in pixels:
         arr = np.ascontiguousarray(array, dtype=np.float32)
         h.update(f"{name}|{descriptor}|{arr.shape}\n".encode())
@@ -147,7 +152,7 @@ def job_fingerprint(stack, settings) -> str:
     import dataclasses
 
     h = hashlib.sha256()
-    h.update(f"seamless-usd {__version__} job {CACHE_FORMAT}\n".encode())
+    h.update(f"seamless-usd {__version__} job {CACHE_FORMAT} tiles {TILE_REVISION}\n".encode())
     fields = {k: v for k, v in dataclasses.asdict(settings).items() if k != "cache_dir"}
     h.update(json.dumps(fields, sort_keys=True, default=str).encode())
     for m in sorted(stack.maps, key=lambda m: (m.resolved, m.channels_used)):
