@@ -84,16 +84,22 @@ def copy_origins(tile: np.ndarray, source: np.ndarray, infer: int = 0) -> tuple[
     flat = sk.ravel()
     order = np.argsort(flat, kind="stable")
     sorted_keys = flat[order]
-    idx = np.searchsorted(sorted_keys, tk.ravel())
+    wanted = tk.ravel()
+    # looked up in key order: a sorted search over sorted queries walks the table once (at 4K this lookup
+    # took 55 s with the queries unsorted, 22 s sorted)
+    by_key = np.argsort(wanted)
+    idx, right = np.empty_like(by_key), np.empty_like(by_key)
+    idx[by_key] = np.searchsorted(sorted_keys, wanted[by_key])
+    right[by_key] = np.searchsorted(sorted_keys, wanted[by_key], side="right")
     idx = np.clip(idx, 0, len(sorted_keys) - 1)
-    hit = sorted_keys[idx] == tk.ravel()
+    hit = sorted_keys[idx] == wanted
     pos = order[idx]
     ys, xs = pos // sk.shape[1] + 1, pos % sk.shape[1] + 1
     origin = np.stack([np.where(hit, ys, -1), np.where(hit, xs, -1)], -1).reshape(tk.shape + (2,))
     tq, sq = _quantised(tile), _quantised(source)
     # a neighbourhood found in one place only, or one with texture in it, places its texel for certain; a
     # flat one is found all over a flat area, and its continuation there may be anything
-    single = hit & (np.searchsorted(sorted_keys, tk.ravel(), side="right") - idx == 1)
+    single = hit & (right - idx == 1)
     certain = single.reshape(tk.shape) | (hit.reshape(tk.shape) & (_local_range(tq) >= FLAT_CODES))
     # a texel beside a join has a neighbourhood the source lacks: it takes its neighbour's origin, moved
     # by one, when the source has exactly its value there
