@@ -89,8 +89,9 @@ def copy_origins(tile: np.ndarray, source: np.ndarray, infer: int = 0) -> tuple[
     # took 55 s with the queries unsorted, 22 s sorted)
     by_key = np.argsort(wanted)
     idx, right = np.empty_like(by_key), np.empty_like(by_key)
-    idx[by_key] = np.searchsorted(sorted_keys, wanted[by_key])
-    right[by_key] = np.searchsorted(sorted_keys, wanted[by_key], side="right")
+    in_order = wanted[by_key]
+    idx[by_key] = np.searchsorted(sorted_keys, in_order)
+    right[by_key] = np.searchsorted(sorted_keys, in_order, side="right")
     idx = np.clip(idx, 0, len(sorted_keys) - 1)
     hit = sorted_keys[idx] == wanted
     pos = order[idx]
