@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Refinement levers, before and after: each setting of ``RefineConfig`` against the product's default,
-and the window cut (``seamless_usd.synthesis.lattice.window``: one window of the source, cut across its
-wraps), the candidate that ``make_tile`` now weighs against the refined tile for a stack with no lattice.
+the window cut (``seamless_usd.synthesis.lattice.window``: one window of the source, cut across its
+wraps), and the quilt (``seamless_usd.synthesis.lattice.quilt``: ny x nx large source blocks on a torus,
+joined along cuts that follow the texture's lines), the candidates that ``make_tile`` weighs against the
+refined tile for a stack with no lattice (the window where the texture continues itself, else the 2x2 quilt).
 
 The refinement alone (a random start, no GAN training: what the levers change is the same either way)
 runs on structured 512 px stacks whose structure breaks visibly when copied blocks meet badly: stone cells
@@ -17,6 +19,9 @@ guidance channel with the maps (the distance to the texture's lines; Kaspar et a
     .venv/bin/python benchmarks/levers.py            # every lever, writes results/levers.md and levers.json
     .venv/bin/python benchmarks/levers.py --levers "default,coarse patch 17" --stacks cells_512
     .venv/bin/python benchmarks/levers.py --levers "default,guide dark lines 1,guide edges 2" --name levers_guide
+    .venv/bin/python benchmarks/levers.py --levers "quilt 2x2,quilt 2x2 by difference,quilt 3x3" --name levers_quilt
+    .venv/bin/python benchmarks/levers.py --levers "quilt 2x2,quilt 2x2 by difference" --name levers_quilt_fullres \
+        --stacks rot23_wood_2048,rot61_wood_2048,rot23_brick_2048,rot61_brick_2048,cells_2048,stripes_2048
     .venv/bin/python benchmarks/levers.py --levers "default,window cut" --name levers_fullres \
         --stacks rot23_wood_2048,rot61_wood_2048,rot23_brick_2048,rot61_brick_2048,cells_2048,stripes_2048,rot23_wood_4096,rot23_brick_4096
 """
@@ -50,6 +55,11 @@ LEVERS: dict[str, dict] = {
     "heal 8 + blend 3": {"heal": 8, "blend": 3},
     "robust vote 3": {"robust_vote": 3},
     "window cut": {"window": True},  # not a refinement: one window of the source cut across its wraps
+    # not a refinement: image quilting on a torus from ny x nx large source blocks (lattice/quilt.py)
+    # cut along the texture's lines where it has long ones, or ("by difference") where the blocks agree
+    "quilt 2x2": {"quilt": (2, 2)},
+    "quilt 2x2 by difference": {"quilt": (2, 2), "lines": False},
+    "quilt 3x3": {"quilt": (3, 3)},
     # a guidance channel matched with the maps and not written (Kaspar et al. 2015, self-tuning texture
     # optimisation): the distance to the texture's lines, clipped at 16 px, as ``weight`` extra maps
     "guide dark lines 1": {"guide": ("dark", 1)},
@@ -91,6 +101,7 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
     maps = [stack[k][0] for k in keys]
     normals = [stack[k][1] for k in keys]
     t0 = time.perf_counter()
+    notes = {}
     if lever.get("window"):
         from seamless_usd.synthesis.lattice.cut import lattice_cut
         from seamless_usd.synthesis.lattice.window import continues_itself, window_tile_size
@@ -99,6 +110,15 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
         offered = continues_itself(lags)  # whether make_tile offers this cut (see window_gate.py)
         field, _ = lattice_cut(maps, tile_hw, band)
         tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
+    elif lever.get("quilt"):
+        from seamless_usd.synthesis.lattice.quilt import best_quilt
+        from seamless_usd.synthesis.tile import QUILT_TRIES
+
+        field, quilted = best_quilt(maps, maps[0].shape[:2], lever["quilt"], QUILT_TRIES, seed=seed,
+                                    lines=lever.get("lines", True))
+        tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
+        offered = True
+        notes = {"join_mean": quilted["join_mean"], "join_worst": quilted["join_worst"], "lines": quilted["lines"]}
     else:
         guide_kind, weight = lever.get("guide", (None, 0))
         extra = [line_guide(maps[0], guide_kind)] * weight  # matched, then dropped
@@ -120,7 +140,7 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
            "passed": verdict.passed, "seams": len(verdict.seams), "offered": offered,
            "structure": {k: structure_figures(t, m)["structure"] for k, t, m in zip(keys, tiles, maps)},
            "scale": {k: round(scale_ratio(t, m, n), 3) for k, t, m, n in zip(keys, tiles, maps, normals)},
-           "patch": {k: round(patch_distance(t, m, n), 3) for k, t, m, n in zip(keys, tiles, maps, normals)}}
+           "patch": {k: round(patch_distance(t, m, n), 3) for k, t, m, n in zip(keys, tiles, maps, normals)}, **notes}
     return row, tiles[0]
 
 
@@ -131,7 +151,8 @@ def _md(rows: list[dict], load: str) -> str:
            "The refinement alone (random start, seed 0, one thread) on structured stacks, and the window cut "
            "(one window of the source cut across its wraps; its tile is smaller, its UV transform keeps the texel "
            "density; *not offered*: the texture does not continue itself at the window's lags, so `make_tile` does "
-           "not weigh this cut, `benchmarks/results/window_gate.md`); `benchmarks/levers.py`. Verdict: passed, or the seams it names (at most 6 per direction "
+           "not weigh this cut, `benchmarks/results/window_gate.md`), and the quilt (large source blocks on a torus; "
+           "*along lines*: the stack has long lines and the cuts followed them); `benchmarks/levers.py`. Verdict: passed, or the seams it names (at most 6 per direction "
            "and map). Bad joins: stretches of >= 8 texels where two copied blocks meet with a "
            "continuation error above the verdict's threshold, for the maps together (per-map counts in "
            "levers.json), read through the refinement's own field (so blended texels are judged where they "
@@ -143,7 +164,8 @@ def _md(rows: list[dict], load: str) -> str:
            "| patch (worst) | s |", "|---|---|---|---:|---:|---:|---|---:|---:|---:|---:|"]
     for r in rows:
         scale = max(r["scale"].values(), key=lambda v: abs(v - 1))
-        size = "x".join(str(v) for v in r.get("tile", [])) + ("" if r.get("offered", True) else ", not offered")
+        size = ("x".join(str(v) for v in r.get("tile", [])) + ("" if r.get("offered", True) else ", not offered")
+                + (", along lines" if r.get("lines") else ""))
         verdict = "passed" if r["passed"] else f"{r['seams']} seams" if r["seams"] else "not faithful"
         out.append(f"| {r['stack']} | {r['lever']} | {size} | {r['bad_joins'].get('stack', '–')} | {r['coherence']} | "
                    f"{r['blended']:.0%} | {verdict} | {max(r['structure'].values()):.2f} | {scale:.2f} | "

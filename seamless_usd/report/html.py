@@ -67,7 +67,8 @@ def _seeds_text(seeds: list[dict] | None) -> str | None:
 _LAYOUTS = {"gan": "the SeamlessGAN tile, refined",
             "random": "a random start, refined (the GAN tile's feature scale was implausible)",
             "lattice": "a cut of whole lattice periods from the source",
-            "window": "one window of the source, joined across its wraps along minimum-error cuts"}
+            "window": "one window of the source, joined across its wraps along minimum-error cuts",
+            "quilt": "large source blocks quilted on a torus, joined along minimum-error cuts"}
 
 
 def _layout_text(gan: dict) -> str | None:
@@ -93,8 +94,15 @@ def _layout_text(gan: dict) -> str | None:
             return (q + (f", lattice ratio {ratio:.2f}" if ratio is not None else "")
                     + (", passes" if lattice.get("passes" + suffix) else ""))
         rival = next((k[len("score_"):] for k in lattice if k.startswith("score_")), None)
-        name = "window cut" if lattice.get("cut") == "window" else "lattice cut"
-        text += (f"; {name} {lattice['tile'][0]}x{lattice['tile'][1]} px scored {lattice['score']:.2f}"
+        name = {"window": "window cut", "quilt": "quilt"}.get(lattice.get("cut"), "lattice cut")
+        blocks = ""
+        if lattice.get("cut") == "quilt" and "cells" in lattice:
+            how = "cuts along the texture's lines" if lattice.get("lines") else "cuts where the blocks agree"
+            blocks = f" of {lattice['cells'][0]}x{lattice['cells'][1]} blocks, {how} (worst join {lattice['join_worst']:.3f})"
+            if len(lattice.get("quilts", [])) > 1:
+                blocks += ", the better of " + " and ".join(
+                    f"{q['score']:.2f} ({'along lines' if q['lines'] else 'by difference'})" for q in lattice["quilts"])
+        text += (f"; {name} {lattice['tile'][0]}x{lattice['tile'][1]} px{blocks} scored {lattice['score']:.2f}"
                  f" ({verdict('')})")
         if rival is not None:
             text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)});"
@@ -109,7 +117,7 @@ def _map_name(m: MapReport) -> str:
 def made_on_a_torus(stack: StackReport) -> bool:
     """Whether the stack's tile was refined or cut from the source (every line of it is a line of the
     texture), rather than sampled from SeamlessGAN alone (whose latent copies meet at its centre lines)."""
-    return stack.resampled.get("gan", {}).get("layout") in ("gan", "random", "lattice", "window")
+    return stack.resampled.get("gan", {}).get("layout") in ("gan", "random", "lattice", "window", "quilt")
 
 
 def map_verdicts(m: MapReport, torus: bool = False, tolerances: dict | None = None

@@ -21,6 +21,7 @@ import torch
 import torch.nn.functional as F
 
 from seamless_usd.metrics import scale_ratio
+from seamless_usd.metrics.structure import STRUCTURE_TARGET, structure_figures
 from seamless_usd.verdict import judge as verdict_of
 
 from .config import SynthesisConfig
@@ -28,6 +29,7 @@ from .gan.data import effective_k
 from .gan.sample import judge, sample
 from .gan.seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
 from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
+from .lattice.quilt import best_quilt
 from .lattice.window import WINDOW_MAX_DIFFERENCE, continues_itself, window_tile_size
 from .refinement.refine import RefineConfig, refine, resize_periodic
 from .scale import structure_size, working_factor
@@ -42,6 +44,12 @@ TILE_SIZES = ("source", "paper")
 #: test preset) would only be copied faithfully into nonsense, and the refinement starts from a
 #: random field instead. The default preset's brick tile scores 1.0-1.3.
 LAYOUT_SCALE_RANGE = (0.5, 2.0)
+
+#: Blocks (rows, columns) of a quilted tile (:mod:`.lattice.quilt`): the fewest that still let every block be
+#: chosen to fit its neighbours; each block keeps a stone or a run of plank whole.
+QUILT_CELLS = (2, 2)
+#: Quilts tried (seeds) for a stack; the one whose worst join costs least is weighed.
+QUILT_TRIES = 3
 
 #: Layout candidates are compared on the source's grid, halved until its longest side is at most this (px).
 SCORE_SIDE = 1024
@@ -65,7 +73,7 @@ class MadeTile:
     refine_levels: list[dict] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     seeds: list[dict] = field(default_factory=list)  # with config.seeds > 1: each seed's figures and which won
-    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice" or "window": a cut (see
+    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice", "window", "quilt": a cut (see
     #                           .lattice)
     lattice: dict = field(default_factory=dict)  # the stack's lattice, and each layout candidate's figures
     q: QResult | None = None  # Q of the written tile: the GAN sample's, else D's verdict on the tile itself
@@ -187,7 +195,7 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
                     layout_scale, use_layout, result.levels, timings, seeds, "gan" if use_layout else "random", q=q,
                     level_pictures=_level_pictures(gan.maps[maps[0].name], use_layout, result))
     t4 = time.perf_counter()
-    _try_lattice(made, maps, model, refine_config.lattice and tile_size == "source", keep_alternatives)
+    _try_lattice(made, maps, model, refine_config.lattice and tile_size == "source", keep_alternatives, seed)
     timings["lattice"] = time.perf_counter() - t4
     return made
 
@@ -207,7 +215,8 @@ def _level_pictures(layout: np.ndarray, used: bool, result) -> list[tuple[str, n
 def written_lattice_ratio(lattice: dict, layout_kind: str | None) -> float | None:
     """The lattice ratio of the written tile, from ``MadeTile.lattice`` and ``MadeTile.layout_kind`` (as
     recorded, e.g. in a cached stack's metadata); None when the stack does not repeat."""
-    return lattice.get("lattice_ratio" if layout_kind == "lattice" else f"lattice_ratio_{layout_kind}")
+    cut = layout_kind in ("lattice", "window", "quilt")  # the cut's figures carry no suffix
+    return lattice.get("lattice_ratio" if cut else f"lattice_ratio_{layout_kind}")
 
 
 def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[float, float]) -> dict[str, np.ndarray]:
@@ -223,11 +232,13 @@ def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[f
 def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice) -> tuple[float, bool, float | None]:
     """(score, passes, lattice ratio) of a candidate tile.
 
-    The score is :func:`.seeds.fidelity_score`, and for a stack that repeats, the lattice ratio in the same
-    units ((1 - r) over (1 - LATTICE_TARGET)): none of the fidelity and seam figures sees a broken bond,
-    the lattice ratio does. The tile passes as a stack would (the verdict: no seam, fidelity inside the
+    The score is :func:`.seeds.fidelity_score`, the structure figure in the same units (value over
+    STRUCTURE_TARGET: broken joints and chopped lines, which no fidelity figure sees), and for a stack that
+    repeats, the lattice ratio ((1 - r) over (1 - LATTICE_TARGET)): none of the fidelity and seam figures
+    sees a broken bond, the lattice ratio does. The tile passes as a stack would (the verdict: no seam, fidelity inside the
     source's tolerances) and keeps the repeat."""
     score, _, _ = fidelity_score(tiles, maps)
+    score = max([score] + [structure_figures(tiles[m.name], m.pixels)["structure"] / STRUCTURE_TARGET for m in maps])
     ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
     if ratio is not None:
         score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
@@ -236,37 +247,46 @@ def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice
     return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
 
 
-def _cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict):
-    """The cut tile for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
+def _cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict, seed: int) -> list:
+    """The cut tiles for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
     else one window of the source when the texture continues itself at the window's lags
-    (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``). Returns (kind,
-    tile size, band, figures) or None."""
+    (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``), else source-sized
+    tiles quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES seeds, the one
+    whose worst join costs least): one whose cuts follow the texture's lines where it has long ones, and one
+    whose cuts follow the blocks' difference alone (lines along a joint network hide a join; thin parallel
+    lines are better matched across it). Returns [(kind, field (h, w, 2) of source texels, figures)]."""
+    pixels = [m.pixels for m in maps]
     if lattice.found:
         sizes = lattice_tile_size((H, W), lattice)
         if sizes is not None:
-            return "lattice", sizes[0], sizes[1], {}
-    sizes = window_tile_size([m.pixels for m in maps])
-    if sizes is None:
-        return None
-    if not continues_itself(sizes[2]):
+            field_, offset = lattice_cut(pixels, *sizes)
+            return [("lattice", field_, {"band": list(sizes[1]), "offset": list(offset)})]
+    sizes = window_tile_size(pixels)
+    if sizes is not None:
+        if continues_itself(sizes[2]):
+            field_, offset = lattice_cut(pixels, sizes[0], sizes[1])
+            return [("window", field_, {"band": list(sizes[1]), "offset": list(offset), "lag_difference": sizes[2]})]
         notes["window_refused"] = {"lag_difference": sizes[2], "most": WINDOW_MAX_DIFFERENCE}
-        return None
-    return "window", sizes[0], sizes[1], {"lag_difference": sizes[2]}
+    quilts = [best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed)]
+    if quilts[0] is not None and quilts[0][1]["lines"]:  # the stack has lines: the quilt that ignores them too
+        quilts.append(best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed, lines=False))
+    keys = ("cells", "overlap", "blocks", "lines", "join_mean", "join_worst")
+    return [("quilt", q[0], {k: q[1][k] for k in keys}) for q in quilts if q is not None]
 
 
-def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_alternatives: bool) -> None:
+def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_alternatives: bool, seed: int = 0) -> None:
     """Measure the written tile against a tile cut from the source and, with ``cut``, keep the cut when it
     wins: the candidate that passes (the verdict: no seam, fidelity inside the source's tolerances; for a
     stack that repeats, the lattice ratio) before one that does not, then the lower score (see
     :func:`_judged`). A stack that repeats on a lattice is cut to whole periods
     (:func:`.lattice.lattice_cut`); any other that continues itself to one window of the source joined
     across its wraps (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down
-    to SCORE_SIDE."""
+    to SCORE_SIDE. Where several cuts are offered (quilts), the best of them is weighed."""
     H, W = made.grid_size
     lattice = find_lattice([m.pixels for m in maps])
     made.lattice = lattice.as_dict()
-    candidate = _cut_candidate(maps, lattice, H, W, made.lattice) if cut else None
-    if not lattice.found and candidate is None:
+    candidates = _cut_candidates(maps, lattice, H, W, made.lattice, seed) if cut else []
+    if not lattice.found and not candidates:
         return
     halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
     # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
@@ -281,16 +301,21 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
                          f"score_{kind}": round(current, 3)})
     if current_ratio is not None:
         made.lattice[f"lattice_ratio_{kind}"] = round(current_ratio, 3)
-    if candidate is None:
+    if not candidates:
         return
-    cut_kind, tile_hw, band, figures = candidate
-    field_, offset = lattice_cut([m.pixels for m in maps], tile_hw, band)
-    tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
+    judged = []  # the cuts, best first: (passes, score) as for the written tile
+    for cut_kind, field_, figures in candidates:
+        tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
+        score, passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
+        judged.append(((not passes, score), cut_kind, tiles, figures, passes, ratio))
+    judged.sort(key=lambda j: j[0])
+    if len(judged) > 1:  # the quilts weighed, whether their cuts followed the lines
+        made.lattice["quilts"] = [{"lines": j[3]["lines"], "passes": j[4], "score": round(j[0][1], 3)} for j in judged]
+    (_, score), cut_kind, tiles, figures, passes, ratio = judged[0]
+    tile_hw = next(iter(tiles.values())).shape[:2]
     q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
-    score, passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
     wins = (not passes, score) < (not current_passes, current)
-    made.lattice.update({"cut": cut_kind, "tile": list(tile_hw), "band": list(band), "offset": list(offset),
-                         "q_passed": bool(q.passed), "passes": passes, "score": round(score, 3), "chosen": wins,
+    made.lattice.update({"cut": cut_kind, "tile": list(tile_hw), "q_passed": bool(q.passed), "passes": passes, "score": round(score, 3), "chosen": wins,
                          **figures})
     if ratio is not None:
         made.lattice["lattice_ratio"] = round(ratio, 3)
