@@ -56,10 +56,11 @@ LEVERS: dict[str, dict] = {
     "robust vote 3": {"robust_vote": 3},
     "window cut": {"window": True},  # not a refinement: one window of the source cut across its wraps
     # not a refinement: image quilting on a torus from ny x nx large source blocks (lattice/quilt.py)
-    # cut along the texture's lines where it has long ones, or ("by difference") where the blocks agree
-    "quilt 2x2": {"quilt": (2, 2)},
-    "quilt 2x2 by difference": {"quilt": (2, 2), "lines": False},
-    "quilt 3x3": {"quilt": (3, 3)},
+    # cut along the texture's lines where it has long ones, or ("by difference", the product's) where the
+    # blocks agree
+    "quilt 2x2": {"quilt": (2, 2), "lines": True},
+    "quilt 2x2 by difference": {"quilt": (2, 2)},
+    "quilt 3x3": {"quilt": (3, 3), "lines": True},
     # a guidance channel matched with the maps and not written (Kaspar et al. 2015, self-tuning texture
     # optimisation): the distance to the texture's lines, clipped at 16 px, as ``weight`` extra maps
     "guide dark lines 1": {"guide": ("dark", 1)},
@@ -115,7 +116,7 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
         from seamless_usd.synthesis.tile import QUILT_TRIES
 
         field, quilted = best_quilt(maps, maps[0].shape[:2], lever["quilt"], QUILT_TRIES, seed=seed,
-                                    lines=lever.get("lines", True))
+                                    lines=lever.get("lines", False))
         tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
         offered = True
         notes = {"join_mean": quilted["join_mean"], "join_worst": quilted["join_worst"], "lines": quilted["lines"]}

@@ -175,15 +175,19 @@ def test_run_details_say_what_seeded_the_refinement():
             "does not continue itself at any window&#x27;s lags (difference y 0.64, x 0.68; a cut is offered at 0.05 "
             "or less)") in page
     quilt = {**refused, "cut": "quilt", "tile": [512, 512], "q_passed": False, "passes": False, "score": 1.17,
-             "chosen": True, "cells": [2, 2], "lines": True, "join_worst": 0.0143, "join_mean": 0.0131,
-             "quilts": [{"lines": True, "passes": False, "score": 1.17}, {"lines": False, "passes": False, "score": 1.42}]}
+             "chosen": True, "cells": [2, 2], "join_worst": 0.0559, "join_mean": 0.0412, "difference_worst": 0.0559}
     made = StackReport(id="M-5", material="</M5>", source="s.usda", status=StackStatus.NOT_PASSED,
                        resampled={"gan": {"layout": "quilt", "lattice": quilt}})
     page = render_html(Report(sources=["s.usda"], stacks=[made]))
     assert "large source blocks quilted on a torus, joined along minimum-error cuts" in page
-    assert ("quilt 512x512 px of 2x2 blocks, cuts along the texture&#x27;s lines (worst join 0.014), the better of "
-            "1.17 (along lines) and 1.42 (by difference) scored 1.17 (Q not passed) against 2.07 from random "
-            "(Q not passed)") in page
+    assert ("quilt 512x512 px of 2x2 blocks (worst difference along a cut 0.056) scored 1.17 (Q not passed) "
+            "against 2.07 from random (Q not passed)") in page
+    kept = {**quilt, "chosen": False, "passes": True, "quilt_refused": {"difference_worst": 0.1033, "most": 0.05}}
+    made = StackReport(id="M-6", material="</M6>", source="s.usda", status=StackStatus.NOT_PASSED,
+                       resampled={"gan": {"layout": "random", "lattice": kept}})
+    page = render_html(Report(sources=["s.usda"], stacks=[made]))
+    assert ("quilt not written: the verdict passes it, but its blocks differ along a cut by 0.10 (its joins hide at "
+            "0.05 or less)") in page
 
 
 def test_run_details_show_each_synthesis_stage_as_a_picture():

@@ -35,7 +35,7 @@ def test_a_quilt_is_source_texels_on_a_torus_joined_only_in_its_overlap_bands(ce
     field, figures = quilt_field(cells, (256, 256), (2, 2), seed=1)
     assert field.shape == (256, 256, 2) and field.dtype == np.int64
     assert field.min() >= 0 and field[..., 0].max() < 256 and field[..., 1].max() < 256
-    assert len(figures["blocks"]) == 4 and figures["lines"]
+    assert len(figures["blocks"]) == 4 and not figures["lines"]  # by the blocks' difference, the product's cuts
     # the left/top bands of each block, and, for the last row and column, their bands across the wrap
     oy, ox = figures["overlap"]
     in_band = np.zeros((256, 256), dtype=bool)
@@ -52,9 +52,10 @@ def test_a_quilt_is_source_texels_on_a_torus_joined_only_in_its_overlap_bands(ce
     assert figures["join_worst"] >= figures["join_mean"] > 0 and len(figures["joins"]) >= 4
 
 
-def test_the_cuts_follow_the_stones_joints(cells):
-    """Where two blocks meet, one side is a joint (the cut runs along a joint, which hides the change of
-    stone); cuts that follow the blocks' difference alone cross the stones."""
+def test_cuts_along_lines_follow_the_stones_joints(cells):
+    """The lever measured and not kept: where two blocks meet, one side is a joint (the cut runs along a
+    joint, which hides the change of stone); cuts that follow the blocks' difference alone, the product's,
+    cross the stones."""
     shares = {}
     for lines in (True, False):
         field, figures = quilt_field(cells, (256, 256), (2, 2), seed=0, lines=lines)
@@ -83,8 +84,8 @@ def test_the_line_mask_finds_dark_joints_and_nothing_in_noise(cells):
 
 
 def test_a_quilt_keeps_stones_whole_where_the_refinement_cuts_them(cells):
-    """The structure figure (broken joints, stones cut in half) of the quilt is lower than that of the
-    refinement from a random start, on both maps."""
+    """The structure figure (broken joints, stones cut in half) of the product's quilt is lower than that of
+    the refinement from a random start, on both maps."""
     torch.set_num_threads(1)
     field, _ = best_quilt(cells, (256, 256), (2, 2), tries=3)
     quilt = [m[field[..., 0], field[..., 1]] for m in cells]
@@ -98,3 +99,25 @@ def test_the_best_of_several_quilts_has_the_cheapest_worst_join(cells):
     field, figures = best_quilt(cells, (256, 256), (2, 2), tries=3)
     assert figures["join_worst"] == min(f["join_worst"] for _, f in made)
     assert quilt_field(cells, (256, 256), (1, 1)) is None  # one block larger than the source cannot be cut
+
+
+@pytest.mark.parametrize("kind", ["cells", "stripes"])
+def test_a_quilt_the_verdict_passes_but_whose_joins_do_not_hide_is_not_written(kind):
+    """These quilts pass the verdict, yet show two-tone stones and stripes that end at a cut
+    (benchmarks/results/quilt_gate.md): their worst join differs by more than QUILT_MAX_DIFFERENCE, so
+    make_tile refuses them, says so, and writes the refined tile, which the verdict does not pass."""
+    from seamless_usd.synthesis import MapInput, get_preset, make_tile
+    from seamless_usd.synthesis.tile import QUILT_MAX_DIFFERENCE
+    from seamless_usd.verdict import judge
+
+    torch.set_num_threads(1)
+    stack = getattr(synthetic, kind)(256, (40 if kind == "cells" else 30) * 256 / 160, seed=2)
+    keys = list(stack)
+    made = make_tile([MapInput(k, v[0], v[1]) for k, v in stack.items()], get_preset("tiny"), seed=0,
+                     keep_alternatives=True)
+    refused = made.lattice["quilt_refused"]
+    assert refused["most"] == QUILT_MAX_DIFFERENCE < refused["difference_worst"]
+    assert made.layout_kind in ("gan", "random") and not made.lattice["chosen"]
+    quilt = made.alternatives["quilt"]  # the refused quilt: the verdict passes it
+    assert judge([quilt[k] for k in keys], [stack[k][0] for k in keys], [False] * 2, keys).passed
+    assert not judge([made.maps[k] for k in keys], [stack[k][0] for k in keys], [False] * 2, keys).passed

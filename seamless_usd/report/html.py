@@ -87,6 +87,10 @@ def _layout_text(gan: dict) -> str | None:
         lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
         text += (f"; no window cut: the texture does not continue itself at any window's lags (difference {lags};"
                  f" a cut is offered at {refused['most']:.2f} or less)")
+    refused = lattice.get("quilt_refused")
+    if refused:
+        text += (f"; quilt not written: the verdict passes it, but its blocks differ along a cut by "
+                 f"{refused['difference_worst']:.2f} (its joins hide at {refused['most']:.2f} or less)")
     if "score" in lattice:
         def verdict(suffix: str) -> str:
             q = "Q passed" if lattice.get("q_passed" + suffix) else "Q not passed"
@@ -97,11 +101,8 @@ def _layout_text(gan: dict) -> str | None:
         name = {"window": "window cut", "quilt": "quilt"}.get(lattice.get("cut"), "lattice cut")
         blocks = ""
         if lattice.get("cut") == "quilt" and "cells" in lattice:
-            how = "cuts along the texture's lines" if lattice.get("lines") else "cuts where the blocks agree"
-            blocks = f" of {lattice['cells'][0]}x{lattice['cells'][1]} blocks, {how} (worst join {lattice['join_worst']:.3f})"
-            if len(lattice.get("quilts", [])) > 1:
-                blocks += ", the better of " + " and ".join(
-                    f"{q['score']:.2f} ({'along lines' if q['lines'] else 'by difference'})" for q in lattice["quilts"])
+            blocks = (f" of {lattice['cells'][0]}x{lattice['cells'][1]} blocks (worst difference along a cut "
+                      f"{lattice['difference_worst']:.3f})")
         text += (f"; {name} {lattice['tile'][0]}x{lattice['tile'][1]} px{blocks} scored {lattice['score']:.2f}"
                  f" ({verdict('')})")
         if rival is not None:

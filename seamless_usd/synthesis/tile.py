@@ -50,6 +50,12 @@ LAYOUT_SCALE_RANGE = (0.5, 2.0)
 QUILT_CELLS = (2, 2)
 #: Quilts tried (seeds) for a stack; the one whose worst join costs least is weighed.
 QUILT_TRIES = 3
+#: A quilt whose two blocks differ along some cut by more than this (mean squared difference over that of
+#: two unrelated texels) may be written only where the verdict does not pass it. The window cut's
+#: threshold, fixed on window cuts looked at along their wraps (``benchmarks/results/window_gate.md``);
+#: quilts looked at afterwards: the two the verdict passed at or under it are seamless, the three it
+#: passed over it (0.10-0.36) show two-tone stones, stepped tone patches and stripes ending at a cut.
+QUILT_MAX_DIFFERENCE = WINDOW_MAX_DIFFERENCE
 
 #: Layout candidates are compared on the source's grid, halved until its longest side is at most this (px).
 SCORE_SIDE = 1024
@@ -251,10 +257,10 @@ def _cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, note
     """The cut tiles for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
     else one window of the source when the texture continues itself at the window's lags
     (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``), else source-sized
-    tiles quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES seeds, the one
-    whose worst join costs least): one whose cuts follow the texture's lines where it has long ones, and one
-    whose cuts follow the blocks' difference alone (lines along a joint network hide a join; thin parallel
-    lines are better matched across it). Returns [(kind, field (h, w, 2) of source texels, figures)]."""
+    tile quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES seeds, the one
+    whose worst join costs least; cuts by the blocks' difference: cuts along the texture's lines thickened
+    and forked its joints and read worse on every figure, ``benchmarks/results/levers_quilt*.md``). Returns
+    [(kind, field (h, w, 2) of source texels, figures)]."""
     pixels = [m.pixels for m in maps]
     if lattice.found:
         sizes = lattice_tile_size((H, W), lattice)
@@ -267,11 +273,18 @@ def _cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, note
             field_, offset = lattice_cut(pixels, sizes[0], sizes[1])
             return [("window", field_, {"band": list(sizes[1]), "offset": list(offset), "lag_difference": sizes[2]})]
         notes["window_refused"] = {"lag_difference": sizes[2], "most": WINDOW_MAX_DIFFERENCE}
-    quilts = [best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed)]
-    if quilts[0] is not None and quilts[0][1]["lines"]:  # the stack has lines: the quilt that ignores them too
-        quilts.append(best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed, lines=False))
-    keys = ("cells", "overlap", "blocks", "lines", "join_mean", "join_worst")
-    return [("quilt", q[0], {k: q[1][k] for k in keys}) for q in quilts if q is not None]
+    quilt = best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed)
+    if quilt is None:
+        return []
+    keys = ("cells", "overlap", "blocks", "join_mean", "join_worst", "difference_worst")
+    return [("quilt", quilt[0], {k: quilt[1][k] for k in keys})]
+
+
+def _joins_hide(figures: dict) -> bool:
+    """Whether a quilt's joins hide: the two blocks agree along every cut to within QUILT_MAX_DIFFERENCE
+    (its ``difference_worst``). Where they do not, the verdict passed seamed quilts (two-tone stones, tone
+    patches, stripes ending at a cut: ``benchmarks/results/quilt_gate.md``)."""
+    return figures["difference_worst"] <= QUILT_MAX_DIFFERENCE
 
 
 def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_alternatives: bool, seed: int = 0) -> None:
@@ -281,7 +294,7 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     :func:`_judged`). A stack that repeats on a lattice is cut to whole periods
     (:func:`.lattice.lattice_cut`); any other that continues itself to one window of the source joined
     across its wraps (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down
-    to SCORE_SIDE. Where several cuts are offered (quilts), the best of them is weighed."""
+    to SCORE_SIDE. Where several cuts are offered, the best of them is weighed."""
     H, W = made.grid_size
     lattice = find_lattice([m.pixels for m in maps])
     made.lattice = lattice.as_dict()
@@ -307,14 +320,23 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     for cut_kind, field_, figures in candidates:
         tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
         score, passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
+        if cut_kind == "quilt" and not _joins_hide(figures):
+            passes = False  # the verdict misses joins like these (benchmarks/results/quilt_gate.md)
         judged.append(((not passes, score), cut_kind, tiles, figures, passes, ratio))
     judged.sort(key=lambda j: j[0])
-    if len(judged) > 1:  # the quilts weighed, whether their cuts followed the lines
-        made.lattice["quilts"] = [{"lines": j[3]["lines"], "passes": j[4], "score": round(j[0][1], 3)} for j in judged]
     (_, score), cut_kind, tiles, figures, passes, ratio = judged[0]
     tile_hw = next(iter(tiles.values())).shape[:2]
     q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
     wins = (not passes, score) < (not current_passes, current)
+    if wins and cut_kind == "quilt" and not _joins_hide(figures):
+        # written, it would be judged at full resolution: a quilt whose joins do not hide is written only
+        # where that verdict sees them, never as a tile that passes
+        full = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
+                          [m.name for m in maps])
+        if full.passed:
+            wins = False
+            made.lattice["quilt_refused"] = {"difference_worst": figures["difference_worst"],
+                                             "most": QUILT_MAX_DIFFERENCE}
     made.lattice.update({"cut": cut_kind, "tile": list(tile_hw), "q_passed": bool(q.passed), "passes": passes, "score": round(score, 3), "chosen": wins,
                          **figures})
     if ratio is not None:

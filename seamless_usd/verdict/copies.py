@@ -55,21 +55,26 @@ MAP_THRESHOLD = 1.2
 
 
 def _keys(img: np.ndarray, periodic: bool) -> np.ndarray:
-    """One 64-bit key per texel for its 3 x 3 neighbourhood, 8-bit quantised ((H, W) or (H-2, W-2))."""
-    q = _quantised(img).astype(np.int64)  # network domain -> 0..255
+    """One 64-bit key per texel for its 3 x 3 neighbourhood, 8-bit quantised ((H, W) or (H-2, W-2)).
+
+    Built one channel at a time from 8-bit codes (the sums wrap the same in any order), so a 4K stack of
+    seven channels never holds a 64-bit copy of all of them."""
+    q = _quantised(img).astype(np.uint8)  # network domain -> 0..255
     rng = np.random.default_rng(12345)
     weights = rng.integers(1, 1 << 61, size=(9, q.shape[-1]), dtype=np.int64) | 1
     if periodic:
-        pad = np.pad(q, ((1, 1), (1, 1), (0, 0)), mode="wrap")
-    else:
-        pad = q
-    h, w = pad.shape[0] - 2, pad.shape[1] - 2
+        q = np.pad(q, ((1, 1), (1, 1), (0, 0)), mode="wrap")
+    h, w = q.shape[0] - 2, q.shape[1] - 2
     key = np.zeros((h, w), dtype=np.int64)
+    part = np.empty((h, w), dtype=np.int64)
     k = 0
     with np.errstate(over="ignore"):
         for dy in range(3):
             for dx in range(3):
-                key = key * np.int64(1_000_003) + (pad[dy:dy + h, dx:dx + w] * weights[k]).sum(-1)
+                key *= np.int64(1_000_003)
+                for c in range(q.shape[-1]):
+                    np.multiply(q[dy:dy + h, dx:dx + w, c], weights[k, c], out=part, dtype=np.int64)
+                    key += part
                 k += 1
     return key
 
@@ -168,14 +173,29 @@ def _local_range(q: np.ndarray) -> np.ndarray:
     return (hi - lo).max(axis=-1)
 
 
-def _quantised(img: np.ndarray) -> np.ndarray:
-    return np.clip(np.round((img + 1.0) * 127.5), 0, 255).astype(np.int16)
+def _quantised(img: np.ndarray, rows: int = 256) -> np.ndarray:
+    """8-bit codes (int16) of network-domain values, a band of ``rows`` rows at a time (a 4K float64 stack's
+    temporaries would otherwise be as large as the stack)."""
+    out = np.empty(img.shape, dtype=np.int16)
+    for r in range(0, img.shape[0], rows):
+        out[r: r + rows] = np.clip(np.round((img[r: r + rows] + 1.0) * 127.5), 0, 255)
+    return out
+
+
+#: Lines (rows for vertical lines, columns for horizontal ones) worked on at a time: a 4K tile's per-texel
+#: temporaries of every channel in float64 would otherwise be gigabytes each.
+_BAND = 256
 
 
 def step_unit(source: np.ndarray, axis: int) -> float:
     """The source's mean neighbour difference along ``axis`` (1: across vertical lines): the unit of the
-    continuation error across lines of that direction."""
-    return float(np.mean(np.linalg.norm(np.diff(source, axis=axis), axis=-1))) + 1e-6
+    continuation error across lines of that direction (summed a band of rows or columns at a time)."""
+    other = 1 - axis
+    n = source.shape[other]
+    total = sum(float(np.linalg.norm(np.diff(np.take(source, range(a, min(n, a + _BAND)), axis=other), axis=axis),
+                                     axis=-1).sum()) for a in range(0, n, _BAND))
+    count = (source.shape[axis] - 1) * n
+    return total / max(count, 1) + 1e-6
 
 
 def continuation(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, axis: int, unit: float) -> np.ndarray:
@@ -184,7 +204,18 @@ def continuation(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, axis:
     0, and a join the value error (see the module notes); where either is not (blended), every line reads its
     step error. At a join whose continuation lies outside the source on both sides (a window used as its own
     tile joins its last column to its first), the plain step across the line stands in, less one unit (the
-    texture's own mean step)."""
+    texture's own mean step). Worked out :data:`_BAND` rows (or columns) at a time: each is independent."""
+    other = 1 - axis
+    n = tile.shape[other]
+    out = np.empty(tile.shape[:2], dtype=np.float64)
+    for a in range(0, n, _BAND):
+        band = np.s_[a: a + _BAND] if other == 0 else np.s_[:, a: a + _BAND]
+        out[band] = _continuation(tile[band], source, origin[band], axis, unit)
+    return out
+
+
+def _continuation(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, axis: int, unit: float) -> np.ndarray:
+    """:func:`continuation` of a band of whole lines along ``axis``."""
     h, w = tile.shape[:2]
     hs, ws = source.shape[:2]
     step = np.array([0, 1]) if axis == 1 else np.array([1, 0])

@@ -17,7 +17,7 @@ from seamless_usd.metrics.structure import structure_figures
 
 from .copies import COPY_THRESHOLD, INFER, MAP_THRESHOLD, continuation, copy_origins, step_unit
 from .features import moving_mean
-from .prepare import prepare_maps
+from .prepare import joined, prepare_maps
 
 __all__ = ["JOIN_SHARE", "SHORT_RUN", "JoinStats", "join_stats", "bad_join_mask", "inside_figures"]
 
@@ -69,9 +69,8 @@ def join_stats(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list
     up. A tile whose texels near the joins were blended (no longer copies) is judged on its field: the
     continuation error then reads the blended values against what the source continues with.
     """
-    t = prepare_maps(tiles, normals)
-    s = prepare_maps(sources, normals)
-    tj, sj = np.concatenate(t, axis=-1), np.concatenate(s, axis=-1)
+    tj, t = joined(prepare_maps(tiles, normals))  # per-map views of the joint arrays: one copy of each in memory
+    sj, s = joined(prepare_maps(sources, normals))
     if origin is None:
         origin, share = copy_origins(tj, sj, INFER)
     else:
@@ -91,8 +90,8 @@ def join_stats(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list
     maps = {}
     parts = [("stack", tj, sj, COPY_THRESHOLD)] + ([(n, a, b, MAP_THRESHOLD) for n, a, b in zip(names, t, s)]
                                                    if len(t) > 1 else [])
-    for name, tile, source, threshold in parts:
-        vx, vy = bad_join_mask(tile, source, origin, threshold, run)
+    for name, tile, source, threshold in parts:  # one map's own copy at a time: gathers from it are faster
+        vx, vy = bad_join_mask(np.ascontiguousarray(tile), np.ascontiguousarray(source), origin, threshold, run)
         count = _segments(vx, 0) + _segments(vy, 1)
         maps[name] = {"count": count, "length": int(vx.sum() + vy.sum()), "per_mpx": round(count / mpx, 1)}
     out["maps"] = maps

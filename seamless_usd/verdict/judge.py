@@ -29,7 +29,7 @@ from ..memo import ContentMemo
 from .classifier import SeamClassifier, fit
 from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, INFER, MAP_THRESHOLD, copy_origins, copy_seams
 from .lines import Seam, runs, seams_from_scores
-from .prepare import WORK_SIDE, joint, map_weights, prepare_maps, to_working
+from .prepare import WORK_SIDE, joined, joint, map_weights, prepare_maps, to_working
 from .tolerance import faithfulness
 
 __all__ = ["SEAM_MARGIN", "SELF_MARGIN", "LENGTH", "STEP", "Verdict", "judge"]
@@ -91,18 +91,20 @@ class Verdict:
                    dict(d.get("tolerances", {})), list(d.get("failing", [])))
 
 
-def _copied(t: list[np.ndarray], s: list[np.ndarray], names: list[str]) -> tuple[list[Seam], float] | None:
-    """Seams of a tile made of the source's own texels (:mod:`.copies`), for the maps together and each map;
-    None when fewer than :data:`.copies.EXACT_SHARE` of its texels are found in the source, or fewer than
-    :data:`.copies.COPY_SHARE` found or inferred beside found ones (a blended band)."""
-    tj, sj = np.concatenate(t, axis=-1), np.concatenate(s, axis=-1)
+def _copied(tj: np.ndarray, sj: np.ndarray, t: list[np.ndarray], s: list[np.ndarray], names: list[str]
+            ) -> tuple[list[Seam], float] | None:
+    """Seams of a tile made of the source's own texels (:mod:`.copies`), for the maps together (``tj``,
+    ``sj``) and each map (``t``, ``s``); None when fewer than :data:`.copies.EXACT_SHARE` of its texels are
+    found in the source, or fewer than :data:`.copies.COPY_SHARE` found or inferred beside found ones (a
+    blended band)."""
     origin, share = copy_origins(tj, sj, INFER)
     if share < EXACT_SHARE or (origin[..., 0] >= 0).mean() < COPY_SHARE:
         return None
     seams, strongest = copy_seams(tj, sj, origin, "stack", COPY_RUN)
     if len(t) > 1:
-        for tile, source, name in zip(t, s, names):
-            found, _ = copy_seams(tile, source, origin, name, COPY_RUN, MAP_THRESHOLD)
+        for tile, source, name in zip(t, s, names):  # one map's own copy at a time: gathers from it are faster
+            found, _ = copy_seams(np.ascontiguousarray(tile), np.ascontiguousarray(source), origin, name, COPY_RUN,
+                                  MAP_THRESHOLD)
             seams += found
     seams.sort(key=lambda x: -x.figure)
     return seams, strongest
@@ -164,11 +166,11 @@ def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: li
     >>> judge([noise], None, [False], ["noise"]).seamless
     True
     """
-    t = prepare_maps(tiles, normals)
-    s = None if sources is None else prepare_maps(sources, normals)
+    tj, t = joined(prepare_maps(tiles, normals))  # per-map views of the joint arrays: one copy of each in memory
+    sj, s = (None, None) if sources is None else joined(prepare_maps(sources, normals))
     size = t[0].shape[:2]
     if s is not None:
-        copied = _copied(t, s, names)
+        copied = _copied(tj, sj, t, s, names)
         if copied is not None:
             seams, strongest = copied
             verdict = Verdict(not seams, True, seams, strongest, COPY_THRESHOLD, "source", "copies",

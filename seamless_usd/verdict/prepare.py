@@ -5,7 +5,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-__all__ = ["WORK_SIDE", "prepare_maps", "to_working", "map_weights", "joint"]
+__all__ = ["WORK_SIDE", "prepare_maps", "to_working", "map_weights", "joint", "joined"]
 
 #: Longest side (px) the verdict reads a tile at; the source is resized by the same factor, so both keep
 #: one texel scale. Seams that matter stay visible at this size: a join cuts structures of every size.
@@ -70,3 +70,16 @@ def map_weights(reference: list[np.ndarray]) -> list[float]:
 def joint(maps: list[np.ndarray], weights: list[float]) -> np.ndarray:
     """The maps' channels side by side, each map scaled by its weight."""
     return np.concatenate([m * w for m, w in zip(maps, weights)], axis=-1)
+
+
+def joined(maps: list[np.ndarray]) -> tuple[np.ndarray, list[np.ndarray]]:
+    """The maps' channels side by side, and each map as a view of its channels there, so the maps themselves
+    can be let go (a 4K stack of seven channels in float64 holds 0.9 GB per copy).
+
+    >>> j, (a, b) = joined([np.zeros((2, 2, 3)), np.ones((2, 2, 1))])
+    >>> j.shape, a.shape, b.shape, bool(np.shares_memory(j, b))
+    ((2, 2, 4), (2, 2, 3), (2, 2, 1), True)
+    """
+    together = np.concatenate(maps, axis=-1)
+    bounds = np.cumsum([0] + [m.shape[-1] for m in maps])
+    return together, [together[..., a:b] for a, b in zip(bounds[:-1], bounds[1:])]

@@ -11,17 +11,23 @@ several stones or a run of plank, laid on a torus:
 2. blocks are placed in raster order. Each is the source window that agrees best with the texels already
    laid in its overlap bands (left and top; the last column and row also right and bottom, across the
    wrap, which closes the torus), searched over every source position at a coarse grid (FFT) and then
-   refined down to the texel (:func:`_place`). A window that overlaps an earlier block's source window
-   is not taken again while another is near as good, so no part of the source appears twice;
-3. each overlap band is resolved by a minimum-error boundary cut (dynamic programming, as the lattice
-   cut's wraps; :func:`.cut._min_path`): the join runs where the two blocks agree, along a joint or a
-   plank gap, instead of on a straight line.
+   refined down to the texel (:func:`_place`); a random one among those within a tenth of the best, and
+   not a window half or more of which an earlier block took while another is as good (:func:`_pick`);
+3. each overlap band is resolved by the cheapest 8-connected path of texels through the two blocks'
+   difference (Dijkstra on the band: a graph cut's dual, free to turn, so it can run along a joint or a
+   plank gap of any direction, where a one-column-per-row path as the lattice cut's cannot).
 
 Every texel is a source texel, copied through one field for all maps, so the maps stay aligned and keep
 their values (bit depth, unit normals); the tile wraps by construction, its wraps being joins like the
-others. ``figures`` records every join's cost (the mean difference along the cut over the difference
-between unrelated texels), which says whether the cuts could hide their joins: the verdict and the
-fidelity score then weigh the quilt against the refined tile (see :mod:`..tile`).
+others. ``figures`` records every join's cost and difference (over the difference between unrelated
+texels): where the two blocks differ along a cut, the cut cannot hide the join, and the verdict misses
+some such joins (``benchmarks/results/quilt_gate.md``); ``..tile`` weighs the quilt against the refined
+tile and never writes one whose joins do not hide as a tile that passes.
+
+A lever measured and not kept (``lines=True``): cuts that run almost free along the texture's long lines
+(:func:`line_mask`), each block keeping its own line texels near the cut, so a join hides behind a joint.
+Stones stay whole, but the joints thicken, fork and leave slivers, and every figure reads worse
+(``benchmarks/results/levers_quilt.md``, ``levers_quilt_fullres.md``).
 """
 from __future__ import annotations
 
@@ -205,10 +211,11 @@ def _place(canvas: _Canvas, top: int, left: int, size: tuple[int, int],
 
 
 def _cut(diff: np.ndarray, near_lines: np.ndarray | None, far_lines: np.ndarray | None, unrelated: float,
-         reach: int) -> tuple[np.ndarray, float]:
-    """(near, cost) for a band (rows along the join, the band across it, its first column on the side of the
-    block called near): True where the near block is kept, and the join's cost (the mean along the cut,
-    over the difference of two unrelated texels).
+         reach: int) -> tuple[np.ndarray, float, float]:
+    """(near, cost, difference) for a band (rows along the join, the band across it, its first column on the
+    side of the block called near): True where the near block is kept, the join's cost (the mean along the
+    cut of what it minimised) and its difference (the mean of the blocks' difference along the cut), each
+    over the difference of two unrelated texels.
 
     The cut is the cheapest 8-connected path of texels from the band's first row to its last (Dijkstra on
     the band's texels, a graph cut's dual): free to run along the band or turn back, so it follows a joint
@@ -226,7 +233,7 @@ def _cut(diff: np.ndarray, near_lines: np.ndarray | None, far_lines: np.ndarray 
     if near_lines is not None:
         close = ndimage.binary_dilation(path, iterations=reach)
         near = (near | (close & near_lines)) & ~(close & far_lines & ~near_lines)
-    return near, float(cost[path].mean()) / unrelated
+    return near, float(cost[path].mean()) / unrelated, float(diff[path].mean()) / unrelated
 
 
 def _free_path(cost: np.ndarray) -> np.ndarray:
@@ -257,13 +264,16 @@ def _free_path(cost: np.ndarray) -> np.ndarray:
 
 
 def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[int, int],
-                overlap: float = QUILT_OVERLAP, seed: int = 0, margin: int = CUT_MARGIN, lines: bool = True
+                overlap: float = QUILT_OVERLAP, seed: int = 0, margin: int = CUT_MARGIN, lines: bool = False
                 ) -> tuple[np.ndarray, dict] | None:
     """The (h, w, 2) int64 source (y, x) of every texel of a ``tile_hw`` tile quilted from ``cells`` =
-    (ny, nx) blocks (see the module notes), with figures: ``joins``, the cost of each overlap's cut (its
-    mean squared difference over that of two unrelated texels), their mean and worst, and the blocks'
-    source places; None when a block does not fit in the source. ``lines=False``: the cuts ignore the
-    source's lines (:func:`line_mask`) and follow the blocks' difference alone.
+    (ny, nx) blocks (see the module notes), with figures: ``joins``, each overlap's cut with its cost (the
+    mean along it of what it minimised, over the squared difference of two unrelated texels) and its
+    difference (the mean of the two blocks' squared difference along it, in the same units: where the cut
+    follows lines, the cost is low by design and the difference says what the lines hide); the costs'
+    mean and worst, the worst difference, and the blocks' source places; None when a block does not fit
+    in the source. ``lines=True``: where the source has long lines (:func:`line_mask`), the cuts run along
+    them (a lever measured, not the product's: ``benchmarks/results/levers_quilt.md``).
 
     >>> rng = np.random.default_rng(0)
     >>> noise = rng.normal(size=(96, 96, 1)).astype(np.float32)
@@ -319,23 +329,24 @@ def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[i
                 turn = (lambda a: a.T) if across else (lambda a: a)  # rows along the join
                 flip = (lambda a: a[:, ::-1]) if name in ("right", "bottom") else (lambda a: a)  # laid block near
                 view = lambda a: flip(turn(a[band]))  # noqa: E731
-                near, cost = _cut(view(diff), None if lines is None else view(old_lines),
-                                  None if lines is None else view(new_lines), unrelated, reach)
+                near, cost, difference = _cut(view(diff), None if lines is None else view(old_lines),
+                                              None if lines is None else view(new_lines), unrelated, reach)
                 keep[band] &= turn(flip(~near))
-                joins.append({"block": [i, j], "side": name, "cost": round(cost, 4)})
+                joins.append({"block": [i, j], "side": name, "cost": round(cost, 4), "difference": round(difference, 4)})
             keep |= ~laid  # what no block covers yet is this block's
             tr, tc = np.meshgrid(rows, cols, indexing="ij")
             canvas.field[tr[keep], tc[keep]] = np.stack([py + by[keep], px + bx[keep]], -1)
             canvas.laid[tr[keep], tc[keep]] = True
-    costs = [j["cost"] for j in joins]
+    costs, differences = [j["cost"] for j in joins], [j["difference"] for j in joins]
     figures = {"cells": list(cells), "overlap": [oy, ox], "blocks": blocks, "joins": joins, "lines": lines is not None,
                "join_mean": round(float(np.mean(costs)), 4) if costs else 0.0,
-               "join_worst": round(float(np.max(costs)), 4) if costs else 0.0}
+               "join_worst": round(float(np.max(costs)), 4) if costs else 0.0,
+               "difference_worst": round(float(np.max(differences)), 4) if differences else 0.0}
     return canvas.field, figures
 
 
 def best_quilt(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[int, int], tries: int, seed: int = 0,
-               lines: bool = True) -> tuple[np.ndarray, dict] | None:
+               lines: bool = False) -> tuple[np.ndarray, dict] | None:
     """Of ``tries`` quilts (seeds ``seed``, ``seed + 1``, ...), the one whose worst join costs least, then
     whose mean join does (:func:`quilt_field`, ``lines`` as there); None when a block does not fit."""
     made = [q for q in (quilt_field(maps, tile_hw, cells, seed=seed + k, lines=lines) for k in range(tries))
