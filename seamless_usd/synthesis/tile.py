@@ -238,11 +238,13 @@ def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[f
 def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice) -> tuple[float, bool, float | None]:
     """(score, passes, lattice ratio) of a candidate tile.
 
-    The score is :func:`.seeds.fidelity_score`, the structure figure in the same units (value over
-    STRUCTURE_TARGET: broken joints and chopped lines, which no fidelity figure sees), and for a stack that
-    repeats, the lattice ratio ((1 - r) over (1 - LATTICE_TARGET)): none of the fidelity and seam figures
-    sees a broken bond, the lattice ratio does. The tile passes as a stack would (the verdict: no seam, fidelity inside the
-    source's tolerances) and keeps the repeat."""
+    The score is the worst figure in units of its target: :func:`.seeds.fidelity_score`; the structure
+    figure (value over STRUCTURE_TARGET: broken joints and chopped lines, which no fidelity figure sees);
+    the verdict's strongest seam run over its threshold (between two tiles that both have seams, the one
+    whose worst join is weaker); and for a stack that repeats, the lattice ratio ((1 - r) over
+    (1 - LATTICE_TARGET)): none of the fidelity and seam figures sees a broken bond, the lattice ratio does.
+    The tile passes as a stack would (the verdict: no seam, fidelity inside the source's tolerances) and
+    keeps the repeat."""
     score, _, _ = fidelity_score(tiles, maps)
     score = max([score] + [structure_figures(tiles[m.name], m.pixels)["structure"] / STRUCTURE_TARGET for m in maps])
     ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
@@ -250,6 +252,7 @@ def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice
         score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
     verdict = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
                     [m.name for m in maps])
+    score = max(score, verdict.strongest / verdict.margin)
     return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
 
 
@@ -319,21 +322,22 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     judged = []  # the cuts, best first: (passes, score) as for the written tile
     for cut_kind, field_, figures in candidates:
         tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
-        score, passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
-        if cut_kind == "quilt" and not _joins_hide(figures):
-            passes = False  # the verdict misses joins like these (benchmarks/results/quilt_gate.md)
-        judged.append(((not passes, score), cut_kind, tiles, figures, passes, ratio))
+        score, verdict_passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
+        # the verdict misses joins like a quilt's that do not hide (benchmarks/results/quilt_gate.md)
+        passes = verdict_passes and (cut_kind != "quilt" or _joins_hide(figures))
+        judged.append(((not passes, score), cut_kind, tiles, figures, passes, ratio, verdict_passes))
     judged.sort(key=lambda j: j[0])
-    (_, score), cut_kind, tiles, figures, passes, ratio = judged[0]
+    (_, score), cut_kind, tiles, figures, passes, ratio, verdict_passes = judged[0]
     tile_hw = next(iter(tiles.values())).shape[:2]
     q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
     wins = (not passes, score) < (not current_passes, current)
     if wins and cut_kind == "quilt" and not _joins_hide(figures):
         # written, it would be judged at full resolution: a quilt whose joins do not hide is written only
-        # where that verdict sees them, never as a tile that passes
-        full = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
-                          [m.name for m in maps])
-        if full.passed:
+        # where that verdict sees them, never as a tile that passes (on a grid not halved, it was so judged)
+        if halve > 1:
+            verdict_passes = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps],
+                                        [m.is_normal for m in maps], [m.name for m in maps]).passed
+        if verdict_passes:
             wins = False
             made.lattice["quilt_refused"] = {"difference_worst": figures["difference_worst"],
                                              "most": QUILT_MAX_DIFFERENCE}

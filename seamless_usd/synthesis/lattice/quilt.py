@@ -319,7 +319,8 @@ def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[i
             if lines is not None:
                 new_lines, old_lines = lines[py + by, px + bx], lines[had[..., 0], had[..., 1]] & laid
             keep = np.ones(size, dtype=bool)
-            # each side the block shares with one laid before: (name, band, whether the laid block is near)
+            # each side the block shares with one laid before: (name, band, whether the join runs across the
+            # tile's rows, so that the band is turned to have its rows along the join, whether it is there)
             sides = [("left", np.s_[:, :ox], False, j > 0), ("top", np.s_[:oy, :], True, i > 0),
                      ("right", np.s_[:, -ox:], False, j == cells[1] - 1 and cells[1] > 1),
                      ("bottom", np.s_[-oy:, :], True, i == cells[0] - 1 and cells[0] > 1)]
