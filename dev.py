@@ -60,8 +60,11 @@ def demo(extra: list[str]) -> int:
 
 
 def tests(extra: list[str]) -> int:
+    """The suite on two pytest-xdist workers (2 cores: 2.6 instead of 3.7 minutes); ``-n 0`` after
+    ``tests`` runs it in one process, ``-n N`` on N workers (``SEAMLESS_USD_TEST_WORKERS`` sets the default)."""
     setup()
-    cmd = [_bin("python"), "-m", "pytest", "-q", str(ROOT / "tests"), *extra]
+    workers = os.environ.get("SEAMLESS_USD_TEST_WORKERS", "2")
+    cmd = [_bin("python"), "-m", "pytest", "-q", "-n", workers, str(ROOT / "tests"), *extra]
     print("+", " ".join(str(c) for c in cmd), flush=True)
     return subprocess.run([str(c) for c in cmd], cwd=ROOT).returncode
 

@@ -34,7 +34,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.signal import fftconvolve
 
 from ..refinement.refine import spread
 from ..scale import box_downsample
@@ -143,6 +142,8 @@ def _cost_at(level: np.ndarray | None, maps: list[np.ndarray], spreads: list[flo
 
 def _coarse_costs(level: np.ndarray, template: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """The overlap error of a block at every place of ``level`` (FFT correlation): (h - bh + 1, w - bw + 1)."""
+    from scipy.signal import fftconvolve  # here, not at import: scipy.signal alone takes 0.8 s to import
+
     m = mask.astype(np.float32)
     flip = (slice(None, None, -1), slice(None, None, -1))
     total = float((m[..., None] * template ** 2).sum())
