@@ -1,0 +1,80 @@
+#!/usr/bin/env python3
+"""Would more quilts hide their joins? The worst join's difference over many seeds, on the gate's items.
+
+The product makes ``QUILT_TRIES`` quilts of a stack (seeds 0, 1, ...) and keeps the one whose worst join
+costs least (``seamless_usd.synthesis.lattice.quilt.best_quilt``); a quilt is written as passed only where
+that join's difference is at most ``QUILT_MAX_DIFFERENCE`` (``benchmarks/quilt_gate.py``). This script
+makes ``--seeds`` quilts of every item of ``quilt_gate.py`` and prints the best worst-join difference of
+the product's first ``QUILT_TRIES`` seeds against that of all of them, and every seed's: whether a wider
+search would bring the structured stacks' joins under the threshold.
+
+    .venv/bin/python benchmarks/quilt_seeds.py                 # writes results/quilt_seeds.md
+    .venv/bin/python benchmarks/quilt_seeds.py --seeds 6 --items cells_256_1,wood_37_512 --out /tmp/seeds
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))
+
+import quilt_gate  # noqa: E402
+
+
+def run_item(name: str, seeds: int) -> dict | None:
+    """The worst-join difference of each seed's quilt, the product's best of its tries, and the best of all."""
+    from seamless_usd.synthesis.lattice.quilt import quilt_field
+    from seamless_usd.synthesis.tile import QUILT_CELLS, QUILT_TRIES
+
+    stack = quilt_gate.stack_for(name)
+    maps = [stack[k][0] for k in stack]
+    start = time.perf_counter()
+    made = [quilt_field(maps, maps[0].shape[:2], QUILT_CELLS, seed=s) for s in range(seeds)]
+    if any(q is None for q in made):
+        return None
+    figures = [q[1] for q in made]
+
+    def best(group: list[dict]) -> float:  # best_quilt's choice: the cheapest worst join, then mean join
+        return min(group, key=lambda f: (f["join_worst"], f["join_mean"]))["difference_worst"]
+
+    return {"item": name, "tile": list(maps[0].shape[:2]), "product": best(figures[:QUILT_TRIES]),
+            "all": best(figures), "seeds": [f["difference_worst"] for f in figures],
+            "seconds": round(time.perf_counter() - start, 1)}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--items", default=",".join(quilt_gate.ITEMS))
+    ap.add_argument("--seeds", type=int, default=12)
+    ap.add_argument("--out", type=Path, default=quilt_gate.RESULTS)
+    args = ap.parse_args(argv)
+    from seamless_usd.synthesis.tile import QUILT_MAX_DIFFERENCE, QUILT_TRIES
+
+    load = os.getloadavg()[0]
+    rows = [r for r in (run_item(name, args.seeds) for name in args.items.split(",")) if r is not None]
+    lines = ["# Quilts over more seeds", "",
+             f"`benchmarks/quilt_seeds.py --seeds {args.seeds}`: the worst join's difference (over that of "
+             f"unrelated texels) of the quilt the product keeps of its {QUILT_TRIES} seeds, against the one "
+             f"kept of {args.seeds}; joins hide at {QUILT_MAX_DIFFERENCE} or less. Labels by eye: "
+             f"`quilt_gate.md`. Load average at the start: {load:.2f}. At the end: {os.getloadavg()[0]:.2f}.", "",
+             f"| item | tile | best of {QUILT_TRIES} | best of {args.seeds} | every seed | s |",
+             "|---|---|---:|---:|---|---:|"]
+    for r in rows:
+        lines.append(f"| {r['item']} | {r['tile'][0]}x{r['tile'][1]} | {r['product']:.3f} | {r['all']:.3f} | "
+                     f"{' '.join(f'{d:.2f}' for d in r['seeds'])} | {r['seconds']} |")
+    hide = lambda key: [r["item"] for r in rows if r[key] <= QUILT_MAX_DIFFERENCE]  # noqa: E731
+    lines += ["", f"Joins hide, best of {QUILT_TRIES}: {', '.join(hide('product')) or 'none'}. "
+              f"Best of {args.seeds}: {', '.join(hide('all')) or 'none'}."]
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "quilt_seeds.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
