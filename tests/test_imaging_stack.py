@@ -106,7 +106,8 @@ def test_sample_brick_stack_native(samples_dir: Path) -> None:
     for v in stack.values:
         assert v.dtype == np.float32 and v.shape[:2] == (256, 256)
         assert v.min() >= -1.0 and v.max() <= 1.0
-    assert np.allclose(np.linalg.norm(stack.values[1], axis=-1), 1.0, atol=1e-5)
+    # unit to the precision of the 8-bit file: each component within half a code (sqrt(3) / 255 at most)
+    assert np.abs(np.linalg.norm(stack.values[1], axis=-1) - 1.0).max() <= np.sqrt(3) / 255
     assert stack.stacked().shape == (256, 256, 13)
     assert [a.shape[2] for a in stack.split(np.zeros((64, 32, 13)))] == [3, 3, 3, 1, 3]
     assert stack.findings == []
@@ -218,11 +219,16 @@ def test_sample_maps_round_trip_through_the_network_domain(samples_dir: Path, tm
     if info.dtype == "half":
         assert np.array_equal(back.astype(np.float16), source.astype(np.float16))
     elif m.is_normal:
-        # The sample's vectors are not unit length (resized from a JPEG): the output stores the
-        # same directions as unit vectors, and a second pass moves no value by more than 1/255.
+        # The sample's vectors are mostly not unit length (resized from a JPEG; 1 % are): the output
+        # stores the same directions, those unit as stored in their own codes and the others made
+        # unit, and a second pass moves no value by more than 1/255.
         directions = decode_map(source, enc), decode_map(back, enc)
-        cos = np.clip(np.sum(directions[0] * directions[1], axis=-1), -1, 1)
-        assert np.degrees(np.arccos(cos)).max() < 1.0
+        cos = np.sum(directions[0] * directions[1], axis=-1) / (
+            np.linalg.norm(directions[0], axis=-1) * np.linalg.norm(directions[1], axis=-1))
+        assert np.degrees(np.arccos(np.clip(cos, -1, 1))).max() < 1.0
+        as_stored = np.abs(np.linalg.norm(source * 2.0 - 1.0, axis=-1) - 1.0) <= np.sqrt(3) / 255
+        assert as_stored.sum() > 100 and np.array_equal(np.rint(back * 255)[as_stored], np.rint(source * 255)[as_stored])
+        assert np.abs(np.linalg.norm(directions[1], axis=-1) - 1.0).max() <= np.sqrt(3) / 255
         again = write_map(tmp_path / "again.png", decode_map(back, enc), enc, like=info)
         assert np.abs(np.rint(read_image(again)[0] * 255) - np.rint(back * 255)).max() <= 1
     else:

@@ -14,7 +14,9 @@ What a map's encoding records, and how each network channel is made:
   (IEC 61966-2-1). Raw maps are taken as they are; alpha is always linear.
 * **normals**: the xyz channels of a normal map become unit vectors with the map's scale and bias
   (negative Y scale = the other Y convention), and go to the network as they are (already in
-  [-1, 1]). Encoding renormalises, then inverts scale and bias.
+  [-1, 1]). Encoding renormalises, then inverts scale and bias. A vector already unit to the precision
+  of the source's sample type is left as it is both ways, so a copied texel is stored exactly as in
+  the source.
 * **range**: other channels are mapped affinely from ``[lo, hi]`` to [-1, 1]. Integer files use
   [0, 1]. Float files get a range fitted to their pixels, ``lo = min(0, min)``,
   ``hi = max(1, max)``; when values leave [-1, 1] (HDR, e.g. emission above 1) the ``log`` tone
@@ -36,7 +38,7 @@ import numpy as np
 from seamless_usd.discover.types import ColorSpace, ImageInfo, TextureMap
 from seamless_usd.imaging.transfer import file_codes, from_linear, linear_table, to_linear
 from seamless_usd.imaging.io import alpha_channel
-from seamless_usd.imaging.normals import decode_normals, encode_normals, normal_scale_bias
+from seamless_usd.imaging.normals import decode_normals, encode_normals, normal_scale_bias, stored_unit_tolerance
 
 __all__ = ["Tone", "ValueRange", "MapEncoding", "decode_map", "encode_map"]
 
@@ -301,6 +303,19 @@ def _as_hwc(array: np.ndarray, channels: int, what: str) -> np.ndarray:
     return a
 
 
+#: The spacing of stored values in [0, 1] (linear): integer codes, or half floats just below 1.
+_FILE_STEP = {"uint8": 1 / 255, "uint16": 1 / 65535, "half": 2.0 ** -11, "float": 2.0 ** -24}
+
+
+def _stored_unit(encoding: MapEncoding) -> float:
+    """Normals whose length is this close to 1 are unit as the source stores them, and are neither
+    renormalised on decoding nor on encoding: a copied texel is written back to its own codes."""
+    step = _FILE_STEP.get(encoding.dtype, 0.0)
+    if encoding.color_space == ColorSpace.SRGB:
+        step *= 2.4 / 1.055  # the sRGB curve's steepest slope, linear per stored unit (at 1)
+    return stored_unit_tolerance(step, encoding.normal_scale)
+
+
 def decode_map(pixels: np.ndarray, encoding: MapEncoding) -> np.ndarray:
     """File values -> network values in [-1, 1].
 
@@ -342,7 +357,7 @@ def decode_map(pixels: np.ndarray, encoding: MapEncoding) -> np.ndarray:
             out[..., values] = encoding.value_range.to_network(linear)
     if normals:
         linear = to_linear(p[..., list(encoding.normal)], encoding.color_space, encoding.dtype)
-        out[..., normals] = decode_normals(linear, encoding.normal_scale, encoding.normal_bias)
+        out[..., normals] = decode_normals(linear, encoding.normal_scale, encoding.normal_bias, _stored_unit(encoding))
     if alphas:
         out[..., alphas] = encoding.alpha_range.to_network(p[..., [encoding.alpha]].astype(np.float64))
     return out.astype(np.float32)
@@ -381,7 +396,7 @@ def encode_map(values: np.ndarray, encoding: MapEncoding) -> np.ndarray:
         linear = encoding.value_range.from_network(v[..., groups_values])
         out[..., idx] = from_linear(linear, encoding.value_transfer, encoding.dtype)
     if normals:
-        linear = encode_normals(v[..., normals], encoding.normal_scale, encoding.normal_bias)
+        linear = encode_normals(v[..., normals], encoding.normal_scale, encoding.normal_bias, _stored_unit(encoding))
         out[..., list(encoding.normal)] = from_linear(linear, encoding.color_space, encoding.dtype)
     if alphas:
         out[..., [encoding.alpha]] = encoding.alpha_range.from_network(v[..., alphas])

@@ -8,9 +8,12 @@ inverts them, so the output is stored in the source's convention.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["DEFAULT_NORMAL_SCALE", "DEFAULT_NORMAL_BIAS", "normal_scale_bias", "renormalise", "decode_normals", "encode_normals"]
+__all__ = ["DEFAULT_NORMAL_SCALE", "DEFAULT_NORMAL_BIAS", "normal_scale_bias", "renormalise", "stored_unit_tolerance",
+           "decode_normals", "encode_normals"]
 
 DEFAULT_NORMAL_SCALE = (2.0, 2.0, 2.0)
 DEFAULT_NORMAL_BIAS = (-1.0, -1.0, -1.0)
@@ -46,27 +49,46 @@ def normal_scale_bias(
     return s, b  # type: ignore[return-value]
 
 
-def renormalise(vectors: np.ndarray) -> np.ndarray:
+def renormalise(vectors: np.ndarray, keep_within: float = 0.0) -> np.ndarray:
     """Unit vectors along the last axis (length 3); zero-length vectors become (0, 0, 1).
+
+    Vectors whose length is within ``keep_within`` of 1 are kept as they are: a unit vector stored in a
+    file is that far off at most (:func:`stored_unit_tolerance`), and a texel copied from the source
+    then encodes back to its own stored codes instead of moving by a step.
 
     Examples
     --------
     >>> renormalise(np.array([[0.0, 0.0, 2.0], [0.0, 0.0, 0.0]])).tolist()
     [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]
+    >>> renormalise(np.array([[0.0, 0.0, 1.001], [0.0, 0.0, 1.01]]), keep_within=0.002).tolist()
+    [[0.0, 0.0, 1.001], [0.0, 0.0, 1.0]]
     """
     v = np.asarray(vectors, dtype=np.float64)
     length = np.linalg.norm(v, axis=-1, keepdims=True)
     tiny = length < 1e-12
-    return np.where(tiny, _FLAT, v / np.where(tiny, 1.0, length))
+    kept = np.abs(length - 1.0) <= keep_within
+    return np.where(tiny, _FLAT, v / np.where(tiny | kept, 1.0, length))
 
 
-def decode_normals(values: np.ndarray, scale, bias) -> np.ndarray:
-    """Linear file values ``(..., 3)`` -> unit vectors ``value * scale + bias``, renormalised."""
+def stored_unit_tolerance(file_step: float, scale) -> float:
+    """How far from 1 the length of a unit normal can be once stored: each component rounded by half a
+    ``file_step`` (the stored values' spacing, linear), times the scale that maps them to the vector.
+
+    >>> round(stored_unit_tolerance(1 / 65535, (2.0, 2.0, 2.0)), 7)
+    2.64e-05
+    """
+    return math.sqrt(3.0) * file_step / 2.0 * max(abs(float(v)) for v in scale)
+
+
+def decode_normals(values: np.ndarray, scale, bias, keep_within: float = 0.0) -> np.ndarray:
+    """Linear file values ``(..., 3)`` -> unit vectors ``value * scale + bias``, renormalised
+    (``keep_within`` as in :func:`renormalise`)."""
     v = np.asarray(values, dtype=np.float64)
-    return renormalise(v * np.asarray(scale, np.float64) + np.asarray(bias, np.float64))
+    return renormalise(v * np.asarray(scale, np.float64) + np.asarray(bias, np.float64), keep_within)
 
 
-def encode_normals(vectors: np.ndarray, scale, bias) -> np.ndarray:
-    """Vectors ``(..., 3)`` -> linear file values: renormalise, then ``(n - bias) / scale``."""
-    n = renormalise(vectors)
+def encode_normals(vectors: np.ndarray, scale, bias, keep_within: float = 0.0) -> np.ndarray:
+    """Vectors ``(..., 3)`` -> linear file values: renormalise (``keep_within`` as in
+    :func:`renormalise`), then ``(n - bias) / scale``."""
+    n = renormalise(vectors, keep_within)
     return (n - np.asarray(bias, np.float64)) / np.asarray(scale, np.float64)
