@@ -10,6 +10,7 @@ search would bring the structured stacks' joins under the threshold.
 
     .venv/bin/python benchmarks/quilt_seeds.py                 # writes results/quilt_seeds.md
     .venv/bin/python benchmarks/quilt_seeds.py --seeds 6 --items cells_256_1,wood_37_512 --out /tmp/seeds
+    .venv/bin/python benchmarks/quilt_seeds.py --seeds 3 --cells 3x3   # smaller blocks: results/quilt_seeds_3x3.md
 """
 from __future__ import annotations
 
@@ -26,15 +27,16 @@ sys.path.insert(0, str(HERE.parent))
 import quilt_gate  # noqa: E402
 
 
-def run_item(name: str, seeds: int) -> dict | None:
-    """The worst-join difference of each seed's quilt, the product's best of its tries, and the best of all."""
+def run_item(name: str, seeds: int, cells: tuple[int, int] | None = None) -> dict | None:
+    """The worst-join difference of each seed's quilt (``cells`` blocks, the product's by default), the
+    product's best of its tries, and the best of all."""
     from seamless_usd.synthesis.lattice.quilt import quilt_field
     from seamless_usd.synthesis.tile import QUILT_CELLS, QUILT_TRIES
 
     stack = quilt_gate.stack_for(name)
     maps = [stack[k][0] for k in stack]
     start = time.perf_counter()
-    made = [quilt_field(maps, maps[0].shape[:2], QUILT_CELLS, seed=s) for s in range(seeds)]
+    made = [quilt_field(maps, maps[0].shape[:2], cells or QUILT_CELLS, seed=s) for s in range(seeds)]
     if any(q is None for q in made):
         return None
     figures = [q[1] for q in made]
@@ -51,14 +53,19 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--items", default=",".join(quilt_gate.ITEMS))
     ap.add_argument("--seeds", type=int, default=12)
+    ap.add_argument("--cells", default=None, help="blocks, e.g. 3x3 (default: the product's)")
     ap.add_argument("--out", type=Path, default=quilt_gate.RESULTS)
     args = ap.parse_args(argv)
-    from seamless_usd.synthesis.tile import QUILT_MAX_DIFFERENCE, QUILT_TRIES
+    from seamless_usd.synthesis.tile import QUILT_CELLS, QUILT_MAX_DIFFERENCE, QUILT_TRIES
+
+    cells = tuple(int(v) for v in args.cells.split("x")) if args.cells else QUILT_CELLS
+    name = "quilt_seeds" + ("" if cells == tuple(QUILT_CELLS) else f"_{cells[0]}x{cells[1]}")
 
     load = os.getloadavg()[0]
-    rows = [r for r in (run_item(name, args.seeds) for name in args.items.split(",")) if r is not None]
-    lines = ["# Quilts over more seeds", "",
-             f"`benchmarks/quilt_seeds.py --seeds {args.seeds}`: the worst join's difference (over that of "
+    rows = [r for r in (run_item(item, args.seeds, cells) for item in args.items.split(",")) if r is not None]
+    lines = [f"# Quilts of {cells[0]} x {cells[1]} blocks over more seeds", "",
+             f"`benchmarks/quilt_seeds.py --seeds {args.seeds} --cells {cells[0]}x{cells[1]}`: the worst join's "
+             "difference (over that of "
              f"unrelated texels) of the quilt the product keeps of its {QUILT_TRIES} seeds, against the one "
              f"kept of {args.seeds}; joins hide at {QUILT_MAX_DIFFERENCE} or less. Labels by eye: "
              f"`quilt_gate.md`. Load average at the start: {load:.2f}. At the end: {os.getloadavg()[0]:.2f}.", "",
@@ -71,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     lines += ["", f"Joins hide, best of {QUILT_TRIES}: {', '.join(hide('product')) or 'none'}. "
               f"Best of {args.seeds}: {', '.join(hide('all')) or 'none'}."]
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "quilt_seeds.md").write_text("\n".join(lines) + "\n")
+    (args.out / f"{name}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0
 
