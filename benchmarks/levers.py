@@ -20,6 +20,8 @@ guidance channel with the maps (the distance to the texture's lines; Kaspar et a
     .venv/bin/python benchmarks/levers.py --levers "default,coarse patch 17" --stacks cells_512
     .venv/bin/python benchmarks/levers.py --levers "default,guide dark lines 1,guide edges 2" --name levers_guide
     .venv/bin/python benchmarks/levers.py --levers "quilt 2x2,quilt 2x2 by difference,quilt 3x3" --name levers_quilt
+    .venv/bin/python benchmarks/levers.py --name levers_quilt_blend \
+        --levers "quilt 2x2 by difference,quilt 2x2 by difference + blend 3,quilt 2x2 by difference + blend 8"
     .venv/bin/python benchmarks/levers.py --levers "quilt 2x2,quilt 2x2 by difference" --name levers_quilt_fullres \
         --stacks rot23_wood_2048,rot61_wood_2048,rot23_brick_2048,rot61_brick_2048,cells_2048,stripes_2048
     .venv/bin/python benchmarks/levers.py --levers "default,window cut" --name levers_fullres \
@@ -60,6 +62,9 @@ LEVERS: dict[str, dict] = {
     # blocks agree
     "quilt 2x2": {"quilt": (2, 2), "lines": True},
     "quilt 2x2 by difference": {"quilt": (2, 2)},
+    # the product's quilt with a band of 3 or 8 texels around every join blended in the gradient domain
+    "quilt 2x2 by difference + blend 3": {"quilt": (2, 2), "blend": 3},
+    "quilt 2x2 by difference + blend 8": {"quilt": (2, 2), "blend": 8},
     "quilt 3x3": {"quilt": (3, 3), "lines": True},
     # a guidance channel matched with the maps and not written (Kaspar et al. 2015, self-tuning texture
     # optimisation): the distance to the texture's lines, clipped at 16 px, as ``weight`` extra maps
@@ -118,6 +123,10 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
         field, quilted = best_quilt(maps, maps[0].shape[:2], lever["quilt"], QUILT_TRIES, seed=seed,
                                     lines=lever.get("lines", False))
         tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
+        if lever.get("blend"):
+            from seamless_usd.synthesis.refinement.blend import blend_band
+
+            tiles = blend_band(maps, field, lever["blend"], normals)[0]
         offered = True
         notes = {"join_mean": quilted["join_mean"], "join_worst": quilted["join_worst"], "lines": quilted["lines"]}
     else:
