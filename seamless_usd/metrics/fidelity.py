@@ -9,7 +9,7 @@ import numpy as np
 from ..memo import ContentMemo
 from .common import _prepare, _ratio, as_hwc
 
-__all__ = ["tile_to", "ssim_tiled", "FeatureFn", "gram_matrix", "gram_distance", "mean_log_frequency", "scale_ratio",
+__all__ = ["tile_to", "ssim_tiled", "FeatureFn", "gram_matrix", "gram_distance", "mean_log_frequency", "kept_log_frequency", "scale_ratio",
            "patch_sw", "patch_distance", "source_halves", "SCALE_MAX_FREQUENCY"]
 
 # --------------------------------------------------------------------------------------------
@@ -171,7 +171,17 @@ def scale_ratio(tile: np.ndarray, source: np.ndarray, is_normal: bool = False) -
     >>> round(scale_ratio(img, img), 3)
     1.0
     """
-    return float(np.exp(mean_log_frequency(tile, is_normal) - mean_log_frequency(source, is_normal)))
+    return float(np.exp(kept_log_frequency(tile, is_normal) - kept_log_frequency(source, is_normal)))
+
+
+#: Each picture's mean log frequency, by its content: the verdict and the report measure the same tile
+#: against the same source, and the source's scale tolerance measures it against each of its quarters.
+_LOG_FREQUENCIES: ContentMemo[float] = ContentMemo()
+
+
+def kept_log_frequency(img: np.ndarray, is_normal: bool = False) -> float:
+    """:func:`mean_log_frequency` at the default band, computed once per picture (by content) and kept."""
+    return _LOG_FREQUENCIES.get((img,), (is_normal, SCALE_MAX_FREQUENCY), lambda: mean_log_frequency(img, is_normal))
 
 
 def _patches(u: np.ndarray, count: int, rng: np.random.Generator, size: int = PATCH_SIZE) -> np.ndarray:

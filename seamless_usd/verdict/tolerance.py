@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from seamless_usd.memo import ContentMemo
 from seamless_usd.metrics import TARGETS, patch_distance, scale_ratio
 from seamless_usd.metrics.fidelity import PATCH_SIZE
 
@@ -41,6 +42,15 @@ def scale_tolerance(source: np.ndarray, is_normal: bool = False) -> tuple[float,
     low, high = TARGETS["scale_ratio"]
     if min(source.shape[:2]) < 32:
         return low, high
+    return _TOLERANCES.get((source,), is_normal, lambda: _scale_tolerance(source, is_normal, low, high))
+
+
+#: Each source's scale tolerance, by its content: every candidate of a stack and the written tile are judged
+#: against the same source.
+_TOLERANCES: ContentMemo[tuple[float, float]] = ContentMemo()
+
+
+def _scale_tolerance(source: np.ndarray, is_normal: bool, low: float, high: float) -> tuple[float, float]:
     ratios = [scale_ratio(a, b, is_normal) for a, b in _parts(source)]
     finite = [r for r in ratios if np.isfinite(r)]
     return (min([low] + finite), max([high] + finite))
