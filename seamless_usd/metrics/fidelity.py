@@ -9,8 +9,8 @@ import numpy as np
 from ..memo import ContentMemo
 from .common import _prepare, _ratio, as_hwc
 
-__all__ = ["tile_to", "ssim_tiled", "FeatureFn", "gram_matrix", "gram_distance", "mean_log_frequency", "kept_log_frequency", "scale_ratio",
-           "patch_sw", "patch_distance", "source_halves", "SCALE_MAX_FREQUENCY"]
+__all__ = ["tile_to", "ssim_tiled", "FeatureFn", "gram_matrix", "gram_distance", "mean_log_frequency",
+           "kept_log_frequency", "scale_ratio", "patch_sw", "patch_distance", "source_halves", "SCALE_MAX_FREQUENCY"]
 
 # --------------------------------------------------------------------------------------------
 # Fidelity
