@@ -11,6 +11,7 @@ search would bring the structured stacks' joins under the threshold.
     .venv/bin/python benchmarks/quilt_seeds.py                 # writes results/quilt_seeds.md
     .venv/bin/python benchmarks/quilt_seeds.py --seeds 6 --items cells_256_1,wood_37_512 --out /tmp/seeds
     .venv/bin/python benchmarks/quilt_seeds.py --seeds 3 --cells 3x3   # smaller blocks: results/quilt_seeds_3x3.md
+    .venv/bin/python benchmarks/quilt_seeds.py --seeds 3 --tile 0.8    # a smaller tile: results/quilt_seeds_tile0.8.md
 """
 from __future__ import annotations
 
@@ -27,16 +28,17 @@ sys.path.insert(0, str(HERE.parent))
 import quilt_gate  # noqa: E402
 
 
-def run_item(name: str, seeds: int, cells: tuple[int, int] | None = None) -> dict | None:
-    """The worst-join difference of each seed's quilt (``cells`` blocks, the product's by default), the
-    product's best of its tries, and the best of all."""
+def run_item(name: str, seeds: int, cells: tuple[int, int] | None = None, tile: float = 1.0) -> dict | None:
+    """The worst-join difference of each seed's quilt (``cells`` blocks, the product's by default, of a tile
+    ``tile`` times the source's sides), the product's best of its tries, and the best of all."""
     from seamless_usd.synthesis.lattice.quilt import quilt_field
     from seamless_usd.synthesis.tile import QUILT_CELLS, QUILT_TRIES
 
     stack = quilt_gate.stack_for(name)
     maps = [stack[k][0] for k in stack]
     start = time.perf_counter()
-    made = [quilt_field(maps, maps[0].shape[:2], cells or QUILT_CELLS, seed=s) for s in range(seeds)]
+    hw = tuple(round(n * tile) for n in maps[0].shape[:2])
+    made = [quilt_field(maps, hw, cells or QUILT_CELLS, seed=s) for s in range(seeds)]
     if any(q is None for q in made):
         return None
     figures = [q[1] for q in made]
@@ -44,7 +46,7 @@ def run_item(name: str, seeds: int, cells: tuple[int, int] | None = None) -> dic
     def best(group: list[dict]) -> float:  # best_quilt's choice: the cheapest worst join, then mean join
         return min(group, key=lambda f: (f["join_worst"], f["join_mean"]))["difference_worst"]
 
-    return {"item": name, "tile": list(maps[0].shape[:2]), "product": best(figures[:QUILT_TRIES]),
+    return {"item": name, "tile": list(hw), "product": best(figures[:QUILT_TRIES]),
             "all": best(figures), "seeds": [f["difference_worst"] for f in figures],
             "seconds": round(time.perf_counter() - start, 1)}
 
@@ -54,17 +56,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--items", default=",".join(quilt_gate.ITEMS))
     ap.add_argument("--seeds", type=int, default=12)
     ap.add_argument("--cells", default=None, help="blocks, e.g. 3x3 (default: the product's)")
+    ap.add_argument("--tile", type=float, default=1.0, help="the tile's sides over the source's (the product's: 1)")
     ap.add_argument("--out", type=Path, default=quilt_gate.RESULTS)
     args = ap.parse_args(argv)
     from seamless_usd.synthesis.tile import QUILT_CELLS, QUILT_MAX_DIFFERENCE, QUILT_TRIES
 
     cells = tuple(int(v) for v in args.cells.split("x")) if args.cells else QUILT_CELLS
-    name = "quilt_seeds" + ("" if cells == tuple(QUILT_CELLS) else f"_{cells[0]}x{cells[1]}")
+    name = ("quilt_seeds" + ("" if cells == tuple(QUILT_CELLS) else f"_{cells[0]}x{cells[1]}")
+            + ("" if args.tile == 1.0 else f"_tile{args.tile:g}"))
 
     load = os.getloadavg()[0]
-    rows = [r for r in (run_item(item, args.seeds, cells) for item in args.items.split(",")) if r is not None]
+    rows = [r for r in (run_item(item, args.seeds, cells, args.tile) for item in args.items.split(","))
+            if r is not None]
     lines = [f"# Quilts of {cells[0]} x {cells[1]} blocks over more seeds", "",
-             f"`benchmarks/quilt_seeds.py --seeds {args.seeds} --cells {cells[0]}x{cells[1]}`: the worst join's "
+             f"`benchmarks/quilt_seeds.py --seeds {args.seeds} --cells {cells[0]}x{cells[1]} --tile {args.tile:g}`: "
+             "the worst join's "
              "difference (over that of "
              f"unrelated texels) of the quilt the product keeps of its {QUILT_TRIES} seeds, against the one "
              f"kept of {args.seeds}; joins hide at {QUILT_MAX_DIFFERENCE} or less. Labels by eye: "
