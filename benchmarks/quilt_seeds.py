@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
-"""Would more quilts hide their joins? The worst join's difference over many seeds, on the gate's items.
+"""Would a wider search hide a quilt's joins? The worst join's difference over more seeds, smaller blocks
+or a smaller tile, on the quilt gate's items.
 
 The product makes ``QUILT_TRIES`` quilts of a stack (seeds 0, 1, ...) and keeps the one whose worst join
 costs least (``seamless_usd.synthesis.lattice.quilt.best_quilt``); a quilt is written as passed only where
 that join's difference is at most ``QUILT_MAX_DIFFERENCE`` (``benchmarks/quilt_gate.py``). This script
 makes ``--seeds`` quilts of every item of ``quilt_gate.py`` and prints the best worst-join difference of
 the product's first ``QUILT_TRIES`` seeds against that of all of them, and every seed's: whether a wider
-search would bring the structured stacks' joins under the threshold.
+search would bring the structured stacks' joins under the threshold. ``--cells`` and ``--tile`` change
+the blocks and the tile's size (the product's: 2 x 2 blocks on a source-sized tile).
 
     .venv/bin/python benchmarks/quilt_seeds.py                 # writes results/quilt_seeds.md
     .venv/bin/python benchmarks/quilt_seeds.py --seeds 6 --items cells_256_1,wood_37_512 --out /tmp/seeds
@@ -70,9 +72,8 @@ def main(argv: list[str] | None = None) -> int:
             if r is not None]
     lines = [f"# Quilts of {cells[0]} x {cells[1]} blocks over more seeds", "",
              f"`benchmarks/quilt_seeds.py --seeds {args.seeds} --cells {cells[0]}x{cells[1]} --tile {args.tile:g}`: "
-             "the worst join's "
-             "difference (over that of "
-             f"unrelated texels) of the quilt the product keeps of its {QUILT_TRIES} seeds, against the one "
+             "the worst join's difference (over that of unrelated texels) of the quilt the product keeps of "
+             f"its {QUILT_TRIES} seeds, against the one "
              f"kept of {args.seeds}; joins hide at {QUILT_MAX_DIFFERENCE} or less. Labels by eye: "
              f"`quilt_gate.md`. Load average at the start: {load:.2f}. At the end: {os.getloadavg()[0]:.2f}.", "",
              f"| item | tile | best of {QUILT_TRIES} | best of {args.seeds} | every seed | s |",
