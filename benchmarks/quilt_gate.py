@@ -40,7 +40,12 @@ RESULTS = HERE / "results"
 ITEMS = ("cells_160_6,cells_256_1,cells_256_2,cells_320_3,stripes_160_7,stripes_256_1,stripes_256_2,stripes_320_3,"
          "wood,rot23_wood_512,rot61_wood_512,wood_11_512,wood_37_512,wood_49_512,wood_74_512,rot23_brick_512,"
          "rot61_brick_512,brick_11_512,brick_37_512,brick_49_512,brick_74_512,weave_40_300_300_256,"
-         "weave_100_100_500_256,ramp_0.05,ramp_0.1,drift_0.01,drift_0.02").split(",")
+         "weave_100_100_500_256,ramp_0.05,ramp_0.1,drift_0.01,drift_0.02,"
+         # added after the gate was in place (and labelled then): more stones and stripes, other angles,
+         # weave windows and lit-brick ramps
+         "cells_192_4,cells_224_5,cells_288_7,cells_160_8,stripes_192_4,stripes_224_5,stripes_288_8,stripes_160_9,"
+         "wood_29_512,wood_61_384,brick_29_512,brick_61_384,weave_60_200_400_256,weave_10_10_300_200,ramp_0.02,"
+         "drift_0.005").split(",")
 
 #: "item/cut" -> (seamless by eye, what was seen in the 2 x 2 repeat); cut: "difference" or "lines".
 LABELS: dict[str, tuple[bool, str]] = {
@@ -53,6 +58,9 @@ LABELS: dict[str, tuple[bool, str]] = {
     "ramp_0.05/difference": (False, "a head joint steps and a brick is cut short at a join"),
     "ramp_0.1/difference": (False, "darker brick patches end on a join"),
     "cells_256_2/lines": (False, "stones whole, but joints thicken, fork and leave thin slivers at the joins"),
+    "stripes_224_5/difference": (False, "stripes end, cross and fork at the joins"),
+    "stripes_288_8/difference": (False, "an orphan stub of a stripe, and stripes that kink at a join"),
+    "cells_160_8/difference": (False, "stones of two and three tones inside one outline, joints that end"),
     "stripes_160_7/lines": (False, "forks and stubs where the cut follows one block's line then another's"),
 }
 
@@ -99,7 +107,9 @@ def run_item(name: str, out: Path) -> list[dict]:
         import OpenImageIO as oiio
 
         (out / "quilt_gate").mkdir(parents=True, exist_ok=True)
-        oiio.ImageBuf(pic).write(str(out / "quilt_gate" / f"{item.replace('/', '__')}.jpg"))
+        buf = oiio.ImageBuf(pic)
+        buf.specmod().attribute("Compression", "jpeg:80")  # pictures to look at, kept small
+        buf.write(str(out / "quilt_gate" / f"{item.replace('/', '__')}.jpg"))
     return rows
 
 
