@@ -122,11 +122,12 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
 
         field, quilted = best_quilt(maps, maps[0].shape[:2], lever["quilt"], QUILT_TRIES, seed=seed,
                                     lines=lever.get("lines", False))
-        tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
         if lever.get("blend"):
             from seamless_usd.synthesis.refinement.blend import blend_band
 
             tiles = blend_band(maps, field, lever["blend"], normals)[0]
+        else:
+            tiles = [np.ascontiguousarray(m[field[..., 0], field[..., 1]]) for m in maps]
         offered = True
         notes = {"join_mean": quilted["join_mean"], "join_worst": quilted["join_worst"], "lines": quilted["lines"]}
     else:

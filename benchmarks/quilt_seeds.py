@@ -33,7 +33,7 @@ import quilt_gate  # noqa: E402
 def run_item(name: str, seeds: int, cells: tuple[int, int] | None = None, tile: float = 1.0) -> dict | None:
     """The worst-join difference of each seed's quilt (``cells`` blocks, the product's by default, of a tile
     ``tile`` times the source's sides), the product's best of its tries, and the best of all."""
-    from seamless_usd.synthesis.lattice.quilt import quilt_field
+    from seamless_usd.synthesis.lattice.quilt import quilt_field, quilt_order
     from seamless_usd.synthesis.tile import QUILT_CELLS, QUILT_TRIES
 
     stack = quilt_gate.stack_for(name)
@@ -45,8 +45,8 @@ def run_item(name: str, seeds: int, cells: tuple[int, int] | None = None, tile: 
         return None
     figures = [q[1] for q in made]
 
-    def best(group: list[dict]) -> float:  # best_quilt's choice: the cheapest worst join, then mean join
-        return min(group, key=lambda f: (f["join_worst"], f["join_mean"]))["difference_worst"]
+    def best(group: list[dict]) -> float:  # best_quilt's choice
+        return min(group, key=quilt_order)["difference_worst"]
 
     return {"item": name, "tile": list(hw), "product": best(figures[:QUILT_TRIES]),
             "all": best(figures), "seeds": [f["difference_worst"] for f in figures],

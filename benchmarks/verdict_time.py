@@ -19,8 +19,12 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-TEXTURES = HERE.parent.parent / "shared" / "textures"
-MAPS = (("brick_base_gray", 3, False), ("brick_normal", 3, True), ("brick_roughness", 1, False))
+sys.path.insert(0, str(HERE))
+
+from endtoend import MAPS as SCENE_MAPS, TEXTURES  # noqa: E402
+
+#: The end-to-end scene's maps: (name, channels read, whether a normal map).
+MAPS = tuple((name, 1 if role == "roughness" else 3, role == "normal") for name, role, _ in SCENE_MAPS)
 
 
 def _peak_gib() -> float:

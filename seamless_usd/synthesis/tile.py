@@ -256,31 +256,31 @@ def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice
     return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
 
 
-def _cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict, seed: int) -> list:
-    """The cut tiles for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
+def _cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict, seed: int):
+    """The cut tile for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
     else one window of the source when the texture continues itself at the window's lags
     (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``), else source-sized
     tile quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES seeds, the one
     whose worst join costs least; cuts by the blocks' difference: cuts along the texture's lines thickened
     and forked its joints and read worse on every figure, ``benchmarks/results/levers_quilt*.md``). Returns
-    [(kind, field (h, w, 2) of source texels, figures)]."""
+    (kind, field (h, w, 2) of source texels, figures), or None."""
     pixels = [m.pixels for m in maps]
     if lattice.found:
         sizes = lattice_tile_size((H, W), lattice)
         if sizes is not None:
             field_, offset = lattice_cut(pixels, *sizes)
-            return [("lattice", field_, {"band": list(sizes[1]), "offset": list(offset)})]
+            return "lattice", field_, {"band": list(sizes[1]), "offset": list(offset)}
     sizes = window_tile_size(pixels)
     if sizes is not None:
         if continues_itself(sizes[2]):
             field_, offset = lattice_cut(pixels, sizes[0], sizes[1])
-            return [("window", field_, {"band": list(sizes[1]), "offset": list(offset), "lag_difference": sizes[2]})]
+            return "window", field_, {"band": list(sizes[1]), "offset": list(offset), "lag_difference": sizes[2]}
         notes["window_refused"] = {"lag_difference": sizes[2], "most": WINDOW_MAX_DIFFERENCE}
     quilt = best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed)
     if quilt is None:
-        return []
+        return None
     keys = ("cells", "overlap", "blocks", "join_mean", "join_worst", "difference_worst")
-    return [("quilt", quilt[0], {k: quilt[1][k] for k in keys})]
+    return "quilt", quilt[0], {k: quilt[1][k] for k in keys}
 
 
 def _joins_hide(figures: dict) -> bool:
@@ -297,12 +297,12 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     :func:`_judged`). A stack that repeats on a lattice is cut to whole periods
     (:func:`.lattice.lattice_cut`); any other that continues itself to one window of the source joined
     across its wraps (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down
-    to SCORE_SIDE. Where several cuts are offered, the best of them is weighed."""
+    to SCORE_SIDE; a stack that does neither gets a quilt (:mod:`.lattice.quilt`)."""
     H, W = made.grid_size
     lattice = find_lattice([m.pixels for m in maps])
     made.lattice = lattice.as_dict()
-    candidates = _cut_candidates(maps, lattice, H, W, made.lattice, seed) if cut else []
-    if not lattice.found and not candidates:
+    candidate = _cut_candidate(maps, lattice, H, W, made.lattice, seed) if cut else None
+    if not lattice.found and candidate is None:
         return
     halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
     # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
@@ -317,17 +317,13 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
                          f"score_{kind}": round(current, 3)})
     if current_ratio is not None:
         made.lattice[f"lattice_ratio_{kind}"] = round(current_ratio, 3)
-    if not candidates:
+    if candidate is None:
         return
-    judged = []  # the cuts, best first: (passes, score) as for the written tile
-    for cut_kind, field_, figures in candidates:
-        tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
-        score, verdict_passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
-        # the verdict misses joins like a quilt's that do not hide (benchmarks/results/quilt_gate.md)
-        passes = verdict_passes and (cut_kind != "quilt" or _joins_hide(figures))
-        judged.append(((not passes, score), cut_kind, tiles, figures, passes, ratio, verdict_passes))
-    judged.sort(key=lambda j: j[0])
-    (_, score), cut_kind, tiles, figures, passes, ratio, verdict_passes = judged[0]
+    cut_kind, field_, figures = candidate
+    tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
+    score, verdict_passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
+    # the verdict misses joins like a quilt's that do not hide (benchmarks/results/quilt_gate.md)
+    passes = verdict_passes and (cut_kind != "quilt" or _joins_hide(figures))
     tile_hw = next(iter(tiles.values())).shape[:2]
     q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
     wins = (not passes, score) < (not current_passes, current)
@@ -341,8 +337,8 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
             wins = False
             made.lattice["quilt_refused"] = {"difference_worst": figures["difference_worst"],
                                              "most": QUILT_MAX_DIFFERENCE}
-    made.lattice.update({"cut": cut_kind, "tile": list(tile_hw), "q_passed": bool(q.passed), "passes": passes, "score": round(score, 3), "chosen": wins,
-                         **figures})
+    made.lattice.update({"cut": cut_kind, "tile": list(tile_hw), "q_passed": bool(q.passed), "passes": passes,
+                         "score": round(score, 3), "chosen": wins, **figures})
     if ratio is not None:
         made.lattice["lattice_ratio"] = round(ratio, 3)
     if wins:

@@ -39,7 +39,8 @@ from ..refinement.refine import spread
 from ..scale import box_downsample
 from .cut import CUT_MARGIN, _sample
 
-__all__ = ["QUILT_OVERLAP", "LINE_SHARE", "LINE_LONG", "line_sigma", "line_mask", "quilt_field", "best_quilt"]
+__all__ = ["QUILT_OVERLAP", "LINE_SHARE", "LINE_LONG", "line_sigma", "line_mask", "quilt_field", "best_quilt",
+           "quilt_order"]
 
 #: The overlap band between neighbouring blocks, as a share of the cell: where the cut may run.
 QUILT_OVERLAP = 0.25
@@ -355,4 +356,9 @@ def best_quilt(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[in
             if q is not None]
     if not made:
         return None
-    return min(made, key=lambda q: (q[1]["join_worst"], q[1]["join_mean"]))
+    return min(made, key=lambda q: quilt_order(q[1]))
+
+
+def quilt_order(figures: dict) -> tuple[float, float]:
+    """How quilts rank (the lowest is kept), from their figures: the worst join's cost, then the mean's."""
+    return figures["join_worst"], figures["join_mean"]
