@@ -22,6 +22,8 @@ guidance channel with the maps (the distance to the texture's lines; Kaspar et a
     .venv/bin/python benchmarks/levers.py --levers "quilt 2x2,quilt 2x2 by difference,quilt 3x3" --name levers_quilt
     .venv/bin/python benchmarks/levers.py --name levers_quilt_blend \
         --levers "quilt 2x2 by difference,quilt 2x2 by difference + blend 3,quilt 2x2 by difference + blend 8"
+    .venv/bin/python benchmarks/levers.py --name levers_quilt_deform --levers "quilt 2x2 by difference,\
+quilt 2x2 by difference + deform 0.125,quilt 2x2 by difference + deform 0.25"
     .venv/bin/python benchmarks/levers.py --levers "quilt 2x2,quilt 2x2 by difference" --name levers_quilt_fullres \
         --stacks rot23_wood_2048,rot61_wood_2048,rot23_brick_2048,rot61_brick_2048,cells_2048,stripes_2048
     .venv/bin/python benchmarks/levers.py --levers "default,window cut" --name levers_fullres \
@@ -66,6 +68,10 @@ LEVERS: dict[str, dict] = {
     "quilt 2x2 by difference + blend 3": {"quilt": (2, 2), "blend": 3},
     "quilt 2x2 by difference + blend 8": {"quilt": (2, 2), "blend": 8},
     "quilt 3x3": {"quilt": (3, 3), "lines": True},
+    # the product's quilt with each new block's texels near its joins shifted to line up with the laid ones
+    # (lattice/deform.py; Wu and Yu 2004), by at most this share of the overlap band
+    "quilt 2x2 by difference + deform 0.125": {"quilt": (2, 2), "deform": 0.125},
+    "quilt 2x2 by difference + deform 0.25": {"quilt": (2, 2), "deform": 0.25},
     # a guidance channel matched with the maps and not written (Kaspar et al. 2015, self-tuning texture
     # optimisation): the distance to the texture's lines, clipped at 16 px, as ``weight`` extra maps
     "guide dark lines 1": {"guide": ("dark", 1)},
@@ -121,7 +127,7 @@ def run_one(stack: dict, lever: dict, seed: int) -> tuple[dict, np.ndarray]:
         from seamless_usd.synthesis.tile import QUILT_TRIES
 
         field, quilted = best_quilt(maps, maps[0].shape[:2], lever["quilt"], QUILT_TRIES, seed=seed,
-                                    lines=lever.get("lines", False))
+                                    lines=lever.get("lines", False), deform=lever.get("deform", 0.0))
         if lever.get("blend"):
             from seamless_usd.synthesis.refinement.blend import blend_band
 

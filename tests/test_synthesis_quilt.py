@@ -121,3 +121,22 @@ def test_a_quilt_the_verdict_passes_but_whose_joins_do_not_hide_is_not_written(k
     quilt = made.alternatives["quilt"]  # the refused quilt: the verdict passes it
     assert judge([quilt[k] for k in keys], [stack[k][0] for k in keys], [False] * 2, keys).passed
     assert not judge([made.maps[k] for k in keys], [stack[k][0] for k in keys], [False] * 2, keys).passed
+
+
+def test_join_shifts_line_a_block_up_with_the_texels_laid_beside_it(cells):
+    """The deformation lever (lattice/deform.py): where the laid texels are the block's own source shifted
+    by (3, -2), the block's texels over the band move by that shift, and ease to none beyond the ramp."""
+    from seamless_usd.synthesis.lattice.cut import _sample
+    from seamless_usd.synthesis.lattice.deform import join_shifts
+
+    spreads = [float(np.std(m)) + 1e-6 for m in cells]
+    py, px, size, band = 60, 70, (96, 96), 24
+    by, bx = np.mgrid[0:size[0], 0:size[1]]
+    laid = _sample(cells, spreads, py + by + 3, px + bx - 2)
+    mask = np.zeros(size, dtype=bool)
+    mask[:, :band] = True  # the left band is laid
+    unrelated = 2.0 * sum(float(np.var(m / s)) * m.shape[-1] for m, s in zip(cells, spreads))
+    dy, dx = join_shifts(laid, mask, (py, px), [("left", band)], lambda y, x: _sample(cells, spreads, y, x),
+                         cells[0].shape[:2], 6, unrelated)
+    assert (dy[:, :band] == 3).mean() > 0.9 and (dx[:, :band] == -2).mean() > 0.9
+    assert not dy[:, 2 * band:].any() and not dx[:, 2 * band:].any()

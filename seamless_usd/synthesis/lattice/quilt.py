@@ -27,7 +27,9 @@ tile and never writes one whose joins do not hide as a tile that passes.
 A lever measured and not kept (``lines=True``): cuts that run almost free along the texture's long lines
 (:func:`line_mask`), each block keeping its own line texels near the cut, so a join hides behind a joint.
 Stones stay whole, but the joints thicken, fork and leave slivers, and every figure reads worse
-(``benchmarks/results/levers_quilt.md``, ``levers_quilt_fullres.md``).
+(``benchmarks/results/levers_quilt.md``, ``levers_quilt_fullres.md``). Another (``deform``): each new block's
+texels near its joins shifted to line up with the laid ones (:mod:`.deform`); its rounded shifts step
+lines, and it cannot add the stripe or head joint that one block lacks (``levers_quilt_deform.md``).
 """
 from __future__ import annotations
 
@@ -266,8 +268,8 @@ def _free_path(cost: np.ndarray) -> np.ndarray:
 
 
 def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[int, int],
-                overlap: float = QUILT_OVERLAP, seed: int = 0, margin: int = CUT_MARGIN, lines: bool = False
-                ) -> tuple[np.ndarray, dict] | None:
+                overlap: float = QUILT_OVERLAP, seed: int = 0, margin: int = CUT_MARGIN, lines: bool = False,
+                deform: float = 0.0) -> tuple[np.ndarray, dict] | None:
     """The (h, w, 2) int64 source (y, x) of every texel of a ``tile_hw`` tile quilted from ``cells`` =
     (ny, nx) blocks (see the module notes), with figures: ``joins``, each overlap's cut with its cost (the
     mean along it of what it minimised, over the squared difference of two unrelated texels) and its
@@ -275,7 +277,9 @@ def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[i
     follows lines, the cost is low by design and the difference says what the lines hide); the costs'
     mean and worst, the worst difference, and the blocks' source places; None when a block does not fit
     in the source. ``lines=True``: where the source has long lines (:func:`line_mask`), the cuts run along
-    them (a lever measured, not the product's: ``benchmarks/results/levers_quilt.md``).
+    them (a lever measured, not the product's: ``benchmarks/results/levers_quilt.md``). ``deform`` > 0: each
+    new block's texels near its joins shift, by at most that share of the band, to line up with the laid
+    ones (:mod:`.deform`; a lever, not the product's: ``levers_quilt_deform.md``).
 
     >>> rng = np.random.default_rng(0)
     >>> noise = rng.normal(size=(96, 96, 1)).astype(np.float32)
@@ -315,17 +319,27 @@ def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[i
             blocks.append([int(py), int(px)])
             by, bx = np.mgrid[0:size[0], 0:size[1]]
             had = canvas.field[np.ix_(rows, cols)]
-            diff = ((_sample(maps, spreads, py + by, px + bx) - _sample(maps, spreads, had[..., 0], had[..., 1])) ** 2
-                    ).sum(-1) * laid  # texels not laid yet cost nothing to cover
-            new_lines = old_lines = None
-            if lines is not None:
-                new_lines, old_lines = lines[py + by, px + bx], lines[had[..., 0], had[..., 1]] & laid
-            keep = np.ones(size, dtype=bool)
+            laid_features = _sample(maps, spreads, had[..., 0], had[..., 1])
             # each side the block shares with one laid before: (name, band, whether the join runs across the
             # tile's rows, so that the band is turned to have its rows along the join, whether it is there)
             sides = [("left", np.s_[:, :ox], False, j > 0), ("top", np.s_[:oy, :], True, i > 0),
                      ("right", np.s_[:, -ox:], False, j == cells[1] - 1 and cells[1] > 1),
                      ("bottom", np.s_[-oy:, :], True, i == cells[0] - 1 and cells[0] > 1)]
+            sy, sx = py + by, px + bx
+            if deform > 0:  # a lever (deform.py): the block's texels near each join line up with the laid ones
+                from .deform import join_shifts
+
+                bands = [(name, oy if across else ox) for name, _, across, present in sides if present]
+                dy, dx = join_shifts(laid_features, laid, (py, px), bands,
+                                     lambda y, x: _sample(maps, spreads, y, x), (H, W),
+                                     max(1, round(deform * min(oy, ox))), unrelated)
+                sy, sx = np.clip(sy + dy, 0, H - 1), np.clip(sx + dx, 0, W - 1)
+            diff = ((_sample(maps, spreads, sy, sx) - laid_features) ** 2
+                    ).sum(-1) * laid  # texels not laid yet cost nothing to cover
+            new_lines = old_lines = None
+            if lines is not None:
+                new_lines, old_lines = lines[sy, sx], lines[had[..., 0], had[..., 1]] & laid
+            keep = np.ones(size, dtype=bool)
             for name, band, across, present in sides:
                 if not present:
                     continue
@@ -338,7 +352,7 @@ def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[i
                 joins.append({"block": [i, j], "side": name, "cost": round(cost, 4), "difference": round(difference, 4)})
             keep |= ~laid  # what no block covers yet is this block's
             tr, tc = np.meshgrid(rows, cols, indexing="ij")
-            canvas.field[tr[keep], tc[keep]] = np.stack([py + by[keep], px + bx[keep]], -1)
+            canvas.field[tr[keep], tc[keep]] = np.stack([sy[keep], sx[keep]], -1)
             canvas.laid[tr[keep], tc[keep]] = True
     costs, differences = [j["cost"] for j in joins], [j["difference"] for j in joins]
     figures = {"cells": list(cells), "overlap": [oy, ox], "blocks": blocks, "joins": joins, "lines": lines is not None,
@@ -349,10 +363,11 @@ def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[i
 
 
 def best_quilt(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[int, int], tries: int, seed: int = 0,
-               lines: bool = False) -> tuple[np.ndarray, dict] | None:
+               lines: bool = False, deform: float = 0.0) -> tuple[np.ndarray, dict] | None:
     """Of ``tries`` quilts (seeds ``seed``, ``seed + 1``, ...), the one whose worst join costs least, then
     whose mean join does (:func:`quilt_field`, ``lines`` as there); None when a block does not fit."""
-    made = [q for q in (quilt_field(maps, tile_hw, cells, seed=seed + k, lines=lines) for k in range(tries))
+    made = [q for q in (quilt_field(maps, tile_hw, cells, seed=seed + k, lines=lines, deform=deform)
+                        for k in range(tries))
             if q is not None]
     if not made:
         return None
