@@ -280,3 +280,21 @@ def test_a_structured_tile_has_no_interior_seam_and_keeps_its_structure(made_til
     assert all(structure_figures(made.maps[k], stack[k][0])["structure"] <= STRUCTURE_TARGET for k in keys)
     source_share, _ = _joint_network(stack["color"][0])  # lines as long and networks as connected
     assert _joint_network(made.maps["color"])[0] >= 0.8 * source_share
+
+
+@pytest.mark.parametrize("name", ["cells", "stripes"])
+def test_a_stack_whose_joins_cannot_hide_is_told_what_to_do(made_tiles, name):
+    """Neither stack repeats nor continues itself. The stripes' quilt hides its joins (and passes): nothing to
+    advise. The cells' written tile shows its joins: the advice names the window lags and what to do."""
+    from seamless_usd.synthesis import structure_advice
+
+    _, made = made_tiles[name]
+    advice = structure_advice(made.lattice, made.layout_kind)
+    if name == "stripes":
+        assert advice is None
+    else:
+        lags = made.lattice["window_refused"]["lag_difference"]
+        assert advice is not None and "neither repeats nor continues itself" in advice, advice
+        assert f"y {lags['y']:.2f}" in advice and "a source made to repeat" in advice
+    # a stack that repeats is never advised so, whatever it wrote
+    assert structure_advice({**made.lattice, "period_px": [40, None]}, made.layout_kind) is None

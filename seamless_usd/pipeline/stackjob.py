@@ -101,10 +101,16 @@ class StackOutcome:
         return bool(self.verdict.get("passed"))
 
     def reasons(self) -> list[str]:
-        """Why the stack did not pass (empty when it passed)."""
+        """Why the stack did not pass (empty when it passed), and for a stack whose joins cannot hide, what to do."""
+        from seamless_usd.synthesis import structure_advice
         from seamless_usd.verdict import Verdict
 
-        return Verdict.from_dict(self.verdict).reasons() if self.verdict else ["not judged"]
+        if not self.verdict:
+            return ["not judged"]
+        out = Verdict.from_dict(self.verdict).reasons()
+        gan = self.resampled.get("gan") or {}
+        advice = None if self.passed else structure_advice(gan.get("lattice") or {}, gan.get("layout"))
+        return out + ([advice] if advice else [])
 
     def fill_report(self, report: StackReport, stack: TextureStack, reused: bool) -> None:
         report.status = (

@@ -24,10 +24,10 @@ from .gan.sample import SamplingProgress, sample
 from .gan.train import TrainedModel, train
 from .lattice.cut import LATTICE_TARGET
 from .refinement.refine import RefineConfig, RefineResult, refine
-from .tile import MadeTile, downsample_maps, make_tile, written_lattice_ratio
+from .tile import MadeTile, downsample_maps, make_tile, structure_advice, written_lattice_ratio
 from .types import Candidate, MapInput, QResult, TileResult, TrainingProgress
 
 __all__ = ["SynthesisConfig", "PRESETS", "get_preset", "MapInput", "train", "sample", "TrainedModel",
            "TileResult", "QResult", "Candidate", "TrainingProgress", "SamplingProgress",
            "RefineConfig", "RefineResult", "refine", "MadeTile", "make_tile", "downsample_maps", "LATTICE_TARGET",
-           "written_lattice_ratio"]
+           "written_lattice_ratio", "structure_advice"]

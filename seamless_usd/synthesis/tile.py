@@ -35,7 +35,8 @@ from .refinement.refine import RefineConfig, refine, resize_periodic
 from .scale import structure_size, working_factor
 from .types import MapInput, QResult, TileResult, stack_shape
 
-__all__ = ["MadeTile", "make_tile", "downsample_maps", "written_lattice_ratio", "TILE_SIZES", "LAYOUT_SCALE_RANGE"]
+__all__ = ["MadeTile", "make_tile", "downsample_maps", "written_lattice_ratio", "structure_advice", "TILE_SIZES",
+           "LAYOUT_SCALE_RANGE"]
 
 TILE_SIZES = ("source", "paper")
 
@@ -223,6 +224,23 @@ def written_lattice_ratio(lattice: dict, layout_kind: str | None) -> float | Non
     recorded, e.g. in a cached stack's metadata); None when the stack does not repeat."""
     cut = layout_kind in ("lattice", "window", "quilt")  # the cut's figures carry no suffix
     return lattice.get("lattice_ratio" if cut else f"lattice_ratio_{layout_kind}")
+
+
+def structure_advice(lattice: dict, layout_kind: str | None) -> str | None:
+    """What to do about a stack whose written tile's joins cannot hide, from ``MadeTile.lattice`` and
+    ``MadeTile.layout_kind`` as recorded; None for any other. Such a stack neither repeats (no lattice) nor
+    continues itself at a window's lags (its window was refused), and what was written is the refined tile or
+    a quilt whose blocks differ along a cut: every lever measured on such stacks leaves joins that show
+    (two-tone stones, stepped tone patches, jogging courses, stripes that end; ``benchmarks/results/levers*.md``)."""
+    refused = lattice.get("window_refused")
+    if refused is None or any(p is not None for p in lattice.get("period_px") or []):
+        return None
+    if layout_kind == "quilt" and _joins_hide(lattice):
+        return None
+    lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
+    return (f"the texture neither repeats nor continues itself (its window lags differ by {lags}; a cut hides at "
+            f"{refused['most']:.2f} or less), so joins between copies of it show: use a source made to repeat, "
+            "or mend the joins by hand")
 
 
 def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[float, float]) -> dict[str, np.ndarray]:
