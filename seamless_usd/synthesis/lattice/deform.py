@@ -75,12 +75,12 @@ def join_shifts(laid: np.ndarray, mask: np.ndarray, place: tuple[int, int], band
                 shifts.append((0.0, 0.0))
                 continue
             # the shifts the source allows on each axis, the same both ways
-            ry = min(reach, py + rows[0], H - (py + rows[1]))
-            rx = min(reach, px + cols[0], W - (px + cols[1]))
+            ry = max(0, min(reach, py + rows[0], H - (py + rows[1])))
+            rx = max(0, min(reach, px + cols[0], W - (px + cols[1])))
             yy, xx = np.mgrid[py + rows[0] - ry: py + rows[1] + ry, px + cols[0] - rx: px + cols[1] + rx]
             region = sample(yy, xx)
-            shifts.append(_best_shift(laid[rows[0]: rows[1], cols[0]: cols[1]], win_mask, region,
-                                      (max(0, ry), max(0, rx)), unrelated))
+            shifts.append(_best_shift(laid[rows[0]: rows[1], cols[0]: cols[1]], win_mask, region, (ry, rx),
+                                      unrelated))
         u = np.asarray(shifts, dtype=np.float64).reshape(-1, 2)
         if len(u) >= 3:
             u = ndimage.median_filter(u, size=(3, 1), mode="nearest")
