@@ -188,6 +188,16 @@ def test_run_details_say_what_seeded_the_refinement():
     page = render_html(Report(sources=["s.usda"], stacks=[made]))
     assert ("quilt not written: the verdict passes it, but its blocks differ along a cut by 0.10 (its joins hide at "
             "0.05 or less)") in page
+    # not passed with a seam: the box says what to do where the joins cannot hide (refined, or the quilt's
+    # blocks differ along a cut), and not where the quilt's joins hide
+    seam = {"axis": "x", "position": 68, "start": 66, "end": 112, "figure": 0.28, "map": "stack"}
+    judged = {"passed": False, "seamless": False, "faithful": True, "size": [512, 512], "seams": [seam]}
+    for layout, lattice, told in (("random", kept, True), ("quilt", {**quilt, "difference_worst": 0.03}, False)):
+        made = StackReport(id="M-7", material="</M7>", source="s.usda", status=StackStatus.NOT_PASSED, verdict=judged,
+                           resampled={"gan": {"layout": layout, "lattice": lattice}})
+        page = render_html(Report(sources=["s.usda"], stacks=[made]))
+        assert "Not passed" in page and ("<b>What to do</b>: the texture neither repeats nor continues itself (its "
+                                         "window lags differ by y 0.64, x 0.68" in page) == told
 
 
 def test_run_details_show_each_synthesis_stage_as_a_picture():

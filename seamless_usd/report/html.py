@@ -18,6 +18,7 @@ from seamless_usd.fileio import atomic_write_text
 from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page, seams_svg
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
+from seamless_usd.synthesis.tile import structure_advice
 from seamless_usd.verdict.lines import Seam
 from seamless_usd.report.verdicts import LABELS, SEAM_KEYS, TORUS_NOTE, target_text, targets, verdict
 
@@ -260,7 +261,10 @@ def _why(stack: StackReport) -> str:
         items += [f"not faithful: {f}" for f in v.get("failing", [])]
         if items:
             lis = "".join(f"<li>{esc(t)}</li>" for t in items)
-            return f'<div class="why bad"><b>Not passed</b><ul>{lis}</ul>{esc(q_text)}</div>'
+            gan = stack.resampled.get("gan") or {}
+            advice = structure_advice(gan.get("lattice") or {}, gan.get("layout"))  # what to do, where joins show
+            todo = f"<p><b>What to do</b>: {esc(advice)}.</p>" if advice else ""
+            return f'<div class="why bad"><b>Not passed</b><ul>{lis}</ul>{todo}{esc(q_text)}</div>'
         return (f'<div class="why ok"><b>Passed: seamless and faithful.</b> No seam at the wrap, the centre lines or '
                 f'inside any map, and every fidelity figure is inside the tolerance its source sets. {esc(q_text)}</div>')
     failing = _failing(stack)
