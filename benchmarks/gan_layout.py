@@ -7,8 +7,8 @@ here that is the GAN. This script trains the ``default`` preset's networks (one 
 stack, makes its tile with ``make_tile``, and prints, for the GAN's tileable layout at the working
 resolution: the structure figure of its first map against the source at that resolution
 (``seamless_usd.metrics.structure``; target <= 1.5), the layout's feature scale per map, whether the layout
-seeded the refinement, what was written, and the time. Picture (``--out``, default ``/tmp``): the layout
-repeated 2 x 2 beside the source (twice, one above the other), 2x.
+seeded the refinement, what was written, and the time. Picture (``--out``, default ``results/gan_layout/``):
+the layout repeated 2 x 2 beside the source (twice, one above the other), 1x.
 
     .venv/bin/python benchmarks/gan_layout.py --stack stripes_512 --iterations 2400
     .venv/bin/python benchmarks/gan_layout.py --stack stripes_512 --iterations 9600
@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--stack", default="stripes_512")
     ap.add_argument("--iterations", type=int, default=2400)
     ap.add_argument("--preset", default="default", help="the networks' preset (its iterations are replaced)")
-    ap.add_argument("--out", type=Path, default=Path("/tmp"))
+    ap.add_argument("--out", type=Path, default=HERE / "results" / "gan_layout")
     a = ap.parse_args(argv)
     stack = load_stack(a.stack)
     keys = list(stack)
@@ -60,7 +60,6 @@ def main(argv: list[str] | None = None) -> int:
     normal = stack[keys[0]][1]
     pic = np.concatenate([preview_uint8(np.tile(layout, (2, 2, 1)), normal),
                           preview_uint8(np.tile(source, (2, 1, 1)), normal)], axis=1)
-    pic = pic.repeat(2, axis=0).repeat(2, axis=1)
     import OpenImageIO as oiio
 
     a.out.mkdir(parents=True, exist_ok=True)
