@@ -34,7 +34,7 @@ def build_scene(folder: Path, size: int, textures: Path = TEXTURES) -> Path:
     import OpenImageIO as oiio
     from pxr import Gf, Sdf, UsdShade
 
-    from make_scenes import bind, new_layer, plane, preview_material
+    from usdkit import bind, new_layer, plane, preview_material
 
     folder.mkdir(parents=True, exist_ok=True)
     for name, _, _ in MAPS:

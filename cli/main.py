@@ -13,7 +13,7 @@ import tempfile
 import traceback
 from collections.abc import Sequence
 
-from seamless_usd import __version__
+from seamless_usd.version import __version__
 from seamless_usd.errors import SeamlessUsdError
 
 __all__ = ["main", "run", "EXIT_OK", "EXIT_FAILED_ITEMS", "EXIT_USAGE", "EXIT_INTERNAL"]

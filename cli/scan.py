@@ -17,7 +17,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from seamless_usd.discover import ScanResult, TextureMap, TextureStack, UVChain, scan_paths
-from seamless_usd.discover.types import describe_selection
+from seamless_usd.textures import describe_selection
 
 __all__ = ["add_arguments", "run", "render"]
 

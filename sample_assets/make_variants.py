@@ -1,6 +1,6 @@
 """Sample assets whose looks live in variant sets, as published and studio assets keep them.
 
-Called by ``make_scenes.py``. Three assets in ``shading/``, placed side by side by ``set.usda``:
+Called by ``make_scenes.py``; builds with ``usdkit.py``. Three assets in ``shading/``, placed side by side by ``set.usda``:
 
 - ``teapot.usda``: root -> payload -> references to a geometry layer and a materials layer. Both
   have ``modelVariant`` {Utah, Fancy}; inside Fancy the materials layer has ``shadingVariant``
@@ -24,7 +24,7 @@ import numpy as np
 import OpenImageIO as oiio
 from pxr import Sdf, Usd, UsdGeom, UsdShade
 
-from make_scenes import atlas_mesh, bind, new_layer, plane, preview_material, root_with_payload
+from usdkit import atlas_mesh, bind, new_layer, plane, preview_material, root_with_payload
 
 HERE = Path(__file__).resolve().parent
 TEXTURES = HERE / "textures"

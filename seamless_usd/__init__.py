@@ -6,7 +6,7 @@ first use so that ``import seamless_usd`` stays light (no torch, no pxr) for DCC
 """
 from __future__ import annotations
 
-__version__ = "0.1.0"
+from seamless_usd.version import __version__
 
 _API = {"scan", "process_stage", "process_paths", "Options", "ProgressEvent", "Report", "StackReport", "StackStatus", "WriteMode"}
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from seamless_usd.discover.types import ScanResult
+from seamless_usd.textures import ScanResult
 from seamless_usd.pipeline.options import Options, ProgressEvent
 from seamless_usd.pipeline.process import process_paths, process_stage
 from seamless_usd.report.model import Report, StackReport, StackStatus

@@ -19,7 +19,7 @@ from seamless_usd.authoring import (
     scale2d,
     uv_scale_for,
 )
-from seamless_usd.discover.types import AuthoredAt, ColorSpace, Origin, RoleUse, TextureMap, TextureStack, UVChain
+from seamless_usd.textures import AuthoredAt, ColorSpace, Origin, RoleUse, TextureMap, TextureStack, UVChain
 
 SCALE = uv_scale_for((512, 768), (64, 128))  # (4, 3)
 

@@ -25,7 +25,7 @@ from seamless_usd.authoring import (
     uv_affine,
 )
 from seamless_usd.discover import scan_paths
-from seamless_usd.discover.types import Origin
+from seamless_usd.textures import Origin
 
 SCALE = (2.0, 3.0)
 STDLIB = mx.createDocument()

@@ -24,7 +24,7 @@ from seamless_usd.authoring import (
     uv_affine,
     uv_scale_for,
 )
-from seamless_usd.discover.types import (
+from seamless_usd.textures import (
     AuthoredAt,
     ColorSpace,
     Origin,

@@ -11,7 +11,7 @@ from pxr import Sdf, Usd, UsdShade
 from seamless_usd.discover import ColorSpace, scan_paths
 from seamless_usd.discover.colorspace import Label, classify, resolve_color_space
 from seamless_usd.discover.images import read_image_info
-from seamless_usd.discover.types import ImageInfo
+from seamless_usd.textures import ImageInfo
 
 TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
 

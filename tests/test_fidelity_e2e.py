@@ -143,7 +143,7 @@ def test_tile_keeps_both_periods_and_the_uv_transform_agrees(scene, capsys, tile
     assert (su, sv) == pytest.approx(stack["uv_scale"])
     tpx, tpy = _dominant_periods(tile, periodic=True)
     assert tpx == pytest.approx(src_px, rel=0.05), (tpx, tpy, src_px, src_py)
-    # The target is 5 % on both axes. A cut of whole periods keeps it; along y (6 periods in
+    # The target is 5 % on both axes. A cut of whole periods keeps it; along y (6 periods in
     # 144 px, seen by 11 px patches) the refinement from a random start lands at 21.6-23.8 px over
     # seeds 0-5 (source 24.0): up to 10 % off.
     y_tolerance = 0.05 if layout == "lattice" else 0.10

@@ -187,8 +187,8 @@ def _maps(root: Path, kind: str, stack: dict) -> dict[str, tuple[np.ndarray, np.
 
 @pytest.mark.parametrize("kind", ["png16", "exr"])
 def test_every_texel_of_the_tile_is_a_source_texel(processed, kind):
-    """Albedo and roughness exactly; the normal at the same source position up to one stored step (the
-    writer makes copied normals unit length again, see the strict xfail below)."""
+    """Albedo and roughness exactly; the normal at the same source position up to one stored step (a copied
+    normal is stored with the source's codes when it is unit to their precision, else made unit)."""
     root, _, _, stacks = processed
     gan = stacks[kind]["resampled"]["gan"]
     assert gan["refined"] or gan["layout"] == "lattice", gan  # refinement is on: texels come from the source

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamless_usd.discover.types import AuthoredAt, ColorSpace, ImageInfo, Origin, RoleUse, TextureMap
+from seamless_usd.textures import AuthoredAt, ColorSpace, ImageInfo, Origin, RoleUse, TextureMap
 from seamless_usd.imaging import (
     MapEncoding,
     Tone,

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from imagefiles import write_raw_image
 
-from seamless_usd.discover.types import ColorSpace, ImageInfo
+from seamless_usd.textures import ColorSpace, ImageInfo
 from seamless_usd.errors import InputError
 from seamless_usd.imaging import output_extension, read_image, read_info, write_pixels
 

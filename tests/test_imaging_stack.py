@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from imagefiles import write_raw_image
 
-from seamless_usd.discover.types import AuthoredAt, ColorSpace, ImageInfo, Origin, RoleUse, TextureMap
+from seamless_usd.textures import AuthoredAt, ColorSpace, ImageInfo, Origin, RoleUse, TextureMap
 from seamless_usd.errors import InputError, UsageError
 from seamless_usd.imaging import (
     MapEncoding,

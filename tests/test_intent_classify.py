@@ -54,7 +54,7 @@ def test_thresholds_separate_measured_tiling_and_non_tiling_files():
 
 @pytest.mark.skipif(not (SHARED / "wood_color.jpg").is_file(), reason="needs ../shared/textures")
 def test_figures_on_the_full_size_materialx_images():
-    # the MaterialX wood tiles: 0.044 at 512 px (0.051 at 2048 px, as the issue says)
+    # the MaterialX wood tiles: 0.044 at 512 px (0.051 at 2048 px)
     ps, seam = _figures(SHARED / "wood_color.jpg")
     assert ps == pytest.approx(0.044, abs=0.01) and seam < 1.2
     ps, _ = _figures(SHARED / "wood_roughness.jpg")

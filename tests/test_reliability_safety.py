@@ -18,7 +18,7 @@ import pytest
 
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import confine
-from seamless_usd.pipeline.naming import tile_filename
+from seamless_usd.naming import tile_filename
 from seamless_usd.synthesis.gan.checkpoint import CHECKPOINT_NAME, load_checkpoint
 
 from seamless_usd_cli.main import main

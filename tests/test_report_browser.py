@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from seamless_usd.report.html import write_html, write_library_html
+from seamless_usd.report.html import write_html
+from seamless_usd.report.index import write_library_html
 from seamless_usd.report.model import Report, StackReport, StackStatus
 from specimen import specimen_stack
 

@@ -10,7 +10,8 @@ from types import SimpleNamespace as NS
 import numpy as np
 import pytest
 
-from seamless_usd.report.html import seam_segments, render_html, write_html, write_library_html
+from seamless_usd.report.html import seam_segments, render_html, write_html
+from seamless_usd.report.index import write_library_html
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.report.repeat import ViewGeometry, repeat_view, view_geometry

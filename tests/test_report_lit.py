@@ -7,7 +7,7 @@ from types import SimpleNamespace as NS
 import numpy as np
 import pytest
 
-from seamless_usd.discover.types import ColorSpace
+from seamless_usd.textures import ColorSpace
 from seamless_usd.imaging.normals import decode_normals, normal_scale_bias
 from seamless_usd.report.lit import GRAZING_LIGHT, ShadingInputs, shade, shading_inputs, to_display
 from seamless_usd.report.previews import stack_previews

@@ -18,7 +18,7 @@ import MaterialX as mx
 
 from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, WriteMode
-from seamless_usd.discover.types import Origin
+from seamless_usd.textures import Origin
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 

@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from pathlib import Path
 
-from seamless_usd.discover.types import TextureMap, TextureStack
+from seamless_usd.textures import TextureMap, TextureStack
 from seamless_usd.findings import Finding
 
 __all__ = [

@@ -26,7 +26,7 @@ from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, Wr
 from seamless_usd.authoring.usdinplace import _author_in_place, _open_layer
 from seamless_usd.authoring.usdnodes import Names, uv_affine
 from seamless_usd.authoring.usdplan import _Author
-from seamless_usd.discover.types import Origin
+from seamless_usd.textures import Origin
 from seamless_usd.errors import InputError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref
 

@@ -9,7 +9,7 @@ from pxr import Sdf, Usd
 from seamless_usd.authoring.types import Codes
 
 from seamless_usd.authoring.usdnodes import Names
-from seamless_usd.discover.types import TextureStack, describe_selection
+from seamless_usd.textures import TextureStack, describe_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["variant_edit_target", "variant_not_composed"]

@@ -24,7 +24,7 @@ from seamless_usd.authoring.usdnodes import (
     _uv_input_name,
     _value,
 )
-from seamless_usd.discover.types import Origin
+from seamless_usd.textures import Origin
 from seamless_usd.discover.variants import apply_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 

@@ -7,7 +7,7 @@
 from __future__ import annotations
 
 from seamless_usd.discover.scan import open_stage, scan_mtlx, scan_paths, scan_stage
-from seamless_usd.discover.types import (
+from seamless_usd.textures import (
     AuthoredAt,
     ColorSpace,
     ImageInfo,

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from seamless_usd.discover.types import TextureMap, TextureStack
+from seamless_usd.textures import TextureMap, TextureStack
 
 __all__ = ["AtlasFigures", "atlas_figures", "atlas_evidence", "BACKGROUND_MIN", "ISLANDS_MIN"]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from seamless_usd.discover import uvgeom
-from seamless_usd.discover.types import Selection, TextureStack, describe_selection
+from seamless_usd.textures import Selection, TextureStack, describe_selection
 
 __all__ = ["Geometry"]
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from seamless_usd.discover.tokens import Codes, Roles
-from seamless_usd.discover.types import ColorSpace, ImageInfo, RoleUse
+from seamless_usd.textures import ColorSpace, ImageInfo, RoleUse
 from seamless_usd.findings import Finding, Severity
 
 __all__ = ["Label", "classify", "resolve_color_space", "mismatch_finding", "is_color_role"]

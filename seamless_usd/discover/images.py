@@ -16,7 +16,7 @@ import OpenImageIO as oiio
 from pxr import Ar
 
 from seamless_usd.discover.tokens import UDIM_TOKEN
-from seamless_usd.discover.types import ImageInfo
+from seamless_usd.textures import ImageInfo
 from seamless_usd.pngchunks import png_stated_color_space
 
 __all__ = ["read_image_info", "is_package_path", "udim_tiles", "ImageReadError"]

@@ -35,7 +35,7 @@ from enum import Enum
 import numpy as np
 
 from seamless_usd.discover.atlas import atlas_evidence
-from seamless_usd.discover.types import TextureMap, TextureStack
+from seamless_usd.textures import TextureMap, TextureStack
 
 __all__ = ["Intent", "IntentDecision", "Thresholds", "classify_stacks", "measure_map", "THRESHOLDS"]
 

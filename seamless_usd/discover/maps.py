@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from seamless_usd.discover.colorspace import Label, mismatch_finding, resolve_color_space
 from seamless_usd.discover.images import ImageReadError, is_package_path, read_image_info, udim_tiles
 from seamless_usd.discover.tokens import MIN_IMAGE_SIZE, UDIM_TOKEN, Codes, ShaderIds
-from seamless_usd.discover.types import AuthoredAt, ImageInfo, Origin, RoleUse, TextureMap, UVChain
+from seamless_usd.textures import AuthoredAt, ImageInfo, Origin, RoleUse, TextureMap, UVChain
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["TextureUse", "build_maps", "HeaderCache"]

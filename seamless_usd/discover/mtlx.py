@@ -22,7 +22,7 @@ from seamless_usd.discover.tokens import (
     Terminals,
     Wrap,
 )
-from seamless_usd.discover.types import NORMAL_ROLES, Origin, RoleUse
+from seamless_usd.textures import NORMAL_ROLES, Origin, RoleUse
 from seamless_usd.discover.uv import mtlx_uv_chain
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref

@@ -6,7 +6,7 @@ from functools import lru_cache
 import MaterialX as mx
 
 from seamless_usd.discover.tokens import OUTPUT_CHANNELS, TYPE_CHANNELS
-from seamless_usd.discover.types import AuthoredAt
+from seamless_usd.textures import AuthoredAt
 
 __all__ = ["standard_library", "node_type_name", "upstream", "value_source", "authored_at", "input_value", "channels_of"]
 

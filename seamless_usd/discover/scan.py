@@ -14,7 +14,7 @@ from seamless_usd.discover.intent import classify_stacks
 from seamless_usd.discover.maps import HeaderCache, TextureUse, build_maps
 from seamless_usd.discover.stacks import build_stacks
 from seamless_usd.discover.tokens import MTLX_SUFFIX, Codes
-from seamless_usd.discover.types import ExploredSelection, ScanResult, VariantExploration
+from seamless_usd.textures import ExploredSelection, ScanResult, VariantExploration
 from seamless_usd.discover.variants import VariantSpace
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref

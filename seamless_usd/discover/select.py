@@ -6,7 +6,7 @@ import fnmatch
 from collections.abc import Sequence
 
 from seamless_usd.discover.intent import Intent
-from seamless_usd.discover.types import ScanResult, TextureStack
+from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.findings import Severity
 
 __all__ = ["BLOCKING_SKIPS", "select_stacks", "blocked_stacks", "left_alone_stacks"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 
-from seamless_usd.discover.types import TextureMap, TextureStack, UVChain
+from seamless_usd.textures import TextureMap, TextureStack, UVChain
 
 __all__ = ["build_stacks", "chain_key"]
 

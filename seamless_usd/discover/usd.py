@@ -27,7 +27,7 @@ from seamless_usd.discover.tokens import (
     Terminals,
     Wrap,
 )
-from seamless_usd.discover.types import NORMAL_ROLES, ColorSpace, Origin, RoleUse
+from seamless_usd.textures import NORMAL_ROLES, ColorSpace, Origin, RoleUse
 from seamless_usd.discover.uv import usd_uv_chain
 from seamless_usd.findings import Finding, Severity, prim_ref
 

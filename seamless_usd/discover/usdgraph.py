@@ -5,7 +5,7 @@ import os
 
 from pxr import Ar, Sdf, Usd, UsdShade
 
-from seamless_usd.discover.types import AuthoredAt
+from seamless_usd.textures import AuthoredAt
 
 __all__ = [
     "shader_id", "layer_of", "authored_at", "input_value", "value_attribute", "producing_outputs",

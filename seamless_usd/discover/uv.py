@@ -13,7 +13,7 @@ from pxr import Usd, UsdShade
 
 from seamless_usd.discover import mtlxgraph, usdgraph
 from seamless_usd.discover.tokens import Inputs, MtlxCategories, MtlxInputs, ShaderIds, TransformKinds
-from seamless_usd.discover.types import AuthoredAt, UVChain, UVTransform
+from seamless_usd.textures import AuthoredAt, UVChain, UVTransform
 
 __all__ = ["usd_uv_chain", "mtlx_uv_chain"]
 

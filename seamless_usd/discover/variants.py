@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 from pxr import Sdf, Usd
 
-from seamless_usd.discover.types import Selection, VariantChoice
+from seamless_usd.textures import Selection, VariantChoice
 
 __all__ = ["VariantSpace", "apply_selection", "private_stage", "MAX_COMBINATIONS"]
 

@@ -35,7 +35,7 @@ from enum import Enum
 
 import numpy as np
 
-from seamless_usd.discover.types import ColorSpace, ImageInfo, TextureMap
+from seamless_usd.textures import ColorSpace, ImageInfo, TextureMap
 from seamless_usd.imaging.transfer import file_codes, from_linear, linear_table, to_linear
 from seamless_usd.imaging.io import alpha_channel
 from seamless_usd.imaging.normals import decode_normals, encode_normals, normal_scale_bias, stored_unit_tolerance

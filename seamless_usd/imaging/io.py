@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import OpenImageIO as oiio
 
-from seamless_usd.discover.types import ColorSpace, ImageInfo
+from seamless_usd.textures import ColorSpace, ImageInfo
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write
 from seamless_usd.findings import asset_ref
@@ -235,7 +235,7 @@ def output_extension(info: ImageInfo) -> str:
 
     Examples
     --------
-    >>> from seamless_usd.discover.types import ImageInfo
+    >>> from seamless_usd.textures import ImageInfo
     >>> output_extension(ImageInfo(8, 8, 3, "uint8", "jpeg"))
     '.png'
     >>> output_extension(ImageInfo(8, 8, 1, "uint16", "tiff"))

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from seamless_usd.discover.types import ImageInfo, TextureMap
+from seamless_usd.textures import ImageInfo, TextureMap
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 from seamless_usd.imaging.encoding import MapEncoding, decode_map

@@ -15,7 +15,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from seamless_usd.discover.types import ColorSpace
+from seamless_usd.textures import ColorSpace
 
 __all__ = ["TRANSFER_FUNCTIONS", "to_linear", "from_linear", "file_codes", "linear_table", "eotf_srgb",
            "eotf_inverse_srgb"]

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from seamless_usd.discover.types import ImageInfo
+from seamless_usd.textures import ImageInfo
 from seamless_usd.findings import asset_ref
 from seamless_usd.imaging.encoding import MapEncoding, encode_map
 from seamless_usd.imaging.io import norm_ext, output_extension, write_pixels

@@ -22,7 +22,7 @@ from filelock import FileLock
 from safetensors import SafetensorError
 from safetensors.numpy import load_file, save_file
 
-from seamless_usd import __version__
+from seamless_usd.version import __version__
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write, atomic_write_text
 from seamless_usd.findings import asset_ref

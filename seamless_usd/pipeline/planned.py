@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from seamless_usd import __version__
-from seamless_usd.discover.types import TextureStack
-from seamless_usd.pipeline.naming import tile_filename
+from seamless_usd.version import __version__
+from seamless_usd.textures import TextureStack
+from seamless_usd.naming import tile_filename
 from seamless_usd.pipeline.options import Options
 
 __all__ = ["planned_result", "wrap_only_result"]

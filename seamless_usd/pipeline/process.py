@@ -14,11 +14,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from seamless_usd import __version__
+from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
 from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_stacks
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
-from seamless_usd.discover.types import ScanResult, TextureStack, describe_selection
+from seamless_usd.textures import ScanResult, TextureStack, describe_selection
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 from seamless_usd.pipeline.cache import JobIndex, job_fingerprint
@@ -280,7 +280,8 @@ def _author_source(run: Run, src: _Source) -> None:
 
 
 def _finish(run: Run, started: float) -> Report:
-    from seamless_usd.report.html import write_html, write_json, write_library_html
+    from seamless_usd.report.html import write_html, write_json
+    from seamless_usd.report.index import write_library_html
 
     report = run.report
     report.tool_version = __version__

@@ -14,12 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from seamless_usd.discover.types import TextureMap, TextureStack
+from seamless_usd.textures import TextureMap, TextureStack
 from seamless_usd.fileio import confine
 from seamless_usd.findings import Finding
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
-from seamless_usd.pipeline.naming import tile_filename
+from seamless_usd.naming import tile_filename
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import judge
@@ -138,7 +138,7 @@ class StackOutcome:
 
     def stack_result(self, stack: TextureStack):
         """The authoring input for ``stack`` (possibly an identical stack of another material)."""
-        from seamless_usd import __version__
+        from seamless_usd.version import __version__
         from seamless_usd.authoring import MapResult, Provenance, StackResult
 
         prov = Provenance(

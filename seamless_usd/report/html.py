@@ -22,7 +22,7 @@ from seamless_usd.synthesis.tile import structure_advice
 from seamless_usd.verdict.lines import Seam
 from seamless_usd.report.verdicts import LABELS, SEAM_KEYS, TORUS_NOTE, target_text, targets, verdict
 
-__all__ = ["render_html", "render_index", "write_html", "write_json", "write_library_html",
+__all__ = ["render_html", "write_html", "write_json",
            "stack_html", "map_verdicts", "failing_figures", "source_report"]
 
 
@@ -417,17 +417,3 @@ def source_report(report: Report, source: str) -> Report:
         unreadable=[u for u in report.unreadable if u == source],
         variants=[v for v in report.variants if v["source"] == source],
     )
-
-
-def render_index(report: Report, pages: dict[str, str], title: str = "seamless-usd library report") -> str:
-    """The library index page (see :func:`seamless_usd.report.index.render_index`)."""
-    from seamless_usd.report import index
-
-    return index.render_index(report, pages, title)
-
-
-def write_library_html(report: Report, path: Path) -> Path:
-    """The index page at ``path`` and one report per source beside it (``<stem>.files/``)."""
-    from seamless_usd.report import index
-
-    return index.write_library_html(report, path)

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from seamless_usd.fileio import atomic_write_text
+from seamless_usd.naming import slug
 from seamless_usd.report.html import failing_figures, render_html, source_report
 from seamless_usd.report.htmlparts import esc, page
 from seamless_usd.report.model import Report, StackReport, StackStatus
@@ -144,8 +145,6 @@ def render_index(report: Report, pages: dict[str, str], title: str = "seamless-u
 
 def write_library_html(report: Report, path: Path) -> Path:
     """The index page at ``path`` and one report per source beside it (``<stem>.files/``)."""
-    from seamless_usd.pipeline.naming import slug
-
     path = Path(path)
     folder = path.with_name(f"{path.stem}.files")
     folder.mkdir(parents=True, exist_ok=True)

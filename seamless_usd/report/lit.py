@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from seamless_usd.discover.types import NORMAL_ROLES, ColorSpace
+from seamless_usd.textures import NORMAL_ROLES, ColorSpace
 
 __all__ = [
     "ALBEDO_ROLES", "ROUGHNESS_ROLES", "METALLIC_ROLES", "OCCLUSION_ROLES",

@@ -1,7 +1,9 @@
-"""Plain values produced by discovery: where each texture is, how it is used, how it is grouped.
+"""The values that cross between the steps: a texture map, where it is authored, how it is used and
+how the maps of a material group into a stack.
 
-No pixels here. Every later step (imaging, synthesis, authoring, pipeline) takes these values,
-so they are frozen dataclasses with a JSON form (``to_dict``).
+Discovery makes them; every later step (imaging, synthesis, authoring, pipeline, report) takes them.
+No pixels here, and nothing above this module is imported: these are frozen dataclasses with a JSON
+form (``to_dict``).
 """
 from __future__ import annotations
 
