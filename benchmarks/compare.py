@@ -7,7 +7,7 @@ maps and how many maps are inside, then how many maps meet both fidelity targets
 Runs with several seeds also list, per stack, the seed kept and each seed's score::
 
     .venv/bin/python benchmarks/compare.py --run "1 seed=benchmarks/results/quality.json" \\
-        --run "2 seeds=runs/seeds/quality.json" --title "Seeds side by side" --out benchmarks/results/seeds.md
+        --run "2 seeds=runs/seeds/quality.json" --title "Seeds side by side" --out /tmp/seeds.md
 """
 from __future__ import annotations
 

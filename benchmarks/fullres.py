@@ -24,6 +24,11 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+if str(HERE) not in sys.path:  # results_io sits beside this script
+    sys.path.insert(0, str(HERE))
+
+from results_io import write_results  # noqa: E402
+
 TEXTURES = HERE.parent.parent / "shared" / "textures"
 NOTES = "## Notes"  # fullres.md keeps everything from this heading on when the table is rewritten
 MAPS = (("brick_base_gray.jpg", False), ("brick_normal.jpg", True), ("brick_roughness.jpg", False))
@@ -105,8 +110,6 @@ def main(argv=None) -> int:
         print(f"{size:>5} px: total {row['total_s']:.0f} s (at {row['preset_iterations']} iterations: "
               f"{row['total_at_preset_iterations_s']:.0f} s), refine {row.get('refine_s', 0):.0f} s, "
               f"peak {row['peak_rss_gib']:.2f} GiB, working {row['working_size']}, load {load_before:.2f}", flush=True)
-    a.out.mkdir(parents=True, exist_ok=True)
-    (a.out / "fullres.json").write_text(json.dumps(rows, indent=1) + "\n")
     lines = ["# Full-resolution benchmark", "", f"Command: `benchmarks/fullres.py {' '.join(argv or sys.argv[1:])}`", "",
              "| size | working | train s | sample s | refine s | lattice s | total s | total at preset iterations s "
              "| peak RSS GiB | tile | layout | load |",
@@ -118,7 +121,8 @@ def main(argv=None) -> int:
                      f"{'x'.join(map(str, r['tile_size']))} | {r.get('layout', '')} | {r['load_average_at_start']:.2f} |")
     page = a.out / "fullres.md"
     notes = page.read_text().partition(NOTES)[2] if page.exists() else ""  # kept: written by hand
-    page.write_text("\n".join(lines) + "\n" + (f"\n{NOTES}{notes}" if notes else ""))
+    text = "\n".join(lines) + "\n" + (f"\n{NOTES}{notes}" if notes else "")
+    write_results(a.out, "fullres", text, rows, end="\n")
     return 0
 
 

@@ -15,7 +15,6 @@ Writes ``<out>/kernels.json`` and ``<out>/kernels.md``. Run from anywhere::
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -26,6 +25,7 @@ if str(HERE) not in sys.path:
     sys.path.insert(0, str(HERE))
 
 from steps import StepRunner, load_average, matmul_gflops  # noqa: E402  (sets the OpenMP policy first)
+from results_io import write_results  # noqa: E402
 
 import torch  # noqa: E402
 from torch import nn  # noqa: E402
@@ -150,10 +150,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=HERE / "results")
     args = p.parse_args(argv)
     result = run(args.preset, args.seconds)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "kernels.json").write_text(json.dumps(result, indent=1))
-    (args.out / "kernels.md").write_text(to_markdown(result))
-    print(to_markdown(result))
+    page = to_markdown(result)
+    write_results(args.out, "kernels", page, result)
+    print(page)
     return 0
 
 

@@ -29,6 +29,10 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
+if str(REPO / "benchmarks") not in sys.path:  # results_io sits beside this script
+    sys.path.insert(0, str(REPO / "benchmarks"))
+
+from results_io import write_results  # noqa: E402
 
 SCENE = """#usda 1.0
 (
@@ -174,12 +178,10 @@ def main(argv: list[str] | None = None) -> int:
         )
     text = "\n".join(lines) + "\n"
     print(text)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "library.md").write_text(text)
     recorded = {k: str(v) for k, v in vars(args).items()}
     if args.out.resolve().is_relative_to(REPO):
         recorded["out"] = str(args.out.resolve().relative_to(REPO))  # no machine paths in results
-    (args.out / "library.json").write_text(json.dumps({"args": recorded, "runs": rows}, indent=2))
+    write_results(args.out, "library", text, {"args": recorded, "runs": rows}, indent=2)
     return 0
 
 

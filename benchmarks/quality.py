@@ -7,7 +7,7 @@ the metrics of :mod:`seamless_usd.metrics` (seam ratios, periodic-plus-smooth sc
 ratios, SSIM and Gram distance to the source), and writes:
 
 - ``<out>/quality.json``: every figure, with the run's settings;
-- ``<out>/quality.md``: the same as Markdown tables, with the issue's targets checked;
+- ``<out>/quality.md``: the same as Markdown tables, with the targets (`seamless_usd.metrics.TARGETS`) checked;
 - ``<out>/tiles/<stack>__<map>__<method>.jpg``: the 2x2 tiling of the method's tile (left) beside
   the naive 2x2 tiling of the input (right), for every method but ``naive``.
 
@@ -42,6 +42,7 @@ if str(HERE) not in sys.path:  # the baselines sit beside this script
 from methods import SYNTHESIS_METHODS, MethodResult, img2texture_tile, preset_config, run_synthesis, to_source_grid
 from baselines import BASELINES  # noqa: E402
 from quality_md import TARGETS, fmt, to_markdown  # noqa: E402,F401 (re-exported)
+from results_io import write_results  # noqa: E402
 from stacks import (FULLRES_STACKS, QUALITY_STACKS, SHARED_DIR, STACKS, MapFile, StackSpec,  # noqa: E402,F401
                     load_stack)
 
@@ -324,18 +325,13 @@ def run(
                     f"p+s {m['ps_score']:.3f}  detail {m['detail_ratio']:.2f}  ssim {m['ssim']:.3f}"
                 )
         merged()
-        _write(out, result)  # after every stack, so a long run leaves its figures as it goes
+        # after every stack, so a long run leaves its figures as it goes
+        write_results(out, "quality", to_markdown(result), result, end="\n")
     result["complete"] = True
     merged()
-    _write(out, result)
-    log(f"wrote @{out / 'quality.md'}@ and @{out / 'quality.json'}@")
+    page, figures = write_results(out, "quality", to_markdown(result), result, end="\n")
+    log(f"wrote @{page}@ and @{figures}@")
     return result
-
-
-def _write(out: Path, result: dict) -> None:
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "quality.json").write_text(json.dumps(result, indent=1) + "\n")
-    (out / "quality.md").write_text(to_markdown(result))
 
 
 def _names(text: str, valid: Sequence[str], what: str) -> list[str]:

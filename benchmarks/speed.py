@@ -45,6 +45,7 @@ if str(HERE) not in sys.path:  # steps.py sits beside this script
 from seamless_usd.synthesis import MapInput, get_preset, sample, train  # noqa: E402
 from seamless_usd.synthesis.precision import cpu_supports_bf16, resolve_precision  # noqa: E402
 from seamless_usd.synthesis.gan.train import TrainedModel, build_networks  # noqa: E402
+from results_io import write_results  # noqa: E402
 from steps import (CHANNELS, bench_compile, bench_seeds, bench_steps, bench_wait_policy, load_average,  # noqa: E402
                    profile_step)
 
@@ -168,7 +169,7 @@ def seam_compare(preset: str, probs: tuple[float, ...] = (0.0, 0.3)) -> dict:
     return {"preset": preset, "results": out}
 
 
-def write_markdown(record: dict, path: Path) -> None:
+def speed_md(record: dict) -> str:
     """The figures of ``speed.json`` as Markdown tables."""
     m = record.get("machine", {})
     lines = ["# Speed benchmark", "", f"Written by `benchmarks/speed.py`. Machine: {m.get('cpu')}, "
@@ -272,7 +273,7 @@ def write_markdown(record: dict, path: Path) -> None:
     notes = record.get("notes")
     if notes:
         lines += ["## Notes", ""] + [f"- {n}" for n in notes] + [""]
-    path.write_text("\n".join(lines))
+    return "\n".join(lines)
 
 
 def main(argv=None) -> int:
@@ -333,8 +334,7 @@ def main(argv=None) -> int:
             keep = [r for r in record.get("sampling", [])
                     if (r["preset"], r["size"], r["whole_search"]) not in {(n["preset"], n["size"], n["whole_search"]) for n in new}]
             record["sampling"] = keep + new
-    json_path.write_text(json.dumps(record, indent=1))
-    write_markdown(record, RESULTS / "speed.md")
+    write_results(RESULTS, "speed", speed_md(record), record)
     print(f"wrote {json_path.relative_to(ROOT)}")
     return 0
 

@@ -27,7 +27,6 @@ Writes ``<out>/spread.json`` and ``<out>/spread.md``. Run from anywhere::
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import tempfile
@@ -42,6 +41,7 @@ if str(HERE) not in sys.path:
     sys.path.insert(0, str(HERE))
 
 from methods import preset_config  # noqa: E402
+from results_io import write_results  # noqa: E402
 from stacks import SHARED_DIR, STACKS, load_stack  # noqa: E402
 
 from seamless_usd import metrics as M  # noqa: E402
@@ -215,10 +215,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if unknown:
         p.error(f"unknown stacks {unknown}; choose from {', '.join(STACKS)}")
     result = run(names, args.seed, args.q, args.preset, args.textures_dir, args.max_size)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "spread.json").write_text(json.dumps(result, indent=1))
-    (args.out / "spread.md").write_text(to_markdown(result))
-    print(f"wrote {args.out / 'spread.md'}")
+    page, _ = write_results(args.out, "spread", to_markdown(result), result)
+    print(f"wrote {page}")
     return 0
 
 

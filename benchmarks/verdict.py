@@ -19,7 +19,6 @@ seamless, seamed called seamed, and the ROC area of its continuous figure. Write
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -32,6 +31,7 @@ sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
 import verdict_corpus as corpus  # noqa: E402
+from results_io import write_results  # noqa: E402
 from seamless_usd.metrics import centre_seam_ratios, ps_score, seam_ratios  # noqa: E402
 from seamless_usd.verdict import judge  # noqa: E402
 
@@ -104,7 +104,7 @@ def summarise(rows: list[dict], rules: list[str]) -> dict:
     return out
 
 
-def write_md(summary: dict, rows: list[dict], rules: list[str], path: Path, note: str) -> None:
+def verdict_md(summary: dict, rows: list[dict], rules: list[str], note: str) -> str:
     lines = ["# Verdict benchmark", "", note, "",
              "| part | rule | seamless called seamless | seamed called seamed | ROC area |", "|---|---|---:|---:|---:|"]
     for split, rs in summary.items():
@@ -119,7 +119,7 @@ def write_md(summary: dict, rows: list[dict], rules: list[str], path: Path, note
         cells = [("**seamed**" if r[k][0] else "seamless") + f" {r[k][1]:.2f}" for k in rules]
         lines.append(f"| {r['name']} | {r['split']} | {'seamless' if r['seamless'] else 'seamed'} | "
                      + " | ".join(cells) + " |")
-    path.write_text("\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -148,9 +148,7 @@ def main(argv: list[str] | None = None) -> int:
     note = (f"{len(rows)} items at sides {sides}; {time.perf_counter() - t0:.0f} s in all, load average "
             f"{load:.2f} at the start; the verdict took {np.median(seconds):.2f} s per item (median, "
             f"{max(seconds):.2f} s at most).")
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "verdict.json").write_text(json.dumps({"summary": summary, "items": rows}, indent=1))
-    write_md(summary, rows, rules, args.out / "verdict.md", note)
+    write_results(args.out, "verdict", verdict_md(summary, rows, rules, note), {"summary": summary, "items": rows})
     print(note)
     for split, rs in summary.items():
         for rule, s in rs.items():

@@ -54,10 +54,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run stacks on Dask: local:N (a local cluster of N workers) or tcp://host:8786")
     p.add_argument("--refine", choices=REFINE_MODES, default="on",
-                   help="exemplar refinement of the SeamlessGAN tile to the source's resolution with real "
-                        "source texels; for textures that repeat on a lattice (bricks, weaves), a cut of whole "
-                        "periods of the source instead when Q and the fidelity figures prefer it. gan: the "
-                        "refined GAN tile only; off: the pure SeamlessGAN tile (default: %(default)s)")
+                   help="on: the SeamlessGAN tile refined to the source's resolution with real source texels, "
+                        "or a tile cut from the source (whole periods of a texture that repeats, one window of "
+                        "one that continues itself, else a quilt of large source blocks) when the verdict and "
+                        "the figures prefer it; gan: the refined GAN tile only; off: the pure SeamlessGAN tile "
+                        "(default: %(default)s)")
     p.add_argument("--tile-size", choices=TILE_SIZES, default="source",
                    help="source: the tile has the source's pixel size (same texture memory); "
                         "paper: the paper's 2c x 2c tile (default: %(default)s)")

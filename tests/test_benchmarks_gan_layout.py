@@ -1,4 +1,5 @@
-"""The GAN-layout benchmark runs end to end on a bundled sample with the test preset."""
+"""The GAN-layout experiment (benchmarks/experiments/gan_layout.py) runs end to end on a bundled sample with the
+test preset."""
 from __future__ import annotations
 
 import json
@@ -7,7 +8,7 @@ from benchscripts import load_benchmark
 
 
 def test_the_gan_layout_benchmark_prints_its_figures_and_writes_its_picture(tmp_path, capsys, one_thread):
-    gan = load_benchmark("gan_layout")
+    gan = load_benchmark("experiments/gan_layout")
     assert gan.main(["--stack", "cloth", "--preset", "tiny", "--iterations", "4", "--out", str(tmp_path)]) == 0
     row = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert row["stack"] == "cloth" and row["iterations"] == 4 and row["layout_structure"] > 0

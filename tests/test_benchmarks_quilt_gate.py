@@ -1,5 +1,6 @@
-"""The quilt-gate benchmark on two small synthetic items: the stripes' quilt hides its joins and passes, the
-stones' quilt passes the verdict with two-tone stones and is not written as passed."""
+"""The quilt-gate experiment (benchmarks/experiments/quilt_gate.py) on two small synthetic items: the stripes'
+quilt hides its joins and passes, the stones' quilt passes the verdict with two-tone stones and is not written
+as passed."""
 from __future__ import annotations
 
 import json
@@ -8,7 +9,7 @@ from benchscripts import load_benchmark
 
 
 def test_the_quilt_gate_benchmark_tells_hidden_joins_from_false_passes(tmp_path):
-    gate = load_benchmark("quilt_gate")
+    gate = load_benchmark("experiments/quilt_gate")
     assert gate.main(["--items", "stripes_160_7,cells_256_2", "--out", str(tmp_path)]) == 0
     rows = {r["item"]: r for r in json.loads((tmp_path / "quilt_gate.json").read_text())}
     assert set(rows) == {"stripes_160_7/difference", "stripes_160_7/lines", "cells_256_2/difference", "cells_256_2/lines"}

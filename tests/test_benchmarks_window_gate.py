@@ -1,4 +1,5 @@
-"""The window-gate benchmark runs on the bundled samples: the weave's window is offered, the wood's is not."""
+"""The window-gate experiment (benchmarks/experiments/window_gate.py) runs on the bundled samples: the weave's
+window is offered, the wood's is not."""
 from __future__ import annotations
 
 import json
@@ -7,7 +8,7 @@ from benchscripts import load_benchmark
 
 
 def test_the_window_gate_benchmark_offers_the_weave_and_not_the_wood(tmp_path):
-    gate = load_benchmark("window_gate")
+    gate = load_benchmark("experiments/window_gate")
     assert gate.main(["--items", "cloth,wood", "--out", str(tmp_path)]) == 0
     rows = {r["item"]: r for r in json.loads((tmp_path / "window_gate.json").read_text())}
     assert rows["cloth"]["offered"] and rows["cloth"]["seamless_by_eye"]

@@ -183,11 +183,12 @@ def test_a_window_cut_joins_only_across_its_wraps(name):
 @pytest.mark.parametrize("name", ["cells", "stripes"])
 def test_a_stack_that_does_not_continue_itself_gets_a_quilt_not_a_window_cut(made_tiles, name):
     """Neither stack repeats, nor continues itself at any lag: a window of it is joined where stones and
-    stripes visibly break, and the verdict misses some such joins (benchmarks/results/window_gate.md), so no
-    window is offered. A source-sized quilt of four large blocks is weighed against the refined tile instead
-    (lattice/quilt.py): the one that passes, else the lower score (fidelity and structure) is written. The
-    verdict passes neither for the cells (their joins thicken joints and glue stone edges); it passes the
-    stripes' quilt, whose lines run unbroken and unkinked across its joins and wraps at 3x, 2x2 repeated."""
+    stripes visibly break, and the verdict misses some such joins
+    (benchmarks/experiments/results/window_gate.md), so no window is offered. A source-sized quilt of four
+    large blocks is weighed against the refined tile instead (lattice/quilt.py): the one that passes, else
+    the lower score (fidelity and structure) is written. The verdict passes neither for the cells (their
+    joins thicken joints and glue stone edges); it passes the stripes' quilt, whose lines run unbroken and
+    unkinked across its joins and wraps at 3x, 2x2 repeated."""
     from seamless_usd.synthesis.lattice.window import WINDOW_MAX_DIFFERENCE
     from seamless_usd.synthesis.tile import QUILT_MAX_DIFFERENCE
     from seamless_usd.verdict import judge

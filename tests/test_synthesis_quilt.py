@@ -104,8 +104,9 @@ def test_the_best_of_several_quilts_has_the_cheapest_worst_join(cells):
 @pytest.mark.parametrize("kind", ["cells", "stripes"])
 def test_a_quilt_the_verdict_passes_but_whose_joins_do_not_hide_is_not_written(kind):
     """These quilts pass the verdict, yet show two-tone stones and stripes that end at a cut
-    (benchmarks/results/quilt_gate.md): their worst join differs by more than QUILT_MAX_DIFFERENCE, so
-    make_tile refuses them, says so, and writes the refined tile, which the verdict does not pass."""
+    (benchmarks/experiments/results/quilt_gate.md): their worst join differs by more than
+    QUILT_MAX_DIFFERENCE, so make_tile refuses them, says so, and writes the refined tile, which the verdict
+    does not pass."""
     from seamless_usd.synthesis import MapInput, get_preset, make_tile
     from seamless_usd.synthesis.tile import QUILT_MAX_DIFFERENCE
     from seamless_usd.verdict import judge

@@ -53,9 +53,9 @@ class Options:
     seeds: int | None = None  # override the preset's seeds trained side by side (the best tile is kept)
     scheduler: str | None = None  # None: in this process; "local:N": N local Dask workers; "tcp://host:port"
     jobs: int | None = None  # stacks trained at once (local workers); None: 1 in process, N for local:N
-    refine: str = "on"  # "on": the GAN tile refined to the source's resolution or, for stacks that repeat on a
-    #                     lattice, a cut of whole periods when that scores better; "gan": the refined GAN tile
-    #                     only; "off": the pure SeamlessGAN tile
+    refine: str = "on"  # "on": the GAN tile refined to the source's resolution or a tile cut from the source
+    #                     (lattice periods, one window or a quilt) when that passes or scores better; "gan": the
+    #                     refined GAN tile only; "off": the pure SeamlessGAN tile
     tile_size: str = "source"  # "source": tile has the source's pixel size; "paper": the paper's 2c x 2c tile
     force: bool = False  # process every stack whatever its tiling intent (uv-atlas, already-tileable, other)
     force_materials: tuple[str, ...] = ()  # fnmatch patterns of materials processed whatever their intent

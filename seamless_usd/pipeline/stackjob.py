@@ -22,8 +22,8 @@ from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.naming import tile_filename
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.report.previews import stack_previews
-from seamless_usd.verdict import judge
-from seamless_usd.verdict.joins import inside_figures
+from seamless_usd.verdict import Reading, Reference, judge_reading
+from seamless_usd.verdict.joins import inside_figures, join_stats
 
 __all__ = ["JobSettings", "StackJob", "StackOutcome", "MapOutcome", "run_stack", "map_identity", "on_tile_grid"]
 
@@ -263,13 +263,20 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     scale = dict(meta["scale"])
     working = tuple(int(v) for v in scale["gan_working_size"])
     t4 = time.perf_counter()
-    verdict = judge(written_values, sources, [m.is_normal for m in stack.maps], [m.asset for m in stack.maps])
+    # the written maps read against the sources once, for the verdict and the join figures alike
+    normals, assets = [m.is_normal for m in stack.maps], [m.asset for m in stack.maps]
+    reading = Reading(written_values, normals, assets, Reference(sources, normals, assets, keep_index=False))
+    verdict = judge_reading(reading)
     ratio = synthesis.written_lattice_ratio(scale.get("lattice") or {}, scale.get("layout"))
     if ratio is not None and ratio < synthesis.LATTICE_TARGET:  # the source repeats and the tile breaks it
         verdict.failing.append(f"all maps: lattice_ratio {ratio:.3g} (tolerance at least {synthesis.LATTICE_TARGET:.2f})")
         verdict.faithful = False
     timings["verdict"] = time.perf_counter() - t4
-    inside = inside_figures(written_values, sources, [m.is_normal for m in stack.maps], [m.asset for m in stack.maps])
+    t5 = time.perf_counter()
+    joins = join_stats(written_values, sources, normals, assets, reading=reading)
+    del reading  # let the working copies go before the structure figures
+    inside = inside_figures(written_values, sources, normals, assets, joins=joins)
+    timings["inside"] = time.perf_counter() - t5  # bad joins, coherence and structure of every map
     for m, figures in zip(stack.maps, inside):
         outcomes[map_identity(m)].metrics.update(figures)
     failing = list(verdict.failing)

@@ -112,7 +112,7 @@ PRESETS: dict[str, SynthesisConfig] = {
     # patch-distance median from 1.02 to 0.93 (benchmarks/results/quality.md); draft stays a quick look.
     # Two seeds train side by side, one per core, for 1.09x the wall time of one: the best of the two took
     # the stacks whose tile passes Q from 1 to 3 of 6 and the maps inside every target from 3 to 4 of 12,
-    # the medians within noise (benchmarks/results/seeds.md).
+    # the medians within noise (docs/decisions.md, "Two seeds side by side").
     "default": SynthesisConfig(k=64, ngf=16, ndf=16, n_res_blocks=4, style_channels=16, iterations=2400,
                                seeds=2, crop_step=32, max_candidates=12, checkpoint_every=200),
     "draft": SynthesisConfig(k=32, ngf=16, ndf=16, n_res_blocks=3, style_channels=16, iterations=350,

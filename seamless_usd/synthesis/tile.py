@@ -22,6 +22,7 @@ import torch.nn.functional as F
 
 from seamless_usd.metrics import scale_ratio
 from seamless_usd.metrics.structure import STRUCTURE_TARGET, structure_figures
+from seamless_usd.verdict import Reading, Reference, judge_reading
 from seamless_usd.verdict import judge as verdict_of
 
 from .config import SynthesisConfig
@@ -53,7 +54,7 @@ QUILT_CELLS = (2, 2)
 QUILT_TRIES = 3
 #: A quilt whose two blocks differ along some cut by more than this (mean squared difference over that of
 #: two unrelated texels) may be written only where the verdict does not pass it. The window cut's
-#: threshold, fixed on window cuts looked at along their wraps (``benchmarks/results/window_gate.md``);
+#: threshold, fixed on window cuts looked at along their wraps (``benchmarks/experiments/results/window_gate.md``);
 #: quilts looked at afterwards: the two the verdict passed at or under it are seamless, the three it
 #: passed over it (0.10-0.36) show two-tone stones, stepped tone patches and stripes ending at a cut.
 QUILT_MAX_DIFFERENCE = WINDOW_MAX_DIFFERENCE
@@ -231,7 +232,7 @@ def structure_advice(lattice: dict, layout_kind: str | None) -> str | None:
     ``MadeTile.layout_kind`` as recorded; None for any other. Such a stack neither repeats (no lattice) nor
     continues itself at a window's lags (its window was refused), and what was written is the refined tile or
     a quilt whose blocks differ along a cut: every lever measured on such stacks leaves joins that show
-    (two-tone stones, stepped tone patches, jogging courses, stripes that end; ``benchmarks/results/levers*.md``)."""
+    (two-tone stones, stepped tone patches, jogging courses, stripes that end; ``benchmarks/experiments/results/levers*.md``)."""
     refused = lattice.get("window_refused")
     if refused is None or any(p is not None for p in lattice.get("period_px") or []):
         return None
@@ -253,8 +254,10 @@ def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[f
     return out
 
 
-def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice) -> tuple[float, bool, float | None]:
-    """(score, passes, lattice ratio) of a candidate tile.
+def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice, reference: Reference
+            ) -> tuple[float, bool, float | None]:
+    """(score, passes, lattice ratio) of a candidate tile; ``reference``: ``maps`` prepared for the verdict once
+    for every candidate.
 
     The score is the worst figure in units of its target: :func:`.seeds.fidelity_score`; the structure
     figure (value over STRUCTURE_TARGET: broken joints and chopped lines, which no fidelity figure sees);
@@ -268,8 +271,7 @@ def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice
     ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
     if ratio is not None:
         score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
-    verdict = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
-                    [m.name for m in maps])
+    verdict = judge_reading(Reading([tiles[m.name] for m in maps], reference.normals, reference.names, reference))
     score = max(score, verdict.strongest / verdict.margin)
     return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
 
@@ -280,7 +282,7 @@ def _cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes
     (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``), else source-sized
     tile quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES seeds, the one
     whose worst join costs least; cuts by the blocks' difference: cuts along the texture's lines thickened
-    and forked its joints and read worse on every figure, ``benchmarks/results/levers_quilt*.md``). Returns
+    and forked its joints and read worse on every figure, ``benchmarks/experiments/results/levers_quilt*.md``). Returns
     (kind, field (h, w, 2) of source texels, figures), or None."""
     pixels = [m.pixels for m in maps]
     if lattice.found:
@@ -304,7 +306,7 @@ def _cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes
 def _joins_hide(figures: dict) -> bool:
     """Whether a quilt's joins hide: the two blocks agree along every cut to within QUILT_MAX_DIFFERENCE
     (its ``difference_worst``). Where they do not, the verdict passed seamed quilts (two-tone stones, tone
-    patches, stripes ending at a cut: ``benchmarks/results/quilt_gate.md``)."""
+    patches, stripes ending at a cut: ``benchmarks/experiments/results/quilt_gate.md``)."""
     return figures["difference_worst"] <= QUILT_MAX_DIFFERENCE
 
 
@@ -328,8 +330,9 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
     grid = [MapInput(m.name, _resized(m.pixels, half, m.is_normal, periodic=True), m.is_normal)
             for m in maps] if halve > 1 else maps
     grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
+    reference = Reference([m.pixels for m in grid], [m.is_normal for m in grid], [m.name for m in grid])
     current, current_passes, current_ratio = _judged(_on_grid(made.maps, maps, (1 / halve, 1 / halve)), grid,
-                                                     grid_lattice)
+                                                     grid_lattice, reference)
     kind = made.layout_kind
     made.lattice.update({f"q_passed_{kind}": made.q_passed, f"passes_{kind}": current_passes,
                          f"score_{kind}": round(current, 3)})
@@ -339,8 +342,9 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
         return
     cut_kind, field_, figures = candidate
     tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
-    score, verdict_passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice)
-    # the verdict misses joins like a quilt's that do not hide (benchmarks/results/quilt_gate.md)
+    score, verdict_passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice,
+                                           reference)
+    # the verdict misses joins like a quilt's that do not hide (benchmarks/experiments/results/quilt_gate.md)
     passes = verdict_passes and (cut_kind != "quilt" or _joins_hide(figures))
     tile_hw = next(iter(tiles.values())).shape[:2]
     q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))

@@ -7,10 +7,11 @@ See :mod:`.judge` for exactly what ``passed`` means.
 """
 from __future__ import annotations
 
-from .judge import LENGTH, SEAM_MARGIN, SELF_MARGIN, STEP, Verdict, judge
+from .judge import LENGTH, SEAM_MARGIN, SELF_MARGIN, STEP, Verdict, judge, judge_reading
 from .lines import Seam
 from .prepare import WORK_SIDE
+from .reference import Reading, Reference
 from .tolerance import FIDELITY_KEYS, faithfulness, scale_tolerance
 
-__all__ = ["Verdict", "Seam", "judge", "faithfulness", "scale_tolerance", "FIDELITY_KEYS", "SEAM_MARGIN",
+__all__ = ["Verdict", "Seam", "judge", "judge_reading", "Reference", "Reading", "faithfulness", "scale_tolerance", "FIDELITY_KEYS", "SEAM_MARGIN",
            "SELF_MARGIN", "LENGTH", "STEP", "WORK_SIDE"]

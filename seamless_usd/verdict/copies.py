@@ -27,8 +27,8 @@ import numpy as np
 from .features import moving_mean
 from .lines import Seam
 
-__all__ = ["COPY_SHARE", "COPY_THRESHOLD", "EXACT_SHARE", "INFER", "MAP_THRESHOLD", "continuation", "copy_origins",
-           "copy_seams", "step_unit"]
+__all__ = ["COPY_SHARE", "COPY_THRESHOLD", "EXACT_SHARE", "INFER", "MAP_THRESHOLD", "SourceIndex", "continuation",
+           "copy_origins", "copy_seams", "step_unit"]
 
 #: Share of a tile's texels that must be placed in the source (found or inferred) for the tile to be judged
 #: as copies.
@@ -79,33 +79,46 @@ def _keys(img: np.ndarray, periodic: bool) -> np.ndarray:
     return key
 
 
-def copy_origins(tile: np.ndarray, source: np.ndarray, infer: int = 0) -> tuple[np.ndarray, float]:
+class SourceIndex:
+    """A source's 3 x 3 neighbourhood keys, sorted for lookup: made once per source and reused by every tile
+    whose copies are looked up in it (the candidates of one stack, the verdict and the join figures)."""
+
+    def __init__(self, source: np.ndarray):
+        sk = _keys(source, periodic=False)  # centre texel (y + 1, x + 1) of the source
+        self.shape = sk.shape
+        self.order = np.argsort(sk.ravel(), kind="stable")
+        self.sorted_keys = sk.ravel()[self.order]
+
+    def lookup(self, wanted: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For each key of ``wanted``: whether the source has it, the first place (flat index into the source's
+        keys) and how many places have it."""
+        # looked up in key order: a sorted search over sorted queries walks the table once (at 4K this lookup
+        # took 55 s with the queries unsorted, 22 s sorted)
+        by_key = np.argsort(wanted)
+        idx, right = np.empty_like(by_key), np.empty_like(by_key)
+        in_order = wanted[by_key]
+        idx[by_key] = np.searchsorted(self.sorted_keys, in_order)
+        right[by_key] = np.searchsorted(self.sorted_keys, in_order, side="right")
+        idx = np.clip(idx, 0, len(self.sorted_keys) - 1)
+        return self.sorted_keys[idx] == wanted, self.order[idx], right - idx
+
+
+def copy_origins(tile: np.ndarray, source: np.ndarray, infer: int = 0, index: SourceIndex | None = None
+                 ) -> tuple[np.ndarray, float]:
     """Source position ``(y, x)`` of every tile texel (-1 where none is placed), and the share found exactly.
 
     ``infer``: texels not found within this many texels of found ones take a found neighbour's origin,
-    moved by one (see the module notes); 0: only exact matches are placed."""
+    moved by one (see the module notes); 0: only exact matches are placed. ``index``: the source's
+    :class:`SourceIndex` when it is already made."""
+    index = SourceIndex(source) if index is None else index
     tk = _keys(tile, periodic=True)
-    sk = _keys(source, periodic=False)  # centre texel (y + 1, x + 1) of the source
-    flat = sk.ravel()
-    order = np.argsort(flat, kind="stable")
-    sorted_keys = flat[order]
-    wanted = tk.ravel()
-    # looked up in key order: a sorted search over sorted queries walks the table once (at 4K this lookup
-    # took 55 s with the queries unsorted, 22 s sorted)
-    by_key = np.argsort(wanted)
-    idx, right = np.empty_like(by_key), np.empty_like(by_key)
-    in_order = wanted[by_key]
-    idx[by_key] = np.searchsorted(sorted_keys, in_order)
-    right[by_key] = np.searchsorted(sorted_keys, in_order, side="right")
-    idx = np.clip(idx, 0, len(sorted_keys) - 1)
-    hit = sorted_keys[idx] == wanted
-    pos = order[idx]
-    ys, xs = pos // sk.shape[1] + 1, pos % sk.shape[1] + 1
+    hit, pos, count = index.lookup(tk.ravel())
+    ys, xs = pos // index.shape[1] + 1, pos % index.shape[1] + 1
     origin = np.stack([np.where(hit, ys, -1), np.where(hit, xs, -1)], -1).reshape(tk.shape + (2,))
     tq, sq = _quantised(tile), _quantised(source)
     # a neighbourhood found in one place only, or one with texture in it, places its texel for certain; a
     # flat one is found all over a flat area, and its continuation there may be anything
-    single = hit & (right - idx == 1)
+    single = hit & (count == 1)
     certain = single.reshape(tk.shape) | (hit.reshape(tk.shape) & (_local_range(tq) >= FLAT_CODES))
     # a texel beside a join has a neighbourhood the source lacks: it takes its neighbour's origin, moved
     # by one, when the source has exactly its value there
@@ -245,12 +258,14 @@ def _continuation(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, axis
 
 
 def copy_seams(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, name: str, run: int,
-               threshold: float = COPY_THRESHOLD, limit: int = 6) -> tuple[list[Seam], float]:
-    """Seams of a copied tile (see the module notes) over runs of ``run`` texels, and its strongest run."""
+               threshold: float = COPY_THRESHOLD, limit: int = 6, units: dict[int, float] | None = None
+               ) -> tuple[list[Seam], float]:
+    """Seams of a copied tile (see the module notes) over runs of ``run`` texels, and its strongest run.
+    ``units``: the source's :func:`step_unit` by axis when they are already measured."""
     found: list[Seam] = []
     strongest = 0.0
     for axis, label in ((1, "x"), (0, "y")):
-        err = continuation(tile, source, origin, axis, step_unit(source, axis))
+        err = continuation(tile, source, origin, axis, units[axis] if units else step_unit(source, axis))
         along = err if axis == 1 else err.T  # rows run along the line; columns are lines
         n = along.shape[0]
         k = min(run, n)

@@ -15,9 +15,9 @@ import numpy as np
 
 from seamless_usd.metrics.structure import structure_figures
 
-from .copies import COPY_THRESHOLD, INFER, MAP_THRESHOLD, continuation, copy_origins, step_unit
+from .copies import COPY_THRESHOLD, MAP_THRESHOLD, continuation, step_unit
 from .features import moving_mean
-from .prepare import joined, prepare_maps
+from .reference import Reading, Reference
 
 __all__ = ["JOIN_SHARE", "SHORT_RUN", "JoinStats", "join_stats", "bad_join_mask", "inside_figures"]
 
@@ -41,10 +41,12 @@ def _flagged(err: np.ndarray, threshold: float, run: int) -> np.ndarray:
 
 
 def bad_join_mask(tile: np.ndarray, source: np.ndarray, origin: np.ndarray, threshold: float,
-                  run: int = SHORT_RUN) -> tuple[np.ndarray, np.ndarray]:
-    """Bool masks (H, W) of bad joins on the vertical lines (before each texel along x) and horizontal ones."""
-    vx = _flagged(continuation(tile, source, origin, 1, step_unit(source, 1)), threshold, run)  # runs along y
-    vy = _flagged(continuation(tile, source, origin, 0, step_unit(source, 0)).T, threshold, run).T  # along x
+                  run: int = SHORT_RUN, units: dict[int, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Bool masks (H, W) of bad joins on the vertical lines (before each texel along x) and horizontal ones.
+    ``units``: the source's :func:`.copies.step_unit` by axis when they are already measured."""
+    units = units or {axis: step_unit(source, axis) for axis in (0, 1)}
+    vx = _flagged(continuation(tile, source, origin, 1, units[1]), threshold, run)  # runs along y
+    vy = _flagged(continuation(tile, source, origin, 0, units[0]).T, threshold, run).T  # along x
     return vx, vy
 
 
@@ -61,18 +63,22 @@ class JoinStats(dict):
 
 
 def join_stats(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list[bool], names: list[str],
-               run: int = SHORT_RUN, origin: np.ndarray | None = None) -> JoinStats:
+               run: int = SHORT_RUN, origin: np.ndarray | None = None, reading: Reading | None = None) -> JoinStats:
     """Bad joins of a tile made of source texels, per map and for the maps together (``"stack"``).
 
     ``sources`` must be at the tile's texel scale (see :func:`seamless_usd.verdict.judge`). ``origin``: the
     source position of every tile texel when it is known (the refinement's field); by default each is looked
     up. A tile whose texels near the joins were blended (no longer copies) is judged on its field: the
-    continuation error then reads the blended values against what the source continues with.
+    continuation error then reads the blended values against what the source continues with. ``reading``: the
+    tile already prepared against its source (:class:`.reference.Reading`; ``tiles`` and ``sources`` are then
+    not read again), whose copies are looked up once for the verdict and these figures.
     """
-    tj, t = joined(prepare_maps(tiles, normals))  # per-map views of the joint arrays: one copy of each in memory
-    sj, s = joined(prepare_maps(sources, normals))
+    if reading is None:
+        reading = Reading(tiles, normals, names, Reference(sources, normals, names, keep_index=False))
+    ref = reading.reference
+    tj, t, sj, s = reading.joint, reading.maps, ref.joint, ref.maps
     if origin is None:
-        origin, share = copy_origins(tj, sj, INFER)
+        origin, share = reading.origins
     else:
         origin, share = np.asarray(origin, dtype=np.int64), 1.0
     out = JoinStats(copied=round(share, 4), coherence=None, maps=None)
@@ -88,22 +94,24 @@ def join_stats(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list
     out["coherence"] = round(float(np.mean(together)), 4)
     mpx = tj.shape[0] * tj.shape[1] / 1e6
     maps = {}
-    parts = [("stack", tj, sj, COPY_THRESHOLD)] + ([(n, a, b, MAP_THRESHOLD) for n, a, b in zip(names, t, s)]
-                                                   if len(t) > 1 else [])
-    for name, tile, source, threshold in parts:  # one map's own copy at a time: gathers from it are faster
-        vx, vy = bad_join_mask(np.ascontiguousarray(tile), np.ascontiguousarray(source), origin, threshold, run)
+    parts = [("stack", tj, sj, COPY_THRESHOLD, ref.units())] + (
+        [(n, a, b, MAP_THRESHOLD, ref.units(k)) for k, (n, a, b) in enumerate(zip(reading.names, t, s))]
+        if len(t) > 1 else [])
+    for name, tile, source, threshold, units in parts:  # one map's own copy at a time: gathers from it are faster
+        vx, vy = bad_join_mask(np.ascontiguousarray(tile), np.ascontiguousarray(source), origin, threshold, run, units)
         count = _segments(vx, 0) + _segments(vy, 1)
         maps[name] = {"count": count, "length": int(vx.sum() + vy.sum()), "per_mpx": round(count / mpx, 1)}
     out["maps"] = maps
     return out
 
 
-def inside_figures(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list[bool], names: list[str]
-                   ) -> list[dict]:
+def inside_figures(tiles: list[np.ndarray], sources: list[np.ndarray], normals: list[bool], names: list[str],
+                   joins: JoinStats | None = None) -> list[dict]:
     """Per map, what lies inside a tile (figures without a tolerance): its bad joins (count, total length in
     texels) and the copies' coherence (None when the tile is not made of source texels), and the structure
-    figure against the source (:mod:`seamless_usd.metrics.structure`). ``sources`` at the tile's texel scale."""
-    joins = join_stats(tiles, sources, normals, names)
+    figure against the source (:mod:`seamless_usd.metrics.structure`). ``sources`` at the tile's texel scale;
+    ``joins``: the tile's :func:`join_stats` when they are already counted (from the reading its verdict used)."""
+    joins = join_stats(tiles, sources, normals, names) if joins is None else joins
     out = []
     for name, tile, source in zip(names, tiles, sources):
         mine = (joins["maps"] or {}).get(name if len(names) > 1 else "stack")

@@ -27,12 +27,13 @@ import numpy as np
 
 from ..memo import ContentMemo
 from .classifier import SeamClassifier, fit
-from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, INFER, MAP_THRESHOLD, copy_origins, copy_seams
+from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, MAP_THRESHOLD, copy_seams
 from .lines import Seam, runs, seams_from_scores
-from .prepare import WORK_SIDE, joined, joint, map_weights, prepare_maps, to_working
+from .prepare import WORK_SIDE, joint, map_weights, to_working
+from .reference import Reading, Reference
 from .tolerance import faithfulness
 
-__all__ = ["SEAM_MARGIN", "SELF_MARGIN", "LENGTH", "STEP", "Verdict", "judge"]
+__all__ = ["SEAM_MARGIN", "SELF_MARGIN", "LENGTH", "STEP", "Verdict", "judge", "judge_reading"]
 
 #: Run (texels at full resolution) over which a copied tile's continuation error is averaged.
 COPY_RUN = 32
@@ -91,20 +92,20 @@ class Verdict:
                    dict(d.get("tolerances", {})), list(d.get("failing", [])))
 
 
-def _copied(tj: np.ndarray, sj: np.ndarray, t: list[np.ndarray], s: list[np.ndarray], names: list[str]
-            ) -> tuple[list[Seam], float] | None:
-    """Seams of a tile made of the source's own texels (:mod:`.copies`), for the maps together (``tj``,
-    ``sj``) and each map (``t``, ``s``); None when fewer than :data:`.copies.EXACT_SHARE` of its texels are
-    found in the source, or fewer than :data:`.copies.COPY_SHARE` found or inferred beside found ones (a
-    blended band)."""
-    origin, share = copy_origins(tj, sj, INFER)
+def _copied(reading: Reading) -> tuple[list[Seam], float] | None:
+    """Seams of a tile made of the source's own texels (:mod:`.copies`), for the maps together and each map;
+    None when fewer than :data:`.copies.EXACT_SHARE` of its texels are found in the source, or fewer than
+    :data:`.copies.COPY_SHARE` found or inferred beside found ones (a blended band)."""
+    ref = reading.reference
+    origin, share = reading.origins
     if share < EXACT_SHARE or (origin[..., 0] >= 0).mean() < COPY_SHARE:
         return None
-    seams, strongest = copy_seams(tj, sj, origin, "stack", COPY_RUN)
-    if len(t) > 1:
-        for tile, source, name in zip(t, s, names):  # one map's own copy at a time: gathers from it are faster
+    seams, strongest = copy_seams(reading.joint, ref.joint, origin, "stack", COPY_RUN, units=ref.units())
+    if len(reading.maps) > 1:
+        for k, (tile, source, name) in enumerate(zip(reading.maps, ref.maps, reading.names)):
+            # one map's own copy at a time: gathers from it are faster
             found, _ = copy_seams(np.ascontiguousarray(tile), np.ascontiguousarray(source), origin, name, COPY_RUN,
-                                  MAP_THRESHOLD)
+                                  MAP_THRESHOLD, units=ref.units(k))
             seams += found
     seams.sort(key=lambda x: -x.figure)
     return seams, strongest
@@ -159,43 +160,50 @@ def _find(tile: np.ndarray, source: np.ndarray | None, factor: float, size: tupl
 def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: list[bool], names: list[str],
           *, fidelity: bool = True, seed: int = 0) -> Verdict:
     """The verdict on a periodic tile (one or more maps, network domain ``[-1, 1]``) against ``sources``
-    (the same maps at the tile's texel scale; None: judged against itself).
+    (the same maps at the tile's texel scale; None: judged against itself). To judge several tiles against
+    one source, or to read the same tile's join figures too, prepare them once and use :func:`judge_reading`.
 
     >>> rng = np.random.default_rng(0)
     >>> noise = rng.normal(size=(96, 96, 1))
     >>> judge([noise], None, [False], ["noise"]).seamless
     True
     """
-    tj, t = joined(prepare_maps(tiles, normals))  # per-map views of the joint arrays: one copy of each in memory
-    sj, s = (None, None) if sources is None else joined(prepare_maps(sources, normals))
-    size = t[0].shape[:2]
-    if s is not None:
-        copied = _copied(tj, sj, t, s, names)
+    reference = None if sources is None else Reference(sources, normals, names, keep_index=False)
+    return judge_reading(Reading(tiles, normals, names, reference), fidelity=fidelity, seed=seed)
+
+
+def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> Verdict:
+    """:func:`judge` on a tile already prepared (:class:`.reference.Reading`), against its reference if it has one."""
+    ref = reading.reference
+    t, size = reading.maps, reading.size
+    if ref is not None:
+        copied = _copied(reading)
         if copied is not None:
             seams, strongest = copied
-            verdict = Verdict(not seams, True, seams, strongest, COPY_THRESHOLD, "source", "copies",
-                              tuple(int(v) for v in size))
+            verdict = Verdict(not seams, True, seams, strongest, COPY_THRESHOLD, "source", "copies", size)
             if fidelity:
-                verdict.figures, verdict.tolerances, verdict.failing = faithfulness(tiles, sources, normals, names)
+                verdict.figures, verdict.tolerances, verdict.failing = faithfulness(
+                    reading.tiles, ref.sources, reading.normals, reading.names)
                 verdict.faithful = not verdict.failing
             return verdict
     factor = min(1.0, WORK_SIDE / max(size))
     tw = to_working(t, factor, periodic=True)
-    sw = None if s is None else to_working(s, factor, periodic=False)
+    sw = None if ref is None else to_working(ref.maps, factor, periodic=False)
     weights = map_weights(sw if sw is not None else tw)
-    margin = SEAM_MARGIN if s is not None else SELF_MARGIN
+    margin = SEAM_MARGIN if ref is not None else SELF_MARGIN
     seams, strongest = _find(joint(tw, weights), None if sw is None else joint(sw, weights), factor, size, "stack",
                              seed)
     if len(t) > 1:
-        for k, name in enumerate(names):
+        for k, name in enumerate(reading.names):
             found, top = _find(tw[k] * weights[k], None if sw is None else sw[k] * weights[k], factor, size, name,
                                seed)
             seams += found
             strongest = max(strongest, top)
     seams.sort(key=lambda x: -x.figure)
-    verdict = Verdict(not seams, True, seams, strongest, margin, "source" if s is not None else "itself",
-                      "classifier", tuple(int(v) for v in size))
-    if fidelity and sources is not None:
-        verdict.figures, verdict.tolerances, verdict.failing = faithfulness(tiles, sources, normals, names)
+    verdict = Verdict(not seams, True, seams, strongest, margin, "source" if ref is not None else "itself",
+                      "classifier", size)
+    if fidelity and ref is not None:
+        verdict.figures, verdict.tolerances, verdict.failing = faithfulness(reading.tiles, ref.sources,
+                                                                            reading.normals, reading.names)
         verdict.faithful = not verdict.failing
     return verdict

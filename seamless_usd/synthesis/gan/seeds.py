@@ -2,7 +2,7 @@
 
 One short GAN run depends on its seed: on the quality benchmark one seed's tile passes Q where
 another's fails, or repeats a band along its centre line where the other does not
-(``benchmarks/results/seeds.md``). A stack's training runs on one CPU thread (faster than two on
+(``docs/decisions.md``, "Two seeds side by side"). A stack's training runs on one CPU thread (faster than two on
 these small convolutions), so on a machine with two cores a second seed trains in the idle core's
 time. ``config.seeds`` seeds (``seed, seed + 1, ...``) train in parallel, one thread each, and the
 tile kept is the one whose figures against the working source (feature scale, patch distance,

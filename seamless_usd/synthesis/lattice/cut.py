@@ -15,8 +15,9 @@ So for a stack whose autocorrelation has strong peaks along an axis, this module
    lattice phase, so bricks land on bricks and the cut runs through the mortar. Every texel is a
    source texel, copied through one field for all maps.
 
-The result is one more candidate beside the refined GAN tile (see :mod:`.tile`); the
-discriminator's Q and the fidelity figures choose between them.
+The result is one more candidate beside the refined GAN tile (see :mod:`seamless_usd.synthesis.tile`):
+the verdict and the score (fidelity, structure, lattice ratio, strongest seam) choose between them;
+the discriminator's Q is recorded, not used to choose.
 """
 from __future__ import annotations
 

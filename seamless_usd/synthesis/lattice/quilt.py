@@ -1,7 +1,7 @@
 """Stacks with long structure and no lattice: a tile quilted on a torus from a few large source blocks.
 
 The refinement's tile is a mosaic of hundreds of copied blocks, each 10-30 px, and its joins cut stones
-and plank gaps wherever they fall (``benchmarks/results/levers.md``). The window cut makes two joins but
+and plank gaps wherever they fall (``benchmarks/experiments/results/levers.md``). The window cut makes two joins but
 only hides them where the texture continues itself at some lag (:mod:`.window`). This candidate is the
 step between: image quilting (Efros and Freeman 2001) with a handful of blocks, each large enough to hold
 several stones or a run of plank, laid on a torus:
@@ -21,13 +21,13 @@ Every texel is a source texel, copied through one field for all maps, so the map
 their values (bit depth, unit normals); the tile wraps by construction, its wraps being joins like the
 others. ``figures`` records every join's cost and difference (over the difference between unrelated
 texels): where the two blocks differ along a cut, the cut cannot hide the join, and the verdict misses
-some such joins (``benchmarks/results/quilt_gate.md``); ``..tile`` weighs the quilt against the refined
+some such joins (``benchmarks/experiments/results/quilt_gate.md``); ``..tile`` weighs the quilt against the refined
 tile and never writes one whose joins do not hide as a tile that passes.
 
 A lever measured and not kept (``lines=True``): cuts that run almost free along the texture's long lines
 (:func:`line_mask`), each block keeping its own line texels near the cut, so a join hides behind a joint.
 Stones stay whole, but the joints thicken, fork and leave slivers, and every figure reads worse
-(``benchmarks/results/levers_quilt.md``, ``levers_quilt_fullres.md``). Another (``deform``): each new block's
+(``benchmarks/experiments/results/levers_quilt.md``, ``levers_quilt_fullres.md``). Another (``deform``): each new block's
 texels near its joins shifted to line up with the laid ones (:mod:`.deform`); its rounded shifts step
 lines, and it cannot add the stripe or head joint that one block lacks (``levers_quilt_deform.md``).
 """
@@ -277,7 +277,7 @@ def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[i
     follows lines, the cost is low by design and the difference says what the lines hide); the costs'
     mean and worst, the worst difference, and the blocks' source places; None when a block does not fit
     in the source. ``lines=True``: where the source has long lines (:func:`line_mask`), the cuts run along
-    them (a lever measured, not the product's: ``benchmarks/results/levers_quilt.md``). ``deform`` > 0: each
+    them (a lever measured, not the product's: ``benchmarks/experiments/results/levers_quilt.md``). ``deform`` > 0: each
     new block's texels near its joins shift, by at most that share of the band, to line up with the laid
     ones (:mod:`.deform`; a lever, not the product's: ``levers_quilt_deform.md``).
 

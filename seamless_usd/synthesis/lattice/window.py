@@ -1,7 +1,7 @@
 """Stacks that do not repeat: a tile that is one window of the source, joined across its wraps.
 
 A refined tile is a mosaic of copied blocks; where two blocks meet badly a plank gap jumps or a stone
-is cut in half, and the refinement makes hundreds of such joins (``benchmarks/results/levers.md``). This
+is cut in half, and the refinement makes hundreds of such joins (``benchmarks/experiments/results/levers.md``). This
 candidate makes two: the tile is a single window of the source, so every plank, stone and joint inside
 it is whole, and only its two wraps are joins. Each wrap is closed the way :func:`.cut.lattice_cut`
 closes a lattice tile's (image quilting with one block, Efros and Freeman 2001): a band past one side
@@ -22,7 +22,7 @@ closely enough (rotated wood and brick photographs, stone cells, stripes, weave 
 brick with a tone ramp or a drifting scale) showed tone patches with stair-stepped edges, mortar lines
 jogging or ending at the cut, threads cut in half, while the verdict passed many of them: the minimum-error
 cut meanders, so a straight line of the tile crosses a broken stretch for a few texels only
-(``benchmarks/window_gate.py``, ``benchmarks/results/window_gate.md``).
+(``benchmarks/experiments/window_gate.py``, ``benchmarks/experiments/results/window_gate.md``).
 """
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ _ANALYSIS = 256  # longest side (px) the lags are compared at
 #: The most a chosen lag's difference (see :func:`window_tile_size`) may be, on either axis, for the window
 #: cut to be offered. Window cuts looked at along their wraps: the clean ones (a weave whose windows repeat
 #: exactly, a repeating brick with a slight tone ramp or scale drift) read at most 0.039 on their worse axis,
-#: the broken ones 0.059 and more (``benchmarks/results/window_gate.md``).
+#: the broken ones 0.059 and more (``benchmarks/experiments/results/window_gate.md``).
 WINDOW_MAX_DIFFERENCE = 0.05
 
 
