@@ -1,0 +1,148 @@
+"""Experiment (not the product's rule yet): a texture judged on its own by where a line breaks the
+texture's own continuation, read against every parallel line of the same texture.
+
+Measured by ``benchmarks/texture_verdict.py`` beside the product's verdict on textures judged on their own;
+its settings (:data:`RANK`, :data:`MARGIN`) were chosen on the corpus's tuning part only.
+
+With no separate source, a seam is a line unlike the texture's other lines. Across a line, every pair of rows
+``tau`` apart that straddles it is compared (:func:`_straddle`): inside a texture, such pairs differ as the
+texture differs over ``tau`` (its structure function), whichever line they straddle; across a join of
+unrelated places they differ as unrelated texels do, at every lag. So each line gets, for every lag, its
+mean straddling difference in units of the same figure's spread over all the texture's parallel lines
+(a robust z-score: the median and the median absolute deviation), and its break is the largest of these
+over the lags. Short lags see a one-texel break, long lags a broad tone step (a lit photo's seam), and the
+texture's own period, when it has one, a lattice that the join puts out of phase.
+
+A texture's own lines (mortar joints, plank gaps, slab joints) recur: they lift many lines alike. A join is
+one line (a wrap, a half-rolled window's centre) or two (a spliced strip). So the reference is the texture's
+:data:`RANK`-th strongest line, and a seam is a line whose break stands :data:`MARGIN` above it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from seamless_usd.verdict import judge
+from seamless_usd.verdict.lines import Seam
+from seamless_usd.verdict.prepare import joint, map_weights, prepare_maps, to_working
+
+__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "with_line_breaks"]
+
+#: Longest side (px) the maps are read at: fine enough that a join's texel step survives the area filter.
+WORK_SIDE = 512
+#: The reference is the texture's RANK-th strongest line (lines within :data:`SPACING` of a stronger one
+#: left out).
+RANK = 4
+#: A line whose break is more than this above the reference is a seam (robust z units).
+MARGIN = 6.0
+#: Lines closer than this (px at the working size), or than the lag read, to a stronger line are the same line.
+SPACING = 3
+
+
+def period(n: int, profile: np.ndarray) -> int | None:
+    """The texture's own period along the axis: the lag of the strongest autocorrelation peak of ``profile``
+    (rows of the maps flattened, on a torus) between a sixteenth and half of ``n``, if it reaches 0.3."""
+    rows = profile - profile.mean(axis=0)
+    spec = np.fft.rfft(rows, axis=0)
+    auto = np.fft.irfft((spec * spec.conj()).real.sum(axis=1), n=n)
+    auto = auto / max(auto[0], 1e-12)
+    lo, hi = max(4, n // 16), n // 2
+    if hi <= lo:
+        return None
+    peak = lo + int(np.argmax(auto[lo:hi + 1]))
+    if auto[peak] > 0.3 and auto[peak] >= auto[peak - 1] and auto[peak] >= auto[min(peak + 1, n - 1)]:
+        return peak
+    return None
+
+
+def _lags(n: int, own: int | None) -> list[int]:
+    """Short lags doubling up to a quarter of ``n``, and the texture's own period when it has one."""
+    lags = {1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128} & set(range(1, max(2, n // 4) + 1))
+    return sorted(lags | ({own} if own else set()))
+
+
+def _straddle(img: np.ndarray, lag: int) -> np.ndarray:
+    """(n,) for each line ``p`` (before row ``p``, on a torus): the mean difference of the row pairs ``lag``
+    apart that straddle it."""
+    n = img.shape[0]
+    pair = np.linalg.norm(np.roll(img, -lag, axis=0) - img, axis=-1).mean(axis=1)  # rows y and y + lag
+    total = np.concatenate([[0.0], np.cumsum(np.concatenate([pair, pair]))])
+    p = np.arange(n) + n
+    return (total[p] - total[p - lag]) / lag  # pairs starting at rows p - lag .. p - 1
+
+
+def lag_figures(img: np.ndarray, own: int | None = None) -> dict[int, np.ndarray]:
+    """For every lag, (n,) each horizontal line's straddling difference of ``img`` (H, W, C) read as a torus,
+    as a robust z-score over all the lines (see the module notes); ``own``: the texture's period along the
+    axis, read as one more lag."""
+    out = {}
+    for lag in _lags(img.shape[0], own):
+        e = _straddle(img, lag)
+        mid = np.median(e)
+        spread = 1.4826 * np.median(np.abs(e - mid)) + 1e-3 * mid + 1e-12
+        out[lag] = (e - mid) / spread
+    return out
+
+
+def _peaks(f: np.ndarray, spacing: int) -> list[int]:
+    """Lines strongest first, each more than ``spacing`` from every stronger one (on a torus): a join lifts
+    the lines within a lag of it too, less the closer they are."""
+    n = len(f)
+    taken: list[int] = []
+    for line in np.argsort(-f):
+        if all(min(abs(line - t), n - abs(line - t)) > spacing for t in taken):
+            taken.append(int(line))
+        if len(taken) > RANK:
+            break
+    return taken
+
+
+def line_figures(img: np.ndarray, own: int | None = None) -> np.ndarray:
+    """(n,) how far each horizontal line of ``img`` stands above the texture's own lines, at the lag where it
+    stands out most: at each lag, its z-score less the texture's :data:`RANK`-th strongest line at that lag
+    (lines a lag apart) and less its own recurrences one period on (``own``); -inf where it is no top line."""
+    n = img.shape[0]
+    out = np.full(n, -np.inf)
+    for lag, z in lag_figures(img, own).items():
+        peaks = _peaks(z, max(SPACING, lag))
+        reference = z[peaks[RANK]] if len(peaks) > RANK else 0.0
+        for line in peaks[:RANK]:
+            # a texture's own line recurs one period on: a line is read against its recurrences too
+            again = max(z[(line + d * own + k) % n] for d in (-1, 1) for k in (-1, 0, 1)) if own else -np.inf
+            out[line] = max(out[line], float(z[line] - max(reference, again)))
+    return out
+
+
+def line_breaks(maps: list[np.ndarray], normals: list[bool], names: list[str]) -> tuple[list[Seam], float]:
+    """Seams of a texture judged on its own (the maps together, then each map), strongest first, and the
+    strongest line's break over the reference, less :data:`MARGIN` (above 0: a seam)."""
+    prepared = prepare_maps(maps, normals)
+    size = prepared[0].shape[:2]
+    factor = min(1.0, WORK_SIDE / max(size))
+    work = to_working(prepared, factor, periodic=True)
+    weights = map_weights(work)
+    parts = [("stack", joint(work, weights))] + ([(n, m * w) for n, m, w in zip(names, work, weights)]
+                                                 if len(work) > 1 else [])
+    seams: list[Seam] = []
+    strongest = -np.inf
+    for name, img in parts:
+        for axis, label, rotated in (("y", "y", img), ("x", "x", np.ascontiguousarray(img.transpose(1, 0, 2)))):
+            n = rotated.shape[0]
+            f = line_figures(rotated, period(n, rotated.reshape(n, -1)))
+            scale = size[0 if axis == "y" else 1] / n
+            along = size[1 if axis == "y" else 0]
+            for line in np.flatnonzero(np.isfinite(f)):
+                over = float(f[line] - MARGIN)
+                strongest = max(strongest, over)
+                if over > 0:
+                    seams.append(Seam(label, int(round(line * scale)) % size[0 if axis == "y" else 1], 0,
+                                      along - 1, over, name))
+    seams.sort(key=lambda s: -s.figure)
+    return seams, float(strongest)
+
+
+def with_line_breaks(maps: list[np.ndarray], normals: list[bool], names: list[str]) -> tuple[bool, float]:
+    """The product's verdict on a texture judged on its own (the classifier against the texture's own lines),
+    with the line breaks' seams added: (seamed, the strongest figure over its own threshold)."""
+    v = judge(maps, None, normals, names, fidelity=False)
+    found, strongest = line_breaks(maps, normals, names)
+    return bool(v.seams or found), max(v.strongest - v.margin, strongest)
