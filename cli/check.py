@@ -4,8 +4,10 @@ Lists each texture stack meant to tile in USD stages, MaterialX documents and fo
 picture named, with its verdict: passed (no seam at the wrap, the centre lines or inside, and, for a
 tile this tool wrote, faithful to its recorded source) or not, and where each seam is. A texture
 with no separate source is judged against itself: its own lines are the reference, and a seam is a
-line unlike them. ``--json`` prints the result following ``schemas/check.schema.json``. Exit codes:
-0 everything tiles; 1 something does not (or a texture could not be read); 2 unreadable input.
+line unlike them. ``--json`` prints the result following ``schemas/check.schema.json``; ``--report``
+writes a contact sheet (each picture repeated 2 x 2 with its seams drawn in red). A progress bar runs on a
+terminal. Exit codes: 0 everything tiles; 1 something does not (or a texture could not be read); 2
+unreadable input.
 """
 from __future__ import annotations
 
@@ -13,8 +15,11 @@ import argparse
 import json
 import sys
 
+from pathlib import Path
+
 from rich.console import Console
 from rich.markup import escape
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
 from seamless_usd.pipeline.check import CheckReport, check_paths
@@ -27,6 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("paths", nargs="+", metavar="PATH",
                         help="USD stage, .mtlx document, folder, or picture (.png, .jpg, .exr, .tif, ...)")
     parser.add_argument("--json", action="store_true", help="print the result as JSON (schemas/check.schema.json)")
+    parser.add_argument("--report", type=Path, metavar="HTML",
+                        help="write a contact sheet: each picture repeated 2 x 2 with its seams drawn in red")
 
 
 def _where(item) -> str:
@@ -52,10 +59,29 @@ def render(report: CheckReport, console: Console) -> None:
     console.print(f"{sum(i.passed for i in report.items)} of {len(report.items)} passed")
 
 
+def _checked(args: argparse.Namespace, err: Console) -> CheckReport:
+    """check_paths, with a progress bar over the inputs on a terminal."""
+    if not err.is_terminal:
+        return check_paths(args.paths)
+    with Progress(TextColumn("checking"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+                  TimeElapsedColumn(), TimeRemainingColumn(), TextColumn("{task.description}"),
+                  console=err, transient=True) as bar:
+        task = bar.add_task("", total=None)
+
+        def step(name: str, done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total, description=escape(Path(name).name) if name else "")
+
+        return check_paths(args.paths, progress=step)
+
+
 def run(args: argparse.Namespace) -> int:
     err = Console(stderr=True)
-    report = check_paths(args.paths, progress=lambda name: err.print(f"checking {escape(name)}", highlight=False)
-                         if err.is_terminal else None)
+    report = _checked(args, err)
+    if args.report is not None:
+        from seamless_usd.report.contact import write_contact_sheet
+
+        written = write_contact_sheet([item.card() for item in report.items], args.report)
+        err.print(f"contact sheet: {escape(str(written))}", highlight=False)
     if args.json:
         json.dump(report.to_dict(), sys.stdout, indent=2)
         sys.stdout.write("\n")

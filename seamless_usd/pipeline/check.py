@@ -38,6 +38,27 @@ class CheckItem:
     verdict: dict = field(default_factory=dict)  # Verdict.as_dict(); empty when unreadable
     error: str = ""
     seconds: float = 0.0
+    thumbnail: tuple = field(default=(), repr=False)  # (data URI, (w, h), texel scale) of the first map, 2 x 2
+
+    def card(self):
+        """The item as a card of the contact sheet (:mod:`seamless_usd.report.contact`): its seams brought to
+        the thumbnail's pixels."""
+        from seamless_usd.report.contact import SheetCard
+        from seamless_usd.verdict import Verdict
+
+        status = "error" if self.error else "passed" if self.passed else "not-passed"
+        if self.error:
+            words = self.error
+        else:
+            v = Verdict.from_dict(self.verdict)
+            words = "; ".join(v.reasons()) or ("seamless and faithful" if v.reference == "source" else
+                                               "seamless (judged against itself)")
+        if not self.thumbnail:
+            return SheetCard(self.name, status, words)
+        uri, size, scale = self.thumbnail
+        seams = [{**s, "position": s["position"] * scale, "start": s["start"] * scale, "end": s["end"] * scale}
+                 for s in self.verdict.get("seams", [])]
+        return SheetCard(self.name, status, words, uri, size, seams)
 
     @property
     def passed(self) -> bool:
@@ -94,13 +115,21 @@ def _picture(path: Path) -> np.ndarray:
     return 2.0 * a - 1.0
 
 
+def _thumbnail(pixels: np.ndarray) -> tuple:
+    from seamless_usd.report.contact import thumbnail
+
+    return thumbnail(pixels)
+
+
 def _judge_picture(path: Path) -> CheckItem:
     from seamless_usd.verdict import judge
 
     item = CheckItem(str(path), str(path), [str(path)])
     t0 = time.perf_counter()
     try:
-        item.verdict = judge([_picture(path)], None, [False], [path.name], fidelity=False).as_dict()
+        pixels = _picture(path)
+        item.verdict = judge([pixels], None, [False], [path.name], fidelity=False).as_dict()
+        item.thumbnail = _thumbnail(pixels)
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
         item.error = f"{asset_ref(path)}: cannot be judged: {exc}"
     item.seconds = time.perf_counter() - t0
@@ -147,21 +176,32 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
             sources = on_tile_grid(list(load_stack_pixels(src_maps, policy).values), normals, tiles[0].shape[:2], uv)
         item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps],
                              fidelity=sources is not None).as_dict()
+        item.thumbnail = _thumbnail(tiles[0])
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
         item.error = str(exc)
     item.seconds = time.perf_counter() - t0
     return item
 
 
-def check_paths(paths: Sequence[str | Path], progress: Callable[[str], None] | None = None) -> CheckReport:
-    """The verdict on every stack meant to tile in ``paths`` (stages, documents, folders) and every picture."""
+def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int], None] | None = None
+                ) -> CheckReport:
+    """The verdict on every stack meant to tile in ``paths`` (stages, documents, folders) and every picture.
+    ``progress(name, done, total)`` is called before each input (a stage, document or picture) is judged."""
     from seamless_usd.discover import scan_paths
     from seamless_usd.discover.scan import open_stage
 
-    emit = progress or (lambda name: None)
     report = CheckReport()
     scenes, pictures = _expand(paths)
+    total = len(scenes) + len(pictures)
+    done = 0
+
+    def emit(name: str) -> None:
+        if progress is not None:
+            progress(name, done, total)
+
     for scene in scenes:
+        emit(str(scene))
+        done += 1
         if scene.suffix.lower() not in SCENE_SUFFIXES:
             report.unreadable.append(f"{asset_ref(scene)}: not a USD stage, MaterialX document or picture")
             continue
@@ -173,12 +213,14 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str], None] | N
         judged = [s for s in result.stacks if not s.duplicate_of and s.intent in _JUDGED_INTENTS]
         stage = open_stage(scene) if judged and scene.suffix.lower() != ".mtlx" else None  # once per stage
         for stack in judged:
-            emit(stack.material)
             report.items.append(_judge_stack(scene, stage, stack))
     for picture in pictures:
+        emit(str(picture))
+        done += 1
         if not picture.is_file():
             report.unreadable.append(f"{asset_ref(picture)}: no such file")
             continue
-        emit(str(picture))
         report.items.append(_judge_picture(picture))
+    if progress is not None:
+        progress("", done, total)
     return report

@@ -1,0 +1,106 @@
+"""The contact sheet of ``seamless-usd check``: one card per texture or stack, its picture repeated 2 x 2 so the
+wrap shows, every seam the verdict found drawn in red on each repeat, its status and where the seams run.
+
+It takes plain values (a :class:`SheetCard` per item), so the page is made the same from any caller; filtering
+by status is pure CSS (radio buttons), so the page needs no script.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from seamless_usd.fileio import atomic_write_text
+from seamless_usd.report.htmlparts import esc, page, seams_svg
+from seamless_usd.report.webimage import image_data_uri
+
+__all__ = ["THUMB", "SheetCard", "thumbnail", "render_contact_sheet", "write_contact_sheet"]
+
+#: Side (px) of one repeat of a card's picture.
+THUMB = 96
+
+_CSS = """
+.sheet{display:grid;grid-template-columns:repeat(auto-fill,minmax(230px,1fr));gap:12px;margin-top:12px}
+.card{background:#fff;border:1px solid #d9dce3;border-radius:8px;padding:8px;font-size:12px;overflow-wrap:anywhere}
+.card .view{width:100%} .card p{margin:4px 0 0}
+.filters label{margin-right:14px;cursor:pointer}
+#f-passed:checked ~ main .card:not(.s-passed),#f-not:checked ~ main .card:not(.s-not-passed),
+#f-error:checked ~ main .card:not(.s-error){display:none}
+"""
+
+
+@dataclass
+class SheetCard:
+    """One item of the sheet: its name, status (``passed``, ``not-passed`` or ``error``), the words saying
+    where its seams run (or why it could not be judged), its thumbnail and the seams in the thumbnail's own
+    pixels."""
+
+    name: str
+    status: str
+    words: str
+    picture: str = ""  # a data: URI of the 2 x 2 repeat (empty: none)
+    size: tuple[int, int] = (0, 0)  # (w, h) of one repeat in the thumbnail, px
+    seams: list[dict] = field(default_factory=list)  # Seam.as_dict() in the thumbnail's pixels of one repeat
+
+
+def thumbnail(pixels: np.ndarray, side: int = THUMB) -> tuple[str, tuple[int, int], float]:
+    """A picture ``(H, W, C)`` in ``[-1, 1]`` as a 2 x 2 repeat of at most ``side`` px a repeat (data URI), the
+    repeat's ``(w, h)`` and the scale from the picture's texels to the thumbnail's pixels."""
+    a = np.asarray(pixels, dtype=np.float64)
+    a = a[..., None] if a.ndim == 2 else a
+    scale = min(1.0, side / max(a.shape[:2]))
+    h, w = max(1, round(a.shape[0] * scale)), max(1, round(a.shape[1] * scale))
+    ys = (np.arange(h) * a.shape[0] / h).astype(int)
+    xs = (np.arange(w) * a.shape[1] / w).astype(int)
+    small = a[ys][:, xs]
+    small = small[..., :3] if small.shape[2] >= 3 else np.repeat(small[..., :1], 3, axis=2)
+    rgb = np.clip((small + 1.0) * 127.5 + 0.5, 0, 255).astype(np.uint8)
+    return image_data_uri(np.tile(rgb, (2, 2, 1))), (w, h), scale
+
+
+def _segments(card: SheetCard) -> list[tuple[float, float, float, float, str]]:
+    w, h = card.size
+    out = []
+    for s in card.seams:
+        label = f"{s['figure']:+.2f}: {s.get('map', 'stack')}"
+        for ry in (0, h):
+            for rx in (0, w):
+                if s["axis"] == "x":
+                    out.append((rx + s["position"], ry + s["start"], rx + s["position"], ry + s["end"] + 1, label))
+                else:
+                    out.append((rx + s["start"], ry + s["position"], rx + s["end"] + 1, ry + s["position"], label))
+    return out
+
+
+def render_contact_sheet(cards: list[SheetCard], title: str = "seamless-usd check") -> str:
+    """The whole page: a summary, the status filters and a card per item."""
+    counts = {k: sum(c.status == k for c in cards) for k in ("passed", "not-passed", "error")}
+    body = [f"<h1>{esc(title)}</h1><p class=muted>{len(cards)} textures or stacks: {counts['passed']} passed, "
+            f"{counts['not-passed']} not passed, {counts['error']} could not be judged. Each picture is repeated "
+            "2 x 2, so its wrap runs through the middle; red lines are the seams found.</p><div class=sheet>"]
+    for c in cards:
+        view = ""
+        if c.picture:
+            w, h = c.size
+            view = (f'<div class="view"><img src="{c.picture}" width="{2 * w}" height="{2 * h}" alt="{esc(c.name)}">'
+                    f"{seams_svg((2 * w, 2 * h), _segments(c))}</div>")
+        badge = {"passed": "passed", "not-passed": "not passed", "error": "could not be judged"}[c.status]
+        body.append(f'<div class="card s-{c.status}">{view}<p><b>{esc(c.name)}</b>'
+                    f'<span class="badge {c.status if c.status != "error" else "failed"}">{badge}</span></p>'
+                    f"<p class=muted>{esc(c.words)}</p></div>")
+    body.append("</div>")
+    filters = ('<input type=radio name=f id=f-all class=toggle checked><input type=radio name=f id=f-passed class=toggle>'
+               '<input type=radio name=f id=f-not class=toggle><input type=radio name=f id=f-error class=toggle>'
+               '<div class="bar filters"><label for=f-all>all</label><label for=f-passed>passed</label>'
+               '<label for=f-not>not passed</label><label for=f-error>could not be judged</label></div>')
+    html = page(title, "".join(body), extra_css=_CSS, toggle=False)
+    return html.replace("<body>", "<body>" + filters, 1)
+
+
+def write_contact_sheet(cards: list[SheetCard], path: Path, title: str = "seamless-usd check") -> Path:
+    """Write the page to ``path`` atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, render_contact_sheet(cards, title))
+    return path

@@ -1,0 +1,88 @@
+"""``seamless-usd check FOLDER``: every picture judged, bad files named and the rest go on, a progress count,
+JSON, and a contact sheet that draws where each seam runs; nothing is written beside the pictures."""
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import OpenImageIO as oiio
+
+from seamless_usd.pipeline.check import check_paths
+from seamless_usd_cli.main import main
+from seamless_usd_schemas import json_schema
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
+
+
+def _write(path: Path, pixels: np.ndarray, fmt=oiio.UINT8) -> Path:
+    h, w, c = pixels.shape
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), oiio.ImageSpec(w, h, c, fmt)), out.geterror()
+    assert out.write_image(np.ascontiguousarray(pixels, dtype=np.float32)), out.geterror()
+    out.close()
+    return path
+
+
+def _wood() -> np.ndarray:
+    return oiio.ImageBuf(str(SAMPLES / "wood_tileable.jpg")).get_pixels(oiio.FLOAT)[:256, :256]
+
+
+def _folder(root: Path) -> Path:
+    """Good and bad pictures as a library holds them."""
+    lib = root / "lib"
+    lib.mkdir()
+    wood = oiio.ImageBuf(str(SAMPLES / "wood_tileable.jpg")).get_pixels(oiio.FLOAT)  # tiles as a whole
+    _write(lib / "tileable.png", np.roll(wood, (60, 90), (0, 1)), oiio.UINT16)
+    window = np.concatenate([wood, wood], axis=1)[:300, 100:400]  # not a whole period: its wrap is a seam
+    _write(lib / "window.png", window)
+    rgba = np.concatenate([np.roll(wood, 33, 0), np.full(wood.shape[:2] + (1,), 0.5, np.float32)], axis=2)
+    _write(lib / "with_alpha.png", rgba)
+    _write(lib / "one_pixel.png", np.full((1, 1, 3), 0.5, np.float32))
+    nan = np.roll(wood, 7, 1).astype(np.float32)
+    nan[10, 10, 0] = np.nan
+    _write(lib / "nan.exr", nan, oiio.HALF)
+    (lib / "broken.png").write_bytes(b"\x89PNG\r\n\x1a\n" + b"not really a png" * 8)
+    return lib
+
+
+def _digests(folder: Path) -> dict[str, str]:
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
+
+
+def test_check_a_folder_with_json_and_a_contact_sheet(tmp_path, capsys):
+    lib = _folder(tmp_path)
+    before = _digests(lib)
+    sheet = tmp_path / "out" / "sheet.html"
+    code = main(["check", str(lib), "--json", "--report", str(sheet)])
+    payload = json.loads(capsys.readouterr().out)
+    jsonschema.validate(payload, json_schema("check"))
+    assert code == 1 == payload["exit_code"]
+    items = {Path(i["name"]).name: i for i in payload["items"]}
+    assert set(items) == {"tileable.png", "window.png", "with_alpha.png", "one_pixel.png", "nan.exr", "broken.png"}
+    assert items["tileable.png"]["passed"] and items["with_alpha.png"]["passed"]  # alpha is not part of the look
+    assert not items["window.png"]["passed"] and items["window.png"]["verdict"]["seams"]
+    for bad, why in (("one_pixel.png", "at least 8 px"), ("nan.exr", "non-finite"), ("broken.png", "broken.png")):
+        assert not items[bad]["passed"] and why in items[bad]["error"], items[bad]
+    assert _digests(lib) == before  # nothing written beside the pictures, nothing changed
+    html = sheet.read_text(encoding="utf-8")
+    cards = {re.search(r'alt="[^"]*/([^/"]+)"|<b>[^<]*/([^/<]+)</b>', c).group(1) or
+             re.search(r"<b>[^<]*/([^/<]+)</b>", c).group(1): c for c in html.split('<div class="card ')[1:]}
+    assert set(cards) == set(items)
+    assert sum(c.startswith("s-passed") for c in cards.values()) == 2
+    assert sum(c.startswith("s-error") for c in cards.values()) == 3
+    # each seam drawn on all four repeats of the window; none on a picture that passed
+    assert cards["window.png"].count("<line") == 4 * len(items["window.png"]["verdict"]["seams"])
+    assert "<line" not in cards["tileable.png"] and "<img" not in cards["broken.png"]
+
+
+def test_progress_counts_every_input_and_ends_at_the_total(tmp_path):
+    lib = _folder(tmp_path)
+    seen = []
+    report = check_paths([lib], progress=lambda name, done, total: seen.append((name, done, total)))
+    assert len(report.items) == 6
+    assert seen[-1] == ("", 6, 6) and [d for _, d, _ in seen] == list(range(7))
+    assert all(t == 6 for _, _, t in seen)
