@@ -6,6 +6,7 @@ stage or document (the client does that after the job returns).
 from __future__ import annotations
 
 import dataclasses
+import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -20,6 +21,7 @@ from seamless_usd.findings import Finding
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.naming import tile_filename
+from seamless_usd.pipeline.rerun import load_judged, save_judged
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import Reading, Reference, judge_reading
@@ -231,12 +233,16 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             entry.store(tiles, meta)
         else:
             tiles, meta = cached
+    out_dir = Path(job.output_dir)
+    if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
+        again = load_judged(entry.root, out_dir, stack.id)
+        if again is not None:
+            return _outcome(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir)
     discriminator = tiles.pop("__discriminator__", None)
     captions = meta["scale"].get("level_pictures", [])
     levels = [(c, tiles.pop(f"__level{i}__")) for i, c in enumerate(captions) if f"__level{i}__" in tiles]
 
     t3 = time.perf_counter()
-    out_dir = Path(job.output_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     tile_hw = tuple(int(v) for v in next(iter(tiles.values())).shape[:2])
     uv_scale = tuple(float(v) for v in meta["uv_scale"])
@@ -259,9 +265,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     timings = dict(meta.get("timings", {}))
     timings["write"] = time.perf_counter() - t3
 
-    crop = tuple(int(v) for v in meta["crop_size"])
     scale = dict(meta["scale"])
-    working = tuple(int(v) for v in scale["gan_working_size"])
     t4 = time.perf_counter()
     # the written maps read against the sources once, for the verdict and the join figures alike
     normals, assets = [m.is_normal for m in stack.maps], [m.asset for m in stack.maps]
@@ -279,26 +283,38 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     timings["inside"] = time.perf_counter() - t5  # bad joins, coherence and structure of every map
     for m, figures in zip(stack.maps, inside):
         outcomes[map_identity(m)].metrics.update(figures)
-    failing = list(verdict.failing)
     previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator,
                               levels=levels)
+    record = {"outputs": {json.dumps(list(k)): {"path": str(o.output), "metrics": o.metrics,
+                                                "source_metrics": o.source_metrics} for k, o in outcomes.items()},
+              "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
+    save_judged(entry.root, out_dir, stack.id, record, previews)
+    return _outcome(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
+
+
+def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
+             out_dir: Path) -> StackOutcome:
+    """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`)."""
+    maps = {tuple(json.loads(k)): MapOutcome(Path(o["path"]), dict(o["metrics"]), dict(o["source_metrics"]))
+            for k, o in record["outputs"].items()}
+    verdict = dict(record["verdict"])
     return StackOutcome(
         stack_id=stack.id,
-        maps=outcomes,
-        crop_size=crop,
-        tile_size=tile_hw,
-        working_size=working,
-        resampled={**pixels.policy_record, "gan": scale},
-        failing=failing,
-        verdict=verdict.as_dict(),
-        uv_scale=uv_scale,
+        maps=maps,
+        crop_size=tuple(int(v) for v in meta["crop_size"]),
+        tile_size=tuple(int(v) for v in record["tile_size"]),
+        working_size=tuple(int(v) for v in meta["scale"]["gan_working_size"]),
+        resampled={**pixels.policy_record, "gan": dict(meta["scale"])},
+        failing=list(verdict.get("failing", [])),
+        verdict=verdict,
+        uv_scale=tuple(float(v) for v in meta["uv_scale"]),
         q=dict(meta["q"]),
         candidates=int(meta["candidates"]),
-        timings=timings,
+        timings=dict(record["timings"]),
         model_hash=str(meta["model_hash"]),
         device=str(meta["device"]),
         precision=str(meta["precision"]),
-        cached=cached is not None,
+        cached=cached,
         output_dir=out_dir,
         peak_rss_mb=_peak_rss_mb(),
         previews=previews,

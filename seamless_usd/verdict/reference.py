@@ -37,6 +37,7 @@ class Reference:
         # False: the index is let go once one tile's copies are looked up (a 4K source's index is 0.27 GB),
         # for a reference read against a single tile
         self.keep_index = keep_index
+        self._units: dict[int | None, dict[int, float]] = {}
 
     @cached_property
     def index(self) -> SourceIndex:
@@ -46,11 +47,10 @@ class Reference:
     def units(self, which: int | None = None) -> dict[int, float]:
         """The mean neighbour step by axis (:func:`.copies.step_unit`) of the maps together (``which`` None) or of
         map ``which``."""
-        cache = self.__dict__.setdefault("_units", {})
-        if which not in cache:
+        if which not in self._units:
             source = self.joint if which is None else np.ascontiguousarray(self.maps[which])
-            cache[which] = {axis: step_unit(source, axis) for axis in (0, 1)}
-        return cache[which]
+            self._units[which] = {axis: step_unit(source, axis) for axis in (0, 1)}
+        return self._units[which]
 
 
 class Reading:

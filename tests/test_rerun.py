@@ -1,0 +1,65 @@
+"""An unchanged rerun is a no-op: the tiles a previous run wrote are still on disk, so their judged result is
+taken back (pipeline/rerun.py); a tile changed or removed since is written and judged again."""
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+
+from seamless_usd_cli.main import main
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
+
+
+def _run(root: Path, capsys, *extra: str) -> dict:
+    code = main(["process", str(root / "brick" / "scene.usda"), "--preset", "tiny", "--max-size", "128",
+                 "--cache-dir", str(root / "cache"), "--json", *extra])
+    report = json.loads(capsys.readouterr().out)
+    assert code == report["exit_code"]
+    return report
+
+
+def _judged(report: dict) -> list[dict]:
+    """What a run says of its stacks, less how long it took and where the result came from."""
+    return [{k: v for k, v in s.items() if k not in ("timings", "origin", "message", "peak_rss_mb")}
+            for s in report["stacks"]]
+
+
+def _outputs(report: dict) -> dict[str, str]:
+    return {m["output"]: hashlib.sha256(Path(m["output"]).read_bytes()).hexdigest()
+            for s in report["stacks"] for m in s["maps"] if m.get("output")}
+
+
+def test_an_unchanged_rerun_takes_the_judged_result_back_and_a_changed_tile_is_judged_again(tmp_path, capsys):
+    shutil.copytree(SAMPLES / "brick", tmp_path / "brick")
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    first = _run(tmp_path, capsys)
+    written = _outputs(first)
+    assert written and first["stacks"][0]["status"] == "passed"
+    stamps = {p: Path(p).stat().st_mtime_ns for p in written}
+
+    again = _run(tmp_path, capsys)
+    assert _judged(again) == _judged(first) and again["stacks"][0]["origin"] == "cache"
+    assert {p: Path(p).stat().st_mtime_ns for p in written} == stamps  # nothing written again
+    assert again["stacks"][0]["timings"] == first["stacks"][0]["timings"]  # not judged again: the same record
+
+    # a tile changed by hand (a dark stripe across it) is written and judged again, and the run says so
+    albedo = next(p for p in written if "albedo" in p)
+    pixels = oiio.ImageBuf(albedo).get_pixels(oiio.FLOAT)
+    pixels[40:48] *= 0.2
+    out = oiio.ImageOutput.create(albedo)
+    out.open(albedo, oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], oiio.UINT8))
+    out.write_image(np.ascontiguousarray(pixels))
+    out.close()
+    third = _run(tmp_path, capsys)
+    assert _outputs(third) == written  # the tile is the cached one again, byte for byte
+    assert _judged(third) == _judged(first)
+
+    # another output folder is a different set of files: written and judged there
+    elsewhere = _run(tmp_path, capsys, "--output-dir", str(tmp_path / "elsewhere"))
+    assert all(p.startswith(str(tmp_path / "elsewhere")) for p in _outputs(elsewhere))
+    assert [s["verdict"] for s in elsewhere["stacks"]] == [s["verdict"] for s in first["stacks"]]
