@@ -15,6 +15,7 @@ Example
 from __future__ import annotations
 
 import glob
+import hashlib
 import os
 import re
 import socket
@@ -25,7 +26,7 @@ from pathlib import Path
 from seamless_usd.errors import InputError
 from seamless_usd.findings import asset_ref
 
-__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine"]
+__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine", "file_sha256"]
 
 _UMASK = os.umask(0o022)  # read once at import (os.umask can only be read by setting it)
 os.umask(_UMASK)
@@ -140,6 +141,15 @@ def _alive(pid: int) -> bool:
     except OSError:  # exists, owned by someone else
         return True
     return True
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """The SHA-256 of a file's bytes (hex), read a megabyte at a time."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:

@@ -24,7 +24,7 @@ from safetensors.numpy import load_file, save_file
 
 from seamless_usd.version import __version__
 from seamless_usd.errors import InputError
-from seamless_usd.fileio import atomic_write, atomic_write_text
+from seamless_usd.fileio import atomic_write, atomic_write_text, file_sha256
 from seamless_usd.findings import asset_ref
 
 __all__ = ["StackCache", "CacheEntry", "JobIndex", "stack_key", "job_fingerprint", "default_cache_dir"]
@@ -62,14 +62,6 @@ def stack_key(pixels: Iterable[tuple[str, np.ndarray, str]], config: Mapping[str
     return h.hexdigest()
 
 
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 @dataclass(frozen=True)
 class CacheEntry:
     key: str
@@ -99,7 +91,7 @@ class CacheEntry:
             manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
             files = manifest["files"]
             for name, digest in files.items():
-                if _sha256(self.root / name) != digest:
+                if file_sha256(self.root / name) != digest:
                     raise ValueError(f"{name} does not match its recorded hash")
             tiles = load_file(str(self.root / TILES))
         except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
@@ -113,7 +105,7 @@ class CacheEntry:
         try:
             self.root.mkdir(parents=True, exist_ok=True)
             atomic_write(self.root / TILES, lambda tmp: save_file(arrays, str(tmp)))
-            manifest = {"format": CACHE_FORMAT, "key": self.key, "files": {TILES: _sha256(self.root / TILES)},
+            manifest = {"format": CACHE_FORMAT, "key": self.key, "files": {TILES: file_sha256(self.root / TILES)},
                         "meta": dict(meta)}
             atomic_write_text(self.root / MANIFEST, json.dumps(manifest, indent=1, default=str))
         except (OSError, SafetensorError) as exc:
@@ -160,7 +152,7 @@ def job_fingerprint(stack, settings) -> str:
         roles = sorted(r.role for r in m.roles)
         h.update(json.dumps([m.channels_used, m.color_space.value, list(m.scale), list(m.bias), roles,
                              m.is_normal, m.normal_y_flip]).encode())
-        h.update(_sha256(Path(m.resolved)).encode())
+        h.update(file_sha256(Path(m.resolved)).encode())
     return h.hexdigest()
 
 

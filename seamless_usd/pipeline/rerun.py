@@ -19,7 +19,7 @@ import numpy as np
 from safetensors import SafetensorError
 from safetensors.numpy import load_file, save_file
 
-from seamless_usd.fileio import atomic_write, atomic_write_text
+from seamless_usd.fileio import atomic_write, atomic_write_text, file_sha256
 from seamless_usd.report.model import Previews
 from seamless_usd.version import __version__
 
@@ -27,14 +27,6 @@ __all__ = ["JUDGED", "record_paths", "save_judged", "load_judged", "previews_to_
 
 #: Folder of an entry that holds the judged records.
 JUDGED = "judged"
-
-
-def _digest(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def record_paths(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[Path, Path]:
@@ -72,11 +64,11 @@ def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str
     paths = record_paths(entry_root, out_dir, stack_id)
     arrays, info = previews_to_arrays(previews)
     try:
-        outputs = {k: {**v, "sha256": _digest(Path(v["path"]))} for k, v in record["outputs"].items()}
+        outputs = {k: {**v, "sha256": file_sha256(Path(v["path"]))} for k, v in record["outputs"].items()}
         paths[0].parent.mkdir(parents=True, exist_ok=True)
         atomic_write(paths[1], lambda tmp: save_file(arrays, str(tmp)))
         body = {**record, "outputs": outputs, "previews": info, "version": __version__,
-                "pictures": _digest(paths[1])}
+                "pictures": file_sha256(paths[1])}
         atomic_write_text(paths[0], json.dumps(body, default=str))
     except (OSError, SafetensorError):
         return
@@ -88,10 +80,10 @@ def load_judged(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[dict[st
     paths = record_paths(entry_root, out_dir, stack_id)
     try:
         record = json.loads(paths[0].read_text(encoding="utf-8"))
-        if record.get("version") != __version__ or _digest(paths[1]) != record["pictures"]:
+        if record.get("version") != __version__ or file_sha256(paths[1]) != record["pictures"]:
             return None
         for out in record["outputs"].values():
-            if _digest(Path(out["path"])) != out["sha256"]:
+            if file_sha256(Path(out["path"])) != out["sha256"]:
                 return None
         previews = previews_from_arrays(load_file(str(paths[1])), record["previews"])
     except (OSError, ValueError, KeyError, TypeError, SafetensorError):
