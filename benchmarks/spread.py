@@ -115,7 +115,7 @@ def q_over_origins(stack: dict[str, tuple[np.ndarray, bool]], tiles: dict[str, d
     judge each tile, and the source as a tile, at ``Q_ORIGINS`` x ``Q_ORIGINS`` origins."""
     from seamless_usd import synthesis as syn
     from seamless_usd.synthesis.gan.sample import judge
-    from seamless_usd.synthesis.tile import _on_grid
+    from seamless_usd.synthesis.grid import on_grid
     from seamless_usd.synthesis.gan.train import TrainedModel
 
     maps = [syn.MapInput(n, np.ascontiguousarray(px, dtype=np.float32), isn) for n, (px, isn) in stack.items()]
@@ -126,7 +126,7 @@ def q_over_origins(stack: dict[str, tuple[np.ndarray, bool]], tiles: dict[str, d
     factor = (made.working_size[0] / H, made.working_size[1] / W)
     out = {}
     for kind, tile in {**tiles, "naive": {m.name: m.pixels for m in maps}}.items():
-        grid = _on_grid(tile, maps, factor)
+        grid = on_grid(tile, maps, factor)
         h, w = next(iter(grid.values())).shape[:2]
         passed = []
         for dy in np.linspace(0, h, Q_ORIGINS, endpoint=False).astype(int):

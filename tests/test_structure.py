@@ -188,7 +188,8 @@ def test_a_stack_that_does_not_continue_itself_gets_a_quilt_not_a_window_cut(mad
     large blocks is weighed against the refined tile instead (lattice/quilt.py): the one that passes, else
     the lower score (fidelity and structure) is written. The verdict passes neither for the cells (their
     joins thicken joints and glue stone edges); it passes the stripes' quilt, whose lines run unbroken and
-    unkinked across its joins and wraps at 3x, 2x2 repeated."""
+    unkinked across its joins and wraps at 3x, 2x2 repeated, so the stripes' quilt is written before any
+    GAN is trained."""
     from seamless_usd.synthesis.lattice.window import WINDOW_MAX_DIFFERENCE
     from seamless_usd.synthesis.tile import QUILT_MAX_DIFFERENCE
     from seamless_usd.verdict import judge
@@ -200,6 +201,13 @@ def test_a_stack_that_does_not_continue_itself_gets_a_quilt_not_a_window_cut(mad
     lat = made.lattice
     assert lat["cut"] == "quilt" and lat["tile"] == [160, 160] and lat["cells"] == [2, 2] and len(lat["blocks"]) == 4
     assert made.tile_size == (160, 160) and made.uv_scale == (1.0, 1.0)
+    if name == "stripes":  # its quilt passes before any training: written, and no GAN is trained
+        assert lat["passes"] and lat["chosen"] and made.layout_kind == "quilt" and made.gan is None
+        assert "not trained" in lat["gan"] and not any(k.startswith("score_") for k in lat)
+        assert lat["difference_worst"] <= QUILT_MAX_DIFFERENCE and "quilt_refused" not in lat
+        assert judge([made.maps[k] for k in keys], [stack[k][0] for k in keys], [False] * len(keys), keys,
+                     fidelity=False).seamless
+        return
     rival = next(k[len("score_"):] for k in lat if k.startswith("score_"))
     assert rival in ("gan", "random")
     assert lat["chosen"] == ((not lat["passes"], lat["score"]) < (not lat[f"passes_{rival}"], lat[f"score_{rival}"]))
@@ -253,8 +261,9 @@ def test_a_structured_tile_is_made_of_source_texels_with_its_maps_aligned(made_t
     _, colour_share = copy_origins(made.maps["color"].astype(np.float64), stack["color"][0].astype(np.float64))
     # texels beside a join have a neighbourhood the source lacks and may stay unplaced; the rest is found
     assert share > 0.8 and share > 0.97 * colour_share, (share, colour_share)
-    # the stages are recorded as pictures: the GAN's layout, then every refinement level (none for a cut)
-    assert len(made.level_pictures) == 1 + len(made.refine_levels)
+    # the stages are recorded as pictures: the GAN's layout, then every refinement level (none for a cut);
+    # none at all where the cut passed before any training
+    assert len(made.level_pictures) == (0 if made.gan is None else 1 + len(made.refine_levels))
     if made.refine_levels:
         assert made.level_pictures[-1][1].shape[:2] == (160, 160)
 

@@ -37,7 +37,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from seamless_usd.metrics import preview_uint8
     from seamless_usd.metrics.structure import structure_figures
-    from seamless_usd.synthesis import MapInput, downsample_maps, get_preset, make_tile
+    from seamless_usd.synthesis import MapInput, RefineConfig, downsample_maps, get_preset, make_tile
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--stack", default="stripes_512")
@@ -51,7 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     config = dataclasses.replace(get_preset(a.preset), iterations=a.iterations, seeds=1,
                                  checkpoint_every=max(200, a.iterations))
     load, t0 = os.getloadavg()[0], time.perf_counter()
-    made = make_tile(maps, config, seed=0, keep_alternatives=True)
+    # no cut first: the GAN trains even where a tile cut from the source would pass (its layout is the subject)
+    made = make_tile(maps, config, refine_config=RefineConfig(lattice=False), seed=0, keep_alternatives=True)
     layout = made.gan.maps[keys[0]]
     source = downsample_maps([maps[0]], layout.shape[:2])[0].pixels
     row = {"stack": a.stack, "iterations": a.iterations, "seconds": round(time.perf_counter() - t0),

@@ -200,14 +200,14 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                 inputs, config, refine_config=refine_config, tile_size=settings.tile_size, seed=settings.seed,
                 device=settings.device, checkpoint_dir=entry.checkpoint_dir, progress=emit,
             )
-            tile = made.gan
+            tile = made.gan  # None: no GAN was trained (the tile cut from the source passed first)
             meta = {
-                "crop_size": list(tile.crop_size),
-                "q": _q_dict(made),  # of the written tile
-                "candidates": len(tile.candidates),
-                "model_hash": tile.model_hash,
-                "device": tile.device,
-                "precision": tile.precision,
+                "crop_size": list(tile.crop_size if tile is not None else made.tile_size),
+                "q": _q_dict(made),  # of the written tile; empty when Q never ran
+                "candidates": len(tile.candidates) if tile is not None else 0,
+                "model_hash": tile.model_hash if tile is not None else "",
+                "device": tile.device if tile is not None else "none (not trained)",
+                "precision": tile.precision if tile is not None else "",
                 "timings": {**timings, **made.timings},
                 "uv_scale": list(made.uv_scale),
                 "scale": {
@@ -364,6 +364,8 @@ def _peak_rss_mb() -> float:
 
 def _q_dict(tile) -> dict[str, Any]:
     q = tile.q
+    if q is None:
+        return {}
     return {
         "passed": bool(tile.q_passed),
         "tau": float(q.tau),

@@ -94,10 +94,12 @@ def _layout_text(gan: dict) -> str | None:
                  f"{refused['difference_worst']:.2f} (its joins hide at {refused['most']:.2f} or less)")
     if "score" in lattice:
         def verdict(suffix: str) -> str:
-            q = "Q passed" if lattice.get("q_passed" + suffix) else "Q not passed"
+            q = lattice.get("q_passed" + suffix)
             ratio = lattice.get("lattice_ratio" + suffix)
-            return (q + (f", lattice ratio {ratio:.2f}" if ratio is not None else "")
-                    + (", passes" if lattice.get("passes" + suffix) else ""))
+            parts = ["" if "gan" in lattice else "Q passed" if q else "Q not passed",  # "gan": no GAN, no Q
+                     "" if ratio is None else f"lattice ratio {ratio:.2f}",
+                     "passes" if lattice.get("passes" + suffix) else ""]
+            return ", ".join(p for p in parts if p) or "does not pass"
         rival = next((k[len("score_"):] for k in lattice if k.startswith("score_")), None)
         name = {"window": "window cut", "quilt": "quilt"}.get(lattice.get("cut"), "lattice cut")
         blocks = ""
@@ -109,6 +111,8 @@ def _layout_text(gan: dict) -> str | None:
         if rival is not None:
             text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)});"
                      " worst figure / its target")
+    if lattice.get("gan"):
+        text += f"; SeamlessGAN {lattice['gan']}"
     return text
 
 

@@ -9,8 +9,6 @@
 """
 from __future__ import annotations
 
-import dataclasses
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,26 +16,22 @@ from typing import Any, Callable
 
 import numpy as np
 import torch
-import torch.nn.functional as F
 
 from seamless_usd.metrics import scale_ratio
-from seamless_usd.metrics.structure import STRUCTURE_TARGET, structure_figures
-from seamless_usd.verdict import Reading, Reference, judge_reading
 from seamless_usd.verdict import judge as verdict_of
 
+from .candidates import QUILT_CELLS, QUILT_MAX_DIFFERENCE, QUILT_TRIES, SCORE_SIDE, CutCheck, check_cut, joins_hide, judged
 from .config import SynthesisConfig
 from .gan.data import effective_k
 from .gan.sample import judge, sample
 from .gan.seeds import SeedRun, choose_seed, fidelity_score, seed_list, train_seeds
-from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
-from .lattice.quilt import best_quilt
-from .lattice.window import WINDOW_MAX_DIFFERENCE, continues_itself, window_tile_size
-from .refinement.refine import RefineConfig, refine, resize_periodic
+from .grid import downsample_maps, on_grid
+from .refinement.refine import RefineConfig, refine
 from .scale import structure_size, working_factor
 from .types import MapInput, QResult, TileResult, stack_shape
 
 __all__ = ["MadeTile", "make_tile", "downsample_maps", "written_lattice_ratio", "structure_advice", "TILE_SIZES",
-           "LAYOUT_SCALE_RANGE"]
+           "LAYOUT_SCALE_RANGE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE"]
 
 TILE_SIZES = ("source", "paper")
 
@@ -46,22 +40,6 @@ TILE_SIZES = ("source", "paper")
 #: test preset) would only be copied faithfully into nonsense, and the refinement starts from a
 #: random field instead. The default preset's brick tile scores 1.0-1.3.
 LAYOUT_SCALE_RANGE = (0.5, 2.0)
-
-#: Blocks (rows, columns) of a quilted tile (:mod:`.lattice.quilt`): the fewest that still let every block be
-#: chosen to fit its neighbours; each block keeps a stone or a run of plank whole.
-QUILT_CELLS = (2, 2)
-#: Quilts tried (seeds) for a stack; the one whose worst join costs least is weighed.
-QUILT_TRIES = 3
-#: A quilt whose two blocks differ along some cut by more than this (mean squared difference over that of
-#: two unrelated texels) may be written only where the verdict does not pass it. The window cut's
-#: threshold, fixed on window cuts looked at along their wraps (``benchmarks/experiments/results/window_gate.md``);
-#: quilts looked at afterwards: the two the verdict passed at or under it are seamless, the three it
-#: passed over it (0.10-0.36) show two-tone stones, stepped tone patches and stripes ending at a cut.
-QUILT_MAX_DIFFERENCE = WINDOW_MAX_DIFFERENCE
-
-#: Layout candidates are compared on the source's grid, halved until its longest side is at most this (px).
-SCORE_SIDE = 1024
-
 
 @dataclass
 class MadeTile:
@@ -74,7 +52,8 @@ class MadeTile:
     structure_px: float  # structure size estimated on the source (px at the source's resolution)
     working_factor: float  # GAN working resolution / source resolution
     working_size: tuple[int, int]  # (h, w) the GAN trained at
-    gan: TileResult  # the SeamlessGAN candidate chosen by Q (crop, Q, candidates) at the working resolution
+    gan: TileResult | None  # the SeamlessGAN candidate chosen by Q (crop, Q, candidates) at the working resolution;
+    #                        None: not trained, the tile cut from the source passed first
     refined: bool
     layout_scale: dict[str, float] = field(default_factory=dict)  # per map, the GAN tile's scale ratio
     layout_used: bool = False  # whether the GAN tile seeded the refinement
@@ -90,37 +69,19 @@ class MadeTile:
     #                 layout, then every refinement level seen through its field (see refine's ``pictures``)
 
     def __post_init__(self) -> None:
-        if self.q is None:
+        if self.q is None and self.gan is not None:
             self.q = self.gan.q
 
     @property
-    def q_passed(self) -> bool:
-        """Whether the discriminator's Q passes on the written tile (through its layout for a refined GAN tile).
-        The discriminator's view only: whether the tile *passed* is the verdict's (:mod:`seamless_usd.verdict`)."""
-        return bool(self.q.passed)
+    def q_passed(self) -> bool | None:
+        """Whether the discriminator's Q passes on the written tile (through its layout for a refined GAN tile);
+        None when no GAN was trained. The discriminator's view only: whether the tile *passed* is the
+        verdict's (:mod:`seamless_usd.verdict`)."""
+        return None if self.q is None else bool(self.q.passed)
 
 
 #: Longest side (px) of the per-level pictures of the refinement.
 LEVEL_PICTURE = 384
-
-
-def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInput]:
-    """Maps resized to ``size = (h, w)`` (bilinear, antialiased when shrinking; normals renormalised)."""
-    return [m if m.pixels.shape[:2] == tuple(size) else
-            MapInput(m.name, _resized(m.pixels, size, m.is_normal), m.is_normal) for m in maps]
-
-
-def _resized(pixels: np.ndarray, size: tuple[int, int], is_normal: bool, periodic: bool = False) -> np.ndarray:
-    """(H, W, C) pixels resized to ``size``: bilinear with antialiasing, or, for a periodic tile, area
-    averaging with wrap-around (:func:`.refine.resize_periodic`); normals renormalised, values clamped."""
-    t = torch.from_numpy(np.ascontiguousarray(pixels.transpose(2, 0, 1)))
-    if periodic:
-        r = resize_periodic(t, size)
-    else:
-        r = F.interpolate(t[None], size=size, mode="bilinear", antialias=True, align_corners=False)[0]
-    if is_normal and r.shape[0] >= 3:
-        r = torch.cat([F.normalize(r[:3], dim=0, eps=1e-6), r[3:]], 0)
-    return np.ascontiguousarray(r.clamp(-1, 1).permute(1, 2, 0).numpy())
 
 
 def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: RefineConfig | None = RefineConfig(),
@@ -129,6 +90,10 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
               keep_alternatives: bool = False) -> MadeTile:
     """Make a tileable stack from ``maps`` (full resolution, network domain).
 
+    0. With ``refine_config.lattice`` and source-sized tiles, the tile cut from the source comes first
+       (:func:`.candidates.check_cut`: whole lattice periods, one window, or a quilt): when the verdict passes
+       it on the source's grid, it is written and no GAN is trained (the GAN earns its time only where no
+       cut passes). Otherwise:
     1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there,
        ``config.seeds`` seeds side by side (:mod:`.seeds`).
     2. Sample: the crop search with the discriminator's Q (``tile_size="source"``: crops of half the
@@ -156,8 +121,14 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     work_hw = (max(32, round(H * f) // 4 * 4), max(32, round(W * f) // 4 * 4))
     work_hw = (min(work_hw[0], H), min(work_hw[1], W))
     f_y, f_x = work_hw[0] / H, work_hw[1] / W
-    working = downsample_maps(maps, work_hw)
     timings["scale"] = time.perf_counter() - t0
+    if refine_config is not None:
+        t4 = time.perf_counter()
+        cut = check_cut(maps, refine_config.lattice and tile_size == "source", seed)
+        timings["lattice"] = time.perf_counter() - t4
+        if cut.passes:
+            return _made_from_cut(cut, (H, W), structure, f, work_hw, timings)
+    working = downsample_maps(maps, work_hw)
 
     t1 = time.perf_counter()
     models = train_seeds(working, config, seed, device=device, checkpoint_dir=checkpoint_dir,
@@ -198,14 +169,27 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     model = models[runs.index(chosen)]
     # the refinement follows the GAN tile, so it inherits the sample's Q; from a random start it does
     # not, and the discriminator judges the refined tile itself
-    q = None if use_layout else judge(model, _on_grid(tiles, maps, (f_y, f_x)))
+    q = None if use_layout else judge(model, on_grid(tiles, maps, (f_y, f_x)))
     made = MadeTile(tiles, out_hw, (H, W), (W / out_hw[1], H / out_hw[0]), structure, f, work_hw, gan, True,
                     layout_scale, use_layout, result.levels, timings, seeds, "gan" if use_layout else "random", q=q,
                     level_pictures=_level_pictures(gan.maps[maps[0].name], use_layout, result))
     t4 = time.perf_counter()
-    _try_lattice(made, maps, model, refine_config.lattice and tile_size == "source", keep_alternatives, seed)
-    timings["lattice"] = time.perf_counter() - t4
+    _try_lattice(made, maps, model, cut, keep_alternatives)
+    timings["lattice"] += time.perf_counter() - t4
     return made
+
+
+def _made_from_cut(cut: CutCheck, grid_hw: tuple[int, int], structure: float, factor: float,
+                   work_hw: tuple[int, int], timings: dict[str, float]) -> MadeTile:
+    """The written tile when the cut passes before any training: every texel a source copy, no GAN."""
+    H, W = grid_hw
+    tile_hw = tuple(next(iter(cut.tiles.values())).shape[:2])
+    notes = {**cut.notes, "cut": cut.kind, "tile": list(tile_hw), "passes": True, "score": round(cut.score, 3),
+             "chosen": True, "gan": "not trained: the tile cut from the source passes", **cut.figures}
+    if cut.ratio is not None:
+        notes["lattice_ratio"] = round(cut.ratio, 3)
+    return MadeTile(dict(cut.tiles), tile_hw, (H, W), (W / tile_hw[1], H / tile_hw[0]), structure, factor, work_hw,
+                    None, False, timings=timings, layout_kind=cut.kind, lattice=notes)
 
 
 def _level_pictures(layout: np.ndarray, used: bool, result) -> list[tuple[str, np.ndarray]]:
@@ -236,7 +220,7 @@ def structure_advice(lattice: dict, layout_kind: str | None) -> str | None:
     refused = lattice.get("window_refused")
     if refused is None or any(p is not None for p in lattice.get("period_px") or []):
         return None
-    if layout_kind == "quilt" and _joins_hide(lattice):
+    if layout_kind == "quilt" and joins_hide(lattice):
         return None
     lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
     return (f"the texture neither repeats nor continues itself (its window lags differ by {lags}; a cut hides at "
@@ -244,114 +228,34 @@ def structure_advice(lattice: dict, layout_kind: str | None) -> str | None:
             "or mend the joins by hand")
 
 
-def _on_grid(tiles: dict[str, np.ndarray], maps: list[MapInput], factor: tuple[float, float]) -> dict[str, np.ndarray]:
-    """Periodic tiles resized by ``factor`` per axis (working / source size: onto the working grid)."""
-    out = {}
-    for m in maps:
-        h, w = tiles[m.name].shape[:2]
-        hw = (max(8, round(h * factor[0])), max(8, round(w * factor[1])))
-        out[m.name] = _resized(tiles[m.name], hw, m.is_normal, periodic=True)
-    return out
-
-
-def _judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice, reference: Reference
-            ) -> tuple[float, bool, float | None]:
-    """(score, passes, lattice ratio) of a candidate tile; ``reference``: ``maps`` prepared for the verdict once
-    for every candidate.
-
-    The score is the worst figure in units of its target: :func:`.seeds.fidelity_score`; the structure
-    figure (value over STRUCTURE_TARGET: broken joints and chopped lines, which no fidelity figure sees);
-    the verdict's strongest seam run over its threshold (between two tiles that both have seams, the one
-    whose worst join is weaker); and for a stack that repeats, the lattice ratio ((1 - r) over
-    (1 - LATTICE_TARGET)): none of the fidelity and seam figures sees a broken bond, the lattice ratio does.
-    The tile passes as a stack would (the verdict: no seam, fidelity inside the source's tolerances) and
-    keeps the repeat."""
-    score, _, _ = fidelity_score(tiles, maps)
-    score = max([score] + [structure_figures(tiles[m.name], m.pixels)["structure"] / STRUCTURE_TARGET for m in maps])
-    ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
-    if ratio is not None:
-        score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
-    verdict = judge_reading(Reading([tiles[m.name] for m in maps], reference.normals, reference.names, reference))
-    score = max(score, verdict.strongest / verdict.margin)
-    return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
-
-
-def _cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict, seed: int):
-    """The cut tile for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
-    else one window of the source when the texture continues itself at the window's lags
-    (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``), else source-sized
-    tile quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES seeds, the one
-    whose worst join costs least; cuts by the blocks' difference: cuts along the texture's lines thickened
-    and forked its joints and read worse on every figure, ``benchmarks/experiments/results/levers_quilt*.md``). Returns
-    (kind, field (h, w, 2) of source texels, figures), or None."""
-    pixels = [m.pixels for m in maps]
-    if lattice.found:
-        sizes = lattice_tile_size((H, W), lattice)
-        if sizes is not None:
-            field_, offset = lattice_cut(pixels, *sizes)
-            return "lattice", field_, {"band": list(sizes[1]), "offset": list(offset)}
-    sizes = window_tile_size(pixels)
-    if sizes is not None:
-        if continues_itself(sizes[2]):
-            field_, offset = lattice_cut(pixels, sizes[0], sizes[1])
-            return "window", field_, {"band": list(sizes[1]), "offset": list(offset), "lag_difference": sizes[2]}
-        notes["window_refused"] = {"lag_difference": sizes[2], "most": WINDOW_MAX_DIFFERENCE}
-    quilt = best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed)
-    if quilt is None:
-        return None
-    keys = ("cells", "overlap", "blocks", "join_mean", "join_worst", "difference_worst")
-    return "quilt", quilt[0], {k: quilt[1][k] for k in keys}
-
-
-def _joins_hide(figures: dict) -> bool:
-    """Whether a quilt's joins hide: the two blocks agree along every cut to within QUILT_MAX_DIFFERENCE
-    (its ``difference_worst``). Where they do not, the verdict passed seamed quilts (two-tone stones, tone
-    patches, stripes ending at a cut: ``benchmarks/experiments/results/quilt_gate.md``)."""
-    return figures["difference_worst"] <= QUILT_MAX_DIFFERENCE
-
-
-def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_alternatives: bool, seed: int = 0) -> None:
-    """Measure the written tile against a tile cut from the source and, with ``cut``, keep the cut when it
-    wins: the candidate that passes (the verdict: no seam, fidelity inside the source's tolerances; for a
-    stack that repeats, the lattice ratio) before one that does not, then the lower score (see
-    :func:`_judged`). A stack that repeats on a lattice is cut to whole periods
-    (:func:`.lattice.lattice_cut`); any other that continues itself to one window of the source joined
-    across its wraps (:mod:`.lattice.window`). The figures are taken on the source's grid, halved down
-    to SCORE_SIDE; a stack that does neither gets a quilt (:mod:`.lattice.quilt`)."""
+def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, keep_alternatives: bool) -> None:
+    """Measure the written tile against the tile cut from the source (``cut``, made and judged before
+    training) and keep the cut when it wins: the candidate that passes (the verdict: no seam, fidelity inside
+    the source's tolerances; for a stack that repeats, the lattice ratio) before one that does not, then the
+    lower score (see :func:`.candidates.judged`). The figures are taken on the source's grid, halved down to
+    SCORE_SIDE."""
     H, W = made.grid_size
-    lattice = find_lattice([m.pixels for m in maps])
-    made.lattice = lattice.as_dict()
-    candidate = _cut_candidate(maps, lattice, H, W, made.lattice, seed) if cut else None
-    if not lattice.found and candidate is None:
+    made.lattice = dict(cut.notes)
+    if not cut.lattice.found and cut.kind is None:
         return
-    halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
-    # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
-    half = (max(8, round(H / halve)), max(8, round(W / halve)))
-    grid = [MapInput(m.name, _resized(m.pixels, half, m.is_normal, periodic=True), m.is_normal)
-            for m in maps] if halve > 1 else maps
-    grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
-    reference = Reference([m.pixels for m in grid], [m.is_normal for m in grid], [m.name for m in grid])
-    current, current_passes, current_ratio = _judged(_on_grid(made.maps, maps, (1 / halve, 1 / halve)), grid,
-                                                     grid_lattice, reference)
+    halve = cut.halve
+    current, current_passes, current_ratio = judged(on_grid(made.maps, maps, (1 / halve, 1 / halve)), cut.grid,
+                                                    cut.grid_lattice, cut.reference)
     kind = made.layout_kind
     made.lattice.update({f"q_passed_{kind}": made.q_passed, f"passes_{kind}": current_passes,
                          f"score_{kind}": round(current, 3)})
     if current_ratio is not None:
         made.lattice[f"lattice_ratio_{kind}"] = round(current_ratio, 3)
-    if candidate is None:
+    if cut.kind is None:
         return
-    cut_kind, field_, figures = candidate
-    tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
-    score, verdict_passes, ratio = _judged(_on_grid(tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice,
-                                           reference)
-    # the verdict misses joins like a quilt's that do not hide (benchmarks/experiments/results/quilt_gate.md)
-    passes = verdict_passes and (cut_kind != "quilt" or _joins_hide(figures))
+    cut_kind, tiles, figures, score, passes = cut.kind, cut.tiles, cut.figures, cut.score, cut.passes
     tile_hw = next(iter(tiles.values())).shape[:2]
-    q = judge(model, _on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
+    q = judge(model, on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
     wins = (not passes, score) < (not current_passes, current)
-    if wins and cut_kind == "quilt" and not _joins_hide(figures):
+    if wins and cut_kind == "quilt" and not joins_hide(figures):
         # written, it would be judged at full resolution: a quilt whose joins do not hide is written only
         # where that verdict sees them, never as a tile that passes (on a grid not halved, it was so judged)
+        verdict_passes = cut.verdict_passes
         if halve > 1:
             verdict_passes = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps],
                                         [m.is_normal for m in maps], [m.name for m in maps]).passed
@@ -361,8 +265,8 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: bool, keep_al
                                              "most": QUILT_MAX_DIFFERENCE}
     made.lattice.update({"cut": cut_kind, "tile": list(tile_hw), "q_passed": bool(q.passed), "passes": passes,
                          "score": round(score, 3), "chosen": wins, **figures})
-    if ratio is not None:
-        made.lattice["lattice_ratio"] = round(ratio, 3)
+    if cut.ratio is not None:
+        made.lattice["lattice_ratio"] = round(cut.ratio, 3)
     if wins:
         loser_kind, loser = made.layout_kind, dict(made.maps)
         made.maps, made.tile_size, made.q = tiles, tuple(tile_hw), q

@@ -1,0 +1,146 @@
+"""Tiles cut from the source (whole lattice periods, one window, a quilt of large blocks), and how every
+candidate tile of a stack is weighed: the verdict, then a score, on the source's grid halved to SCORE_SIDE.
+
+:func:`check_cut` makes and judges the cut before any training: when it passes, the stack needs no GAN
+(:func:`.tile.make_tile`); when it does not, it is weighed against the refined tile (:func:`.tile._try_lattice`).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from seamless_usd.metrics.structure import STRUCTURE_TARGET, structure_figures
+from seamless_usd.verdict import Reading, Reference, judge_reading
+
+from .gan.seeds import fidelity_score
+from .grid import on_grid, resized
+from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
+from .lattice.quilt import best_quilt
+from .lattice.window import WINDOW_MAX_DIFFERENCE, continues_itself, window_tile_size
+from .types import MapInput
+
+__all__ = ["QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
+           "cut_candidate", "joins_hide"]
+
+#: Blocks (rows, columns) of a quilted tile (:mod:`.lattice.quilt`): the fewest that still let every block be
+#: chosen to fit its neighbours; each block keeps a stone or a run of plank whole.
+QUILT_CELLS = (2, 2)
+#: Quilts tried (seeds) for a stack; the one whose worst join costs least is weighed.
+QUILT_TRIES = 3
+#: A quilt whose two blocks differ along some cut by more than this (mean squared difference over that of
+#: two unrelated texels) may be written only where the verdict does not pass it. The window cut's
+#: threshold, fixed on window cuts looked at along their wraps (``benchmarks/experiments/results/window_gate.md``);
+#: quilts looked at afterwards: the two the verdict passed at or under it are seamless, the three it
+#: passed over it (0.10-0.36) show two-tone stones, stepped tone patches and stripes ending at a cut.
+QUILT_MAX_DIFFERENCE = WINDOW_MAX_DIFFERENCE
+
+#: Layout candidates are compared on the source's grid, halved until its longest side is at most this (px).
+SCORE_SIDE = 1024
+
+
+def judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice, reference: Reference
+            ) -> tuple[float, bool, float | None]:
+    """(score, passes, lattice ratio) of a candidate tile; ``reference``: ``maps`` prepared for the verdict once
+    for every candidate.
+
+    The score is the worst figure in units of its target: :func:`.seeds.fidelity_score`; the structure
+    figure (value over STRUCTURE_TARGET: broken joints and chopped lines, which no fidelity figure sees);
+    the verdict's strongest seam run over its threshold (between two tiles that both have seams, the one
+    whose worst join is weaker); and for a stack that repeats, the lattice ratio ((1 - r) over
+    (1 - LATTICE_TARGET)): none of the fidelity and seam figures sees a broken bond, the lattice ratio does.
+    The tile passes as a stack would (the verdict: no seam, fidelity inside the source's tolerances) and
+    keeps the repeat."""
+    score, _, _ = fidelity_score(tiles, maps)
+    score = max([score] + [structure_figures(tiles[m.name], m.pixels)["structure"] / STRUCTURE_TARGET for m in maps])
+    ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
+    if ratio is not None:
+        score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
+    verdict = judge_reading(Reading([tiles[m.name] for m in maps], reference.normals, reference.names, reference))
+    score = max(score, verdict.strongest / verdict.margin)
+    return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
+
+
+def cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict, seed: int):
+    """The cut tile for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
+    else one window of the source when the texture continues itself at the window's lags
+    (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``), else source-sized
+    tile quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES seeds, the one
+    whose worst join costs least; cuts by the blocks' difference: cuts along the texture's lines thickened
+    and forked its joints and read worse on every figure, ``benchmarks/experiments/results/levers_quilt*.md``). Returns
+    (kind, field (h, w, 2) of source texels, figures), or None."""
+    pixels = [m.pixels for m in maps]
+    if lattice.found:
+        sizes = lattice_tile_size((H, W), lattice)
+        if sizes is not None:
+            field_, offset = lattice_cut(pixels, *sizes)
+            return "lattice", field_, {"band": list(sizes[1]), "offset": list(offset)}
+    sizes = window_tile_size(pixels)
+    if sizes is not None:
+        if continues_itself(sizes[2]):
+            field_, offset = lattice_cut(pixels, sizes[0], sizes[1])
+            return "window", field_, {"band": list(sizes[1]), "offset": list(offset), "lag_difference": sizes[2]}
+        notes["window_refused"] = {"lag_difference": sizes[2], "most": WINDOW_MAX_DIFFERENCE}
+    quilt = best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed)
+    if quilt is None:
+        return None
+    keys = ("cells", "overlap", "blocks", "join_mean", "join_worst", "difference_worst")
+    return "quilt", quilt[0], {k: quilt[1][k] for k in keys}
+
+
+def joins_hide(figures: dict) -> bool:
+    """Whether a quilt's joins hide: the two blocks agree along every cut to within QUILT_MAX_DIFFERENCE
+    (its ``difference_worst``). Where they do not, the verdict passed seamed quilts (two-tone stones, tone
+    patches, stripes ending at a cut: ``benchmarks/experiments/results/quilt_gate.md``)."""
+    return figures["difference_worst"] <= QUILT_MAX_DIFFERENCE
+
+
+
+
+@dataclass
+class CutCheck:
+    """The stack's lattice, its cut (if any) and how the cut is judged, on the source's grid halved ``halve``
+    times to at most SCORE_SIDE; ``reference`` is that grid prepared for the verdict once for every candidate."""
+
+    lattice: Lattice
+    notes: dict  # lattice.as_dict(), and why a window was refused
+    halve: int
+    grid: list[MapInput]
+    grid_lattice: Lattice
+    reference: Reference
+    kind: str | None = None  # "lattice", "window" or "quilt"; None: no cut
+    tiles: dict[str, np.ndarray] = field(default_factory=dict)  # the cut at full resolution
+    figures: dict = field(default_factory=dict)  # the cut's own figures (band, offset, joins)
+    score: float = math.inf
+    verdict_passes: bool = False
+    ratio: float | None = None
+
+    @property
+    def passes(self) -> bool:
+        """The verdict passes the cut and, for a quilt, its joins hide (the verdict misses joins like a quilt's
+        that do not: ``benchmarks/experiments/results/quilt_gate.md``)."""
+        return self.kind is not None and self.verdict_passes and (self.kind != "quilt" or joins_hide(self.figures))
+
+
+def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
+    """Find the stack's lattice and, with ``cut``, make its cut (:func:`cut_candidate`) and judge it."""
+    H, W = maps[0].pixels.shape[:2]
+    lattice = find_lattice([m.pixels for m in maps])
+    notes = lattice.as_dict()
+    candidate = cut_candidate(maps, lattice, H, W, notes, seed) if cut else None
+    halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
+    # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
+    half = (max(8, round(H / halve)), max(8, round(W / halve)))
+    grid = [MapInput(m.name, resized(m.pixels, half, m.is_normal, periodic=True), m.is_normal)
+            for m in maps] if halve > 1 else maps
+    grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
+    reference = Reference([m.pixels for m in grid], [m.is_normal for m in grid], [m.name for m in grid])
+    check = CutCheck(lattice, notes, halve, grid, grid_lattice, reference)
+    if candidate is not None:
+        check.kind, field_, check.figures = candidate
+        check.tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
+        check.score, check.verdict_passes, check.ratio = judged(
+            on_grid(check.tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice, reference)
+    return check
