@@ -147,6 +147,9 @@ class _ProgressView:
             p.update(self.step, total=None, rate=f"refining at {d['tile'][1]}x{d['tile'][0]} ({d['seconds']:.1f}s)")
         elif event.kind == "stack-done":
             p.advance(self.stacks)
+            if self.step is not None:  # the stack's own bar goes with it (a stack cut from its source has no steps)
+                p.remove_task(self.step)
+                self.step = None
 
 
 def _summary(report: Report, console: Console) -> None:
