@@ -6,7 +6,14 @@ first use so that ``import seamless_usd`` stays light (no torch, no pxr) for DCC
 """
 from __future__ import annotations
 
+import os
+
 from seamless_usd.version import __version__
+
+# Threads that sleep instead of spinning at OpenMP barriers: on a busy machine (other jobs on the same cores)
+# spinning made 2-thread training 5-10x slower than 1 thread (benchmarks/speed.py). Set here, before any step
+# first imports torch (the verdict imports it only when it resizes a map); an explicit setting always wins.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 _API = {"scan", "process_stage", "process_paths", "Options", "ProgressEvent", "Report", "StackReport", "StackStatus", "WriteMode"}
 

@@ -2,6 +2,10 @@
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import jsonschema
 import pytest
@@ -93,3 +97,15 @@ def test_mtlx_reference_causes_no_usd_warning_noise(samples_dir, capfd):
     assert main(["scan", str(samples_dir / "mtlx" / "scene.usda")]) == 0
     captured = capfd.readouterr()
     assert "</World/Looks/Wood>" in captured.out and captured.err == ""
+
+
+def test_scan_starts_without_torch():
+    """``scan`` reads headers and a few pixels: torch (over a second to import) is not loaded for it, and the
+    package sets OMP_WAIT_POLICY before any step first imports torch."""
+    code = ("import os, sys; from seamless_usd_cli.main import main; "
+            f"main(['scan', {str(Path(__file__).resolve().parents[1] / 'sample_assets' / 'brick' / 'scene.usda')!r}]); "
+            "print('torch' in sys.modules, os.environ.get('OMP_WAIT_POLICY'))")
+    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().splitlines()[-1] == "False PASSIVE"

@@ -12,13 +12,7 @@ Three methods, one folder each, composed by ``tile.make_tile``:
 >>> maps = [MapInput("albedo", np.zeros((64, 64, 3), np.float32))]
 >>> result = sample(train(maps, get_preset("tiny")), maps)   # doctest: +SKIP
 """
-import os
-
-# Threads that sleep instead of spinning at OpenMP barriers: on a busy machine (other jobs on the same
-# cores) spinning made 2-thread training 5-10x slower than 1 thread (benchmarks/speed.py). Only takes
-# effect when this package is imported before torch; an explicit setting always wins.
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-
+# OMP_WAIT_POLICY=PASSIVE is set by the package itself (seamless_usd/__init__.py), before torch is first imported.
 from .config import PRESETS, SynthesisConfig, get_preset
 from .gan.sample import SamplingProgress, sample
 from .gan.train import TrainedModel, train

@@ -2,8 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-import torch
-import torch.nn.functional as F
 
 __all__ = ["WORK_SIDE", "prepare_maps", "to_working", "map_weights", "joint", "joined"]
 
@@ -37,6 +35,9 @@ def prepare_maps(maps: list[np.ndarray], normals: list[bool]) -> list[np.ndarray
 def _resize(a: np.ndarray, hw: tuple[int, int], periodic: bool) -> np.ndarray:
     if a.shape[:2] == tuple(hw):
         return a
+    import torch  # only where a map is resized: the verdict's import stays light for scan and check
+    import torch.nn.functional as F
+
     t = torch.from_numpy(np.ascontiguousarray(a.transpose(2, 0, 1), dtype=np.float32))[None]
     pad = 4 if periodic else 0
     if pad:
