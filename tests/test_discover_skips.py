@@ -79,10 +79,17 @@ def test_texture_without_uv_input_is_skipped(tmp_path):
     assert f.code == "no-uv" and "swatch" in f.message
 
 
-def test_image_below_100_px_is_skipped(tmp_path):
-    write_image(tmp_path / "small.png", size=64)
+def test_image_below_16_px_is_skipped(tmp_path):
+    write_image(tmp_path / "small.png", size=12)
     f = _only_finding(scan_paths([texture_scene(tmp_path / "s.usda", "small.png")]))
-    assert f.code == "too-small" and "64x64" in f.message
+    assert f.code == "too-small" and "12x12" in f.message and "16 px" in f.message
+
+
+def test_image_of_64_px_is_a_stack(tmp_path):
+    """Icons and small game textures are processed (with a tile cut from the source: see test_process_small)."""
+    write_image(tmp_path / "small.png", size=64)
+    result = scan_paths([texture_scene(tmp_path / "s.usda", "small.png")])
+    assert not result.findings and len(result.stacks) == 1
 
 
 def test_unreadable_image_is_skipped(tmp_path):

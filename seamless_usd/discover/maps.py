@@ -110,7 +110,7 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         return None, [_skip(first, Codes.UNREADABLE_FILE, f"cannot read the image header: {info}")]
     if min(info.width, info.height) < MIN_IMAGE_SIZE:
         return None, [
-            _skip(first, Codes.TOO_SMALL, f"image is {info.width}x{info.height} px, below the {MIN_IMAGE_SIZE} px minimum crop")
+            _skip(first, Codes.TOO_SMALL, f"image is {info.width}x{info.height} px, below the {MIN_IMAGE_SIZE} px of the smallest tile")
         ]
     findings: list[Finding] = []
     cs, reason, unknown = resolve_color_space(first.labels, info)

@@ -19,6 +19,7 @@ __all__ = [
     "OUTPUT_CHANNELS",
     "SEPARATE_OUTPUTS",
     "TYPE_CHANNELS",
+    "MIN_CROP",
     "MIN_IMAGE_SIZE",
     "UDIM_TOKEN",
     "MTLX_SUFFIX",
@@ -172,6 +173,7 @@ class Codes:
     DISCOVERY_ERROR = "discovery-error"
 
 
-MIN_IMAGE_SIZE = 100  # px: the smallest crop synthesis samples (DESIGN: c_min)
+MIN_CROP = 100  # px: the smallest crop SeamlessGAN samples (DESIGN: c_min); a smaller stack gets a cut tile only
+MIN_IMAGE_SIZE = 16  # px: below this no tile can be cut from a map either: skipped as too-small
 UDIM_TOKEN = "<UDIM>"
 MTLX_SUFFIX = ".mtlx"

@@ -310,11 +310,11 @@ def _new_run(options: Options) -> Run:
         get_preset(options.preset)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    from seamless_usd.discover.tokens import MIN_IMAGE_SIZE
+    from seamless_usd.discover.tokens import MIN_CROP
 
-    if options.max_size is not None and options.max_size < MIN_IMAGE_SIZE:
+    if options.max_size is not None and options.max_size < MIN_CROP:
         raise UsageError(
-            f"--max-size {options.max_size} is below the {MIN_IMAGE_SIZE} px minimum crop; use {MIN_IMAGE_SIZE} or more"
+            f"--max-size {options.max_size} is below the {MIN_CROP} px minimum crop; use {MIN_CROP} or more"
         )
     if options.device is not None:
         check_device(options.device)

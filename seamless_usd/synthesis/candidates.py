@@ -22,8 +22,12 @@ from .lattice.quilt import best_quilt
 from .lattice.window import WINDOW_MAX_DIFFERENCE, continues_itself, window_tile_size
 from .types import MapInput
 
-__all__ = ["QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
+__all__ = ["GAN_MIN_SIDE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
            "cut_candidate", "joins_hide"]
+
+#: The smallest side (px) SeamlessGAN is trained on (its minimum crop, ``discover.tokens.MIN_CROP``): a smaller
+#: stack gets the tile cut from its source only, passed or not.
+GAN_MIN_SIDE = 100
 
 #: Blocks (rows, columns) of a quilted tile (:mod:`.lattice.quilt`): the fewest that still let every block be
 #: chosen to fit its neighbours; each block keeps a stone or a run of plank whole.

@@ -20,7 +20,10 @@ import torch
 from seamless_usd.metrics import scale_ratio
 from seamless_usd.verdict import judge as verdict_of
 
-from .candidates import QUILT_CELLS, QUILT_MAX_DIFFERENCE, QUILT_TRIES, SCORE_SIDE, CutCheck, check_cut, joins_hide, judged
+from seamless_usd.errors import SeamlessUsdError
+
+from .candidates import (GAN_MIN_SIDE, QUILT_CELLS, QUILT_MAX_DIFFERENCE, QUILT_TRIES, SCORE_SIDE, CutCheck, check_cut,
+                         joins_hide, judged)
 from .config import SynthesisConfig
 from .gan.data import effective_k
 from .gan.sample import judge, sample
@@ -93,7 +96,8 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     0. With ``refine_config.lattice`` and source-sized tiles, the tile cut from the source comes first
        (:func:`.candidates.check_cut`: whole lattice periods, one window, or a quilt): when the verdict passes
        it on the source's grid, it is written and no GAN is trained (the GAN earns its time only where no
-       cut passes). Otherwise:
+       cut passes). With ``refine_config``, a stack smaller than GAN_MIN_SIDE gets its cut, passed or not (and
+       an error when none can be cut). Otherwise:
     1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there,
        ``config.seeds`` seeds side by side (:mod:`.seeds`).
     2. Sample: the crop search with the discriminator's Q (``tile_size="source"``: crops of half the
@@ -122,6 +126,15 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     work_hw = (min(work_hw[0], H), min(work_hw[1], W))
     f_y, f_x = work_hw[0] / H, work_hw[1] / W
     timings["scale"] = time.perf_counter() - t0
+    if refine_config is not None and min(H, W) < GAN_MIN_SIDE:  # too small to train on: the cut, passed or not
+        t4 = time.perf_counter()
+        cut = check_cut(maps, True, seed)
+        timings["lattice"] = time.perf_counter() - t4
+        if cut.kind is None:
+            raise SeamlessUsdError(f"the stack is {W}x{H} px: too small for SeamlessGAN ({GAN_MIN_SIDE} px) and no tile "
+                                   "can be cut from it; use a larger source")
+        return _made_from_cut(cut, (H, W), structure, f, work_hw, timings,
+                              f"not trained: the stack is below {GAN_MIN_SIDE} px")
     if refine_config is not None:
         t4 = time.perf_counter()
         cut = check_cut(maps, refine_config.lattice and tile_size == "source", seed)
@@ -180,12 +193,14 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
 
 
 def _made_from_cut(cut: CutCheck, grid_hw: tuple[int, int], structure: float, factor: float,
-                   work_hw: tuple[int, int], timings: dict[str, float]) -> MadeTile:
-    """The written tile when the cut passes before any training: every texel a source copy, no GAN."""
+                   work_hw: tuple[int, int], timings: dict[str, float],
+                   why: str = "not trained: the tile cut from the source passes") -> MadeTile:
+    """The written tile made before any training (the cut passes, or the stack is too small to train on): every
+    texel a source copy, no GAN."""
     H, W = grid_hw
     tile_hw = tuple(next(iter(cut.tiles.values())).shape[:2])
-    notes = {**cut.notes, "cut": cut.kind, "tile": list(tile_hw), "passes": True, "score": round(cut.score, 3),
-             "chosen": True, "gan": "not trained: the tile cut from the source passes", **cut.figures}
+    notes = {**cut.notes, "cut": cut.kind, "tile": list(tile_hw), "passes": cut.passes, "score": round(cut.score, 3),
+             "chosen": True, "gan": why, **cut.figures}
     if cut.ratio is not None:
         notes["lattice_ratio"] = round(cut.ratio, 3)
     return MadeTile(dict(cut.tiles), tile_hw, (H, W), (W / tile_hw[1], H / tile_hw[0]), structure, factor, work_hw,
