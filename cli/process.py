@@ -177,7 +177,7 @@ def _stack_table(report: Report, console: Console) -> None:
             escape(s.material + (f" in {s.variant}" if s.variant else "")),
             f"[{style}]{s.status.value}[/]" if style else s.status.value,
             str(len(s.maps)),
-            "x".join(map(str, s.crop_size)) if s.crop_size else "-",
+            "x".join(map(str, s.crop_size)) if s.crop_size and s.model_hash else "-",  # no GAN, no crop
             "x".join(map(str, s.tile_size)) if s.tile_size else "-",
             ", ".join(f"{v:.3g}" for v in s.uv_scale) if s.uv_scale else "-",
             f"{sum(s.timings.values()):.0f}s" if s.timings else "-",

@@ -295,7 +295,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
         "variant selection": stack.variant or None,
         "tile size (h x w)": fmt(stack.tile_size) if stack.tile_size else None,
         "UV scale": f"{fmt(tuple(uv))}{cover}" if uv else None,
-        "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size else None,
+        "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size and stack.model_hash else None,  # GAN crop
         "Q (the discriminator's view)": _q_text(stack.q),
         "same as": stack.duplicate_of,
         "result from": stack.origin or None,
