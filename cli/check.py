@@ -23,7 +23,6 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from rich.table import Table
 
 from seamless_usd.pipeline.check import CheckReport, check_paths
-from seamless_usd.verdict import Verdict
 
 __all__ = ["add_arguments", "run"]
 
@@ -36,14 +35,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write a contact sheet: each picture repeated 2 x 2 with its seams drawn in red")
 
 
-def _where(item) -> str:
-    if item.error:
-        return item.error
-    v = Verdict.from_dict(item.verdict)
-    return "; ".join(v.reasons()) or ("seamless and faithful" if v.reference == "source" else
-                                      "seamless (judged against itself)")
-
-
 def render(report: CheckReport, console: Console) -> None:
     table = Table(title="seamless-usd check", show_lines=False)
     table.add_column("texture or stack", overflow="fold", min_width=20)
@@ -52,7 +43,7 @@ def render(report: CheckReport, console: Console) -> None:
     table.add_column("where", overflow="fold")
     for item in report.items:
         state = "[green]passed[/]" if item.passed else "[red]error[/]" if item.error else "[yellow]not passed[/]"
-        table.add_row(escape(item.name), state, item.verdict.get("reference", "-"), escape(_where(item)))
+        table.add_row(escape(item.name), state, item.verdict.get("reference", "-"), escape(item.words()))
     console.print(table)
     for why in report.unreadable:
         console.print(f"[red]unreadable[/] {escape(why)}", soft_wrap=True)

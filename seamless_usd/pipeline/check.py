@@ -21,6 +21,7 @@ import numpy as np
 from seamless_usd.errors import InputError, SeamlessUsdError
 from seamless_usd.findings import asset_ref
 from seamless_usd.pipeline.inputs import SCENE_SUFFIXES, expand_inputs, is_own_output
+from seamless_usd.report.contact import SheetCard, thumbnail
 
 __all__ = ["IMAGE_SUFFIXES", "CheckItem", "CheckReport", "check_paths"]
 
@@ -40,19 +41,21 @@ class CheckItem:
     seconds: float = 0.0
     thumbnail: tuple = field(default=(), repr=False)  # (data URI, (w, h), texel scale) of the first map, 2 x 2
 
-    def card(self):
-        """The item as a card of the contact sheet (:mod:`seamless_usd.report.contact`): its seams brought to
-        the thumbnail's pixels."""
-        from seamless_usd.report.contact import SheetCard
+    def words(self) -> str:
+        """Where its seams run and what is outside its tolerance, or why it could not be judged."""
         from seamless_usd.verdict import Verdict
 
-        status = "error" if self.error else "passed" if self.passed else "not-passed"
         if self.error:
-            words = self.error
-        else:
-            v = Verdict.from_dict(self.verdict)
-            words = "; ".join(v.reasons()) or ("seamless and faithful" if v.reference == "source" else
-                                               "seamless (judged against itself)")
+            return self.error
+        v = Verdict.from_dict(self.verdict)
+        return "; ".join(v.reasons()) or ("seamless and faithful" if v.reference == "source" else
+                                          "seamless (judged against itself)")
+
+    def card(self) -> SheetCard:
+        """The item as a card of the contact sheet (:mod:`seamless_usd.report.contact`): its seams brought to
+        the thumbnail's pixels."""
+        status = "error" if self.error else "passed" if self.passed else "not-passed"
+        words = self.words()
         if not self.thumbnail:
             return SheetCard(self.name, status, words)
         uri, size, scale = self.thumbnail
@@ -115,12 +118,6 @@ def _picture(path: Path) -> np.ndarray:
     return 2.0 * a - 1.0
 
 
-def _thumbnail(pixels: np.ndarray) -> tuple:
-    from seamless_usd.report.contact import thumbnail
-
-    return thumbnail(pixels)
-
-
 def _judge_picture(path: Path) -> CheckItem:
     from seamless_usd.verdict import judge
 
@@ -129,7 +126,7 @@ def _judge_picture(path: Path) -> CheckItem:
     try:
         pixels = _picture(path)
         item.verdict = judge([pixels], None, [False], [path.name], fidelity=False).as_dict()
-        item.thumbnail = _thumbnail(pixels)
+        item.thumbnail = thumbnail(pixels)
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
         item.error = f"{asset_ref(path)}: cannot be judged: {exc}"
     item.seconds = time.perf_counter() - t0
@@ -176,7 +173,7 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
             sources = on_tile_grid(list(load_stack_pixels(src_maps, policy).values), normals, tiles[0].shape[:2], uv)
         item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps],
                              fidelity=sources is not None).as_dict()
-        item.thumbnail = _thumbnail(tiles[0])
+        item.thumbnail = thumbnail(tiles[0])
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
         item.error = str(exc)
     item.seconds = time.perf_counter() - t0

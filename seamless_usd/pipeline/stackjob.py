@@ -200,14 +200,9 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                 inputs, config, refine_config=refine_config, tile_size=settings.tile_size, seed=settings.seed,
                 device=settings.device, checkpoint_dir=entry.checkpoint_dir, progress=emit,
             )
-            tile = made.gan  # None: no GAN was trained (the tile cut from the source passed first)
             meta = {
-                "crop_size": list(tile.crop_size if tile is not None else made.tile_size),
+                **_gan_facts(made),
                 "q": _q_dict(made),  # of the written tile; empty when Q never ran
-                "candidates": len(tile.candidates) if tile is not None else 0,
-                "model_hash": tile.model_hash if tile is not None else "",
-                "device": tile.device if tile is not None else "none (not trained)",
-                "precision": tile.precision if tile is not None else "",
                 "timings": {**timings, **made.timings},
                 "uv_scale": list(made.uv_scale),
                 "scale": {
@@ -360,6 +355,17 @@ def _peak_rss_mb() -> float:
     except ImportError:  # pragma: no cover - Windows
         return 0.0
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
+
+
+def _gan_facts(made) -> dict[str, Any]:
+    """The SeamlessGAN's crop, candidates, model, device and precision; their empty values when no GAN was
+    trained (the tile cut from the source passed first, or the stack is too small)."""
+    gan = made.gan
+    if gan is None:
+        return {"crop_size": list(made.tile_size), "candidates": 0, "model_hash": "", "device": "none (not trained)",
+                "precision": ""}
+    return {"crop_size": list(gan.crop_size), "candidates": len(gan.candidates), "model_hash": gan.model_hash,
+            "device": gan.device, "precision": gan.precision}
 
 
 def _q_dict(tile) -> dict[str, Any]:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from seamless_usd.fileio import atomic_write_text
+from seamless_usd.metrics import preview_uint8
 from seamless_usd.report.htmlparts import esc, page, seams_svg
 from seamless_usd.report.webimage import image_data_uri
 
@@ -47,15 +48,12 @@ class SheetCard:
 def thumbnail(pixels: np.ndarray, side: int = THUMB) -> tuple[str, tuple[int, int], float]:
     """A picture ``(H, W, C)`` in ``[-1, 1]`` as a 2 x 2 repeat of at most ``side`` px a repeat (data URI), the
     repeat's ``(w, h)`` and the scale from the picture's texels to the thumbnail's pixels."""
-    a = np.asarray(pixels, dtype=np.float64)
-    a = a[..., None] if a.ndim == 2 else a
+    a = np.asarray(pixels)
     scale = min(1.0, side / max(a.shape[:2]))
     h, w = max(1, round(a.shape[0] * scale)), max(1, round(a.shape[1] * scale))
     ys = (np.arange(h) * a.shape[0] / h).astype(int)
     xs = (np.arange(w) * a.shape[1] / w).astype(int)
-    small = a[ys][:, xs]
-    small = small[..., :3] if small.shape[2] >= 3 else np.repeat(small[..., :1], 3, axis=2)
-    rgb = np.clip((small + 1.0) * 127.5 + 0.5, 0, 255).astype(np.uint8)
+    rgb = preview_uint8(a[ys][:, xs])
     return image_data_uri(np.tile(rgb, (2, 2, 1))), (w, h), scale
 
 

@@ -126,19 +126,17 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     work_hw = (min(work_hw[0], H), min(work_hw[1], W))
     f_y, f_x = work_hw[0] / H, work_hw[1] / W
     timings["scale"] = time.perf_counter() - t0
-    if refine_config is not None and min(H, W) < GAN_MIN_SIDE:  # too small to train on: the cut, passed or not
+    if refine_config is not None:
+        small = min(H, W) < GAN_MIN_SIDE  # too small to train on: the cut is the tile, passed or not
         t4 = time.perf_counter()
-        cut = check_cut(maps, True, seed)
+        cut = check_cut(maps, small or (refine_config.lattice and tile_size == "source"), seed)
         timings["lattice"] = time.perf_counter() - t4
-        if cut.kind is None:
+        if small and cut.kind is None:
             raise SeamlessUsdError(f"the stack is {W}x{H} px: too small for SeamlessGAN ({GAN_MIN_SIDE} px) and no tile "
                                    "can be cut from it; use a larger source")
-        return _made_from_cut(cut, (H, W), structure, f, work_hw, timings,
-                              f"not trained: the stack is below {GAN_MIN_SIDE} px")
-    if refine_config is not None:
-        t4 = time.perf_counter()
-        cut = check_cut(maps, refine_config.lattice and tile_size == "source", seed)
-        timings["lattice"] = time.perf_counter() - t4
+        if small:
+            return _made_from_cut(cut, (H, W), structure, f, work_hw, timings,
+                                  f"not trained: the stack is below {GAN_MIN_SIDE} px")
         if cut.passes:
             return _made_from_cut(cut, (H, W), structure, f, work_hw, timings)
     working = downsample_maps(maps, work_hw)
