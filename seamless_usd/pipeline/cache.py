@@ -35,8 +35,10 @@ CACHE_FORMAT = 1  # bump when the entry layout changes
 #: Bump whenever the same inputs and settings make a different tile (a candidate added or refused, a cut
 #: changed): entries made before are then not reused. 2: the window cut is offered only where the texture
 #: continues itself (``synthesis.lattice.window.continues_itself``). 3: a stack with no lattice and no window
-#: weighs quilts (``synthesis.lattice.quilt``), and the candidates' score counts the structure figure.
-TILE_REVISION = 3
+#: weighs quilts (``synthesis.lattice.quilt``), and the candidates' score counts the structure figure. 4: the
+#: cuts are tried in turn (lattice, window, the source mended, ``synthesis.lattice.mend``, then a quilt) until
+#: one passes.
+TILE_REVISION = 4
 
 
 def default_cache_dir() -> Path:

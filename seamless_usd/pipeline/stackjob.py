@@ -211,7 +211,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                     "gan_working_size": [made.working_size[1], made.working_size[0]],
                     "refined": made.refined,
                     "layout_used": made.layout_used,
-                    "layout": made.layout_kind,  # "gan", "random", "lattice", "window" or "quilt"
+                    "layout": made.layout_kind,  # "gan", "random", "lattice", "window", "mend" or "quilt"
                     "lattice": made.lattice,
                     "layout_scale": {m.asset: made.layout_scale.get(n) for n, m in zip(names, stack.maps)},
                     "refine_levels": made.refine_levels,

@@ -69,7 +69,9 @@ _LAYOUTS = {"gan": "the SeamlessGAN tile, refined",
             "random": "a random start, refined (the GAN tile's feature scale was implausible)",
             "lattice": "a cut of whole lattice periods from the source",
             "window": "one window of the source, joined across its wraps along minimum-error cuts",
-            "quilt": "large source blocks quilted on a torus, joined along minimum-error cuts"}
+            "quilt": "large source blocks quilted on a torus, joined along minimum-error cuts",
+            "mend": "the source kept whole and rolled by half, a band over its seams re-laid from itself along "
+                    "minimum-error cuts"}
 
 
 def _layout_text(gan: dict) -> str | None:
@@ -88,10 +90,15 @@ def _layout_text(gan: dict) -> str | None:
         lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
         text += (f"; no window cut: the texture does not continue itself at any window's lags (difference {lags};"
                  f" a cut is offered at {refused['most']:.2f} or less)")
-    refused = lattice.get("quilt_refused")
-    if refused:
-        text += (f"; quilt not written: the verdict passes it, but its blocks differ along a cut by "
-                 f"{refused['difference_worst']:.2f} (its joins hide at {refused['most']:.2f} or less)")
+    for kind in ("quilt", "mend"):
+        refused = lattice.get(f"{kind}_refused")
+        if refused:
+            text += (f"; {kind} not written: the verdict passes it, but its blocks differ along a cut by "
+                     f"{refused['difference_worst']:.2f} (its joins hide at {refused['most']:.2f} or less)")
+    tried = lattice.get("candidates")
+    if tried:
+        text += "; cut from the source, tried in turn: " + ", ".join(
+            f"{c['kind']} {c['score']:.2f}" + (" (passes)" if c["passes"] else "") for c in tried)
     if "score" in lattice:
         def verdict(suffix: str) -> str:
             q = lattice.get("q_passed" + suffix)
@@ -101,10 +108,13 @@ def _layout_text(gan: dict) -> str | None:
                      "passes" if lattice.get("passes" + suffix) else ""]
             return ", ".join(p for p in parts if p) or "does not pass"
         rival = next((k[len("score_"):] for k in lattice if k.startswith("score_")), None)
-        name = {"window": "window cut", "quilt": "quilt"}.get(lattice.get("cut"), "lattice cut")
+        name = {"window": "window cut", "quilt": "quilt", "mend": "mend"}.get(lattice.get("cut"), "lattice cut")
         blocks = ""
         if lattice.get("cut") == "quilt" and "cells" in lattice:
             blocks = (f" of {lattice['cells'][0]}x{lattice['cells'][1]} blocks (worst difference along a cut "
+                      f"{lattice['difference_worst']:.3f})")
+        elif lattice.get("cut") == "mend" and "band" in lattice:
+            blocks = (f", band {2 * sum(lattice['band'])} px wide (worst difference along a cut "
                       f"{lattice['difference_worst']:.3f})")
         text += (f"; {name} {lattice['tile'][0]}x{lattice['tile'][1]} px{blocks} scored {lattice['score']:.2f}"
                  f" ({verdict('')})")
@@ -123,7 +133,7 @@ def _map_name(m: MapReport) -> str:
 def made_on_a_torus(stack: StackReport) -> bool:
     """Whether the stack's tile was refined or cut from the source (every line of it is a line of the
     texture), rather than sampled from SeamlessGAN alone (whose latent copies meet at its centre lines)."""
-    return stack.resampled.get("gan", {}).get("layout") in ("gan", "random", "lattice", "window", "quilt")
+    return stack.resampled.get("gan", {}).get("layout") in ("gan", "random", "lattice", "window", "quilt", "mend")
 
 
 def map_verdicts(m: MapReport, torus: bool = False, tolerances: dict | None = None

@@ -18,12 +18,13 @@ from seamless_usd.verdict import Reading, Reference, judge_reading
 from .gan.seeds import fidelity_score
 from .grid import on_grid, resized
 from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
-from .lattice.quilt import best_quilt
+from .lattice.mend import best_mend
+from .lattice.quilt import best_quilt, line_mask, line_sigma
 from .lattice.window import WINDOW_MAX_DIFFERENCE, continues_itself, window_tile_size
 from .types import MapInput
 
 __all__ = ["GAN_MIN_SIDE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
-           "cut_candidate", "joins_hide"]
+           "cut_candidates", "joins_hide", "gated", "MEND_TRIES"]
 
 #: The smallest side (px) SeamlessGAN is trained on (its minimum crop, ``discover.tokens.MIN_CROP``): a smaller
 #: stack gets the tile cut from its source only, passed or not.
@@ -40,6 +41,9 @@ QUILT_TRIES = 3
 #: quilts looked at afterwards: the two the verdict passed at or under it are seamless, the three it
 #: passed over it (0.10-0.36) show two-tone stones, stepped tone patches and stripes ending at a cut.
 QUILT_MAX_DIFFERENCE = WINDOW_MAX_DIFFERENCE
+
+#: Mends tried (seeds) for a stack; the one whose worst join costs least is weighed.
+MEND_TRIES = 3
 
 #: Layout candidates are compared on the source's grid, halved until its longest side is at most this (px).
 SCORE_SIDE = 1024
@@ -67,40 +71,63 @@ def judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice,
     return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
 
 
-def cut_candidate(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict, seed: int):
-    """The cut tile for this stack: whole lattice periods when it repeats and they fit (:mod:`.lattice.cut`),
-    else one window of the source when the texture continues itself at the window's lags
-    (:mod:`.lattice.window`; a window refused is recorded in ``notes["window_refused"]``), else source-sized
-    tile quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES seeds, the one
-    whose worst join costs least; cuts by the blocks' difference: cuts along the texture's lines thickened
-    and forked its joints and read worse on every figure, ``benchmarks/experiments/results/levers_quilt*.md``). Returns
-    (kind, field (h, w, 2) of source texels, figures), or None."""
+def cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict, seed: int):
+    """The tiles cut from this stack's source, cheapest and most faithful first, each as (kind, field (h, w, 2) of
+    source texels, figures), made one at a time as they are asked for:
+
+    - whole lattice periods when the stack repeats and they fit (:mod:`.lattice.cut`), and nothing else: the
+      other cuts join copies at any phase, and on a drifting repeat a quilt that passed the verdict measured
+      three periods where the source has one;
+    - one window of the source when the texture continues itself at the window's lags (:mod:`.lattice.window`;
+      a window refused is recorded in ``notes["window_refused"]``);
+    - the source kept whole, rolled by half, with a band over its seams re-laid from itself (:mod:`.lattice.mend`;
+      of MEND_TRIES seeds, the one whose worst join costs least);
+    - a source-sized tile quilted from QUILT_CELLS large source blocks (:mod:`.lattice.quilt`; of QUILT_TRIES
+      seeds, the one whose worst join costs least; cuts by the blocks' difference: cuts along the texture's
+      lines thickened and forked its joints and read worse on every figure,
+      ``benchmarks/experiments/results/levers_quilt*.md``)."""
     pixels = [m.pixels for m in maps]
     if lattice.found:
         sizes = lattice_tile_size((H, W), lattice)
         if sizes is not None:
             field_, offset = lattice_cut(pixels, *sizes)
-            return "lattice", field_, {"band": list(sizes[1]), "offset": list(offset)}
+            yield "lattice", field_, {"band": list(sizes[1]), "offset": list(offset)}
+            return  # any other cut breaks the repeat's phase at its joins
     sizes = window_tile_size(pixels)
     if sizes is not None:
         if continues_itself(sizes[2]):
             field_, offset = lattice_cut(pixels, sizes[0], sizes[1])
-            return "window", field_, {"band": list(sizes[1]), "offset": list(offset), "lag_difference": sizes[2]}
-        notes["window_refused"] = {"lag_difference": sizes[2], "most": WINDOW_MAX_DIFFERENCE}
+            yield "window", field_, {"band": list(sizes[1]), "offset": list(offset), "lag_difference": sizes[2]}
+        else:
+            notes["window_refused"] = {"lag_difference": sizes[2], "most": WINDOW_MAX_DIFFERENCE}
+    mend = best_mend(pixels, MEND_TRIES, seed)
+    if mend is not None:
+        keys = ("band", "segment", "blocks", "join_mean", "join_worst", "difference_worst")
+        overlap = mend[1]["band"][1]
+        lines = line_mask(pixels, line_sigma((overlap, overlap))) is not None
+        yield "mend", mend[0], {**{k: mend[1][k] for k in keys}, "lines": lines}
     quilt = best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed)
-    if quilt is None:
-        return None
-    keys = ("cells", "overlap", "blocks", "join_mean", "join_worst", "difference_worst")
-    return "quilt", quilt[0], {k: quilt[1][k] for k in keys}
+    if quilt is not None:
+        keys = ("cells", "overlap", "blocks", "join_mean", "join_worst", "difference_worst")
+        yield "quilt", quilt[0], {k: quilt[1][k] for k in keys}
 
 
 def joins_hide(figures: dict) -> bool:
-    """Whether a quilt's joins hide: the two blocks agree along every cut to within QUILT_MAX_DIFFERENCE
-    (its ``difference_worst``). Where they do not, the verdict passed seamed quilts (two-tone stones, tone
-    patches, stripes ending at a cut: ``benchmarks/experiments/results/quilt_gate.md``)."""
+    """Whether the joins of a quilt, or of a mend of a texture with long lines, hide: the two sides agree along
+    every cut to within QUILT_MAX_DIFFERENCE (its ``difference_worst``). Where they do not, the verdict passed
+    seamed quilts (two-tone stones, tone patches, stripes ending at a cut:
+    ``benchmarks/experiments/results/quilt_gate.md``) and the mend of curved stripes whose lines end in its band
+    (``tests/test_synthesis_mend.py``)."""
     return figures["difference_worst"] <= QUILT_MAX_DIFFERENCE
 
 
+def gated(kind: str | None, figures: dict) -> bool:
+    """Whether a cut of ``kind`` passes only where its joins hide (:func:`joins_hide`), not on the verdict alone:
+    a quilt, and a mend of a texture with long lines (``figures["lines"]``: joints, plank gaps, stripes). A mend
+    of a texture without them has no such gate: on real photos its worst difference does not tell the seamless
+    from the seamed (bark and grass mends seamless at 0.37, a veneer's seamed at 0.27; docs/decisions.md,
+    "Keep and mend")."""
+    return kind == "quilt" or (kind == "mend" and bool(figures.get("lines")))
 
 
 @dataclass
@@ -114,7 +141,7 @@ class CutCheck:
     grid: list[MapInput]
     grid_lattice: Lattice
     reference: Reference
-    kind: str | None = None  # "lattice", "window" or "quilt"; None: no cut
+    kind: str | None = None  # "lattice", "window", "mend" or "quilt"; None: no cut
     tiles: dict[str, np.ndarray] = field(default_factory=dict)  # the cut at full resolution
     figures: dict = field(default_factory=dict)  # the cut's own figures (band, offset, joins)
     score: float = math.inf
@@ -125,15 +152,16 @@ class CutCheck:
     def passes(self) -> bool:
         """The verdict passes the cut and, for a quilt, its joins hide (the verdict misses joins like a quilt's
         that do not: ``benchmarks/experiments/results/quilt_gate.md``)."""
-        return self.kind is not None and self.verdict_passes and (self.kind != "quilt" or joins_hide(self.figures))
+        return self.kind is not None and self.verdict_passes and (not gated(self.kind, self.figures) or joins_hide(self.figures))
 
 
 def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
-    """Find the stack's lattice and, with ``cut``, make its cut (:func:`cut_candidate`) and judge it."""
+    """Find the stack's lattice and, with ``cut``, make the tiles cut from its source (:func:`cut_candidates`) one
+    after another and judge each: the first that passes is the stack's cut, else the one that scores best.
+    ``notes["candidates"]`` records each one tried, with whether it passed and its score."""
     H, W = maps[0].pixels.shape[:2]
     lattice = find_lattice([m.pixels for m in maps])
     notes = lattice.as_dict()
-    candidate = cut_candidate(maps, lattice, H, W, notes, seed) if cut else None
     halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
     # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
     half = (max(8, round(H / halve)), max(8, round(W / halve)))
@@ -141,10 +169,18 @@ def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
             for m in maps] if halve > 1 else maps
     grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
     reference = Reference([m.pixels for m in grid], [m.is_normal for m in grid], [m.name for m in grid])
-    check = CutCheck(lattice, notes, halve, grid, grid_lattice, reference)
-    if candidate is not None:
-        check.kind, field_, check.figures = candidate
+    best = CutCheck(lattice, notes, halve, grid, grid_lattice, reference)
+    tried = []
+    for kind, field_, figures in (cut_candidates(maps, lattice, H, W, notes, seed) if cut else ()):
+        check = dataclasses.replace(best, kind=kind, figures=figures)
         check.tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
         check.score, check.verdict_passes, check.ratio = judged(
             on_grid(check.tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice, reference)
-    return check
+        tried.append({"kind": kind, "passes": check.passes, "score": round(check.score, 3)})
+        if best.kind is None or (not check.passes, check.score) < (not best.passes, best.score):
+            best = check
+        if check.passes:
+            break
+    if len(tried) > 1:
+        notes["candidates"] = tried
+    return best

@@ -23,7 +23,7 @@ from seamless_usd.verdict import judge as verdict_of
 from seamless_usd.errors import SeamlessUsdError
 
 from .candidates import (GAN_MIN_SIDE, QUILT_CELLS, QUILT_MAX_DIFFERENCE, QUILT_TRIES, SCORE_SIDE, CutCheck, check_cut,
-                         joins_hide, judged)
+                         gated, joins_hide, judged)
 from .config import SynthesisConfig
 from .gan.data import effective_k
 from .gan.sample import judge, sample
@@ -63,7 +63,7 @@ class MadeTile:
     refine_levels: list[dict] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     seeds: list[dict] = field(default_factory=list)  # with config.seeds > 1: each seed's figures and which won
-    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice", "window", "quilt": a cut (see
+    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice", "window", "mend", "quilt": a cut (see
     #                           .lattice)
     lattice: dict = field(default_factory=dict)  # the stack's lattice, and each layout candidate's figures
     q: QResult | None = None  # Q of the written tile: the GAN sample's, else D's verdict on the tile itself
@@ -220,25 +220,30 @@ def _level_pictures(layout: np.ndarray, used: bool, result) -> list[tuple[str, n
 def written_lattice_ratio(lattice: dict, layout_kind: str | None) -> float | None:
     """The lattice ratio of the written tile, from ``MadeTile.lattice`` and ``MadeTile.layout_kind`` (as
     recorded, e.g. in a cached stack's metadata); None when the stack does not repeat."""
-    cut = layout_kind in ("lattice", "window", "quilt")  # the cut's figures carry no suffix
+    cut = layout_kind in ("lattice", "window", "quilt", "mend")  # the cut's figures carry no suffix
     return lattice.get("lattice_ratio" if cut else f"lattice_ratio_{layout_kind}")
 
 
 def structure_advice(lattice: dict, layout_kind: str | None) -> str | None:
-    """What to do about a stack whose written tile's joins cannot hide, from ``MadeTile.lattice`` and
+    """What would help a stack whose written tile's joins cannot hide, from ``MadeTile.lattice`` and
     ``MadeTile.layout_kind`` as recorded; None for any other. Such a stack neither repeats (no lattice) nor
-    continues itself at a window's lags (its window was refused), and what was written is the refined tile or
-    a quilt whose blocks differ along a cut: every lever measured on such stacks leaves joins that show
-    (two-tone stones, stepped tone patches, jogging courses, stripes that end; ``benchmarks/experiments/results/levers*.md``)."""
+    continues itself at a window's lags (its window was refused), and what was written is a mend, the refined
+    tile or a quilt whose blocks differ along a cut: every lever measured on such stacks leaves joins that show
+    (two-tone stones, stepped tone patches, jogging courses, stripes that end;
+    ``benchmarks/experiments/results/levers*.md``). Every join is drawn from the source itself, so what helps is
+    more of the same surface to draw from, or a source made to repeat; never retouching by hand, which a
+    stochastic texture (gravel, grass, soil) does not need."""
     refused = lattice.get("window_refused")
     if refused is None or any(p is not None for p in lattice.get("period_px") or []):
+        return None
+    if layout_kind == lattice.get("cut") and lattice.get("passes"):  # the cut written passed
         return None
     if layout_kind == "quilt" and joins_hide(lattice):
         return None
     lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
     return (f"the texture neither repeats nor continues itself (its window lags differ by {lags}; a cut hides at "
-            f"{refused['most']:.2f} or less), so joins between copies of it show: use a source made to repeat, "
-            "or mend the joins by hand")
+            f"{refused['most']:.2f} or less), so joins between copies of it show: a larger photo of the same "
+            "surface (more to draw each join from) or a source made to repeat would help")
 
 
 def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, keep_alternatives: bool) -> None:
@@ -265,7 +270,7 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, kee
     tile_hw = next(iter(tiles.values())).shape[:2]
     q = judge(model, on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
     wins = (not passes, score) < (not current_passes, current)
-    if wins and cut_kind == "quilt" and not joins_hide(figures):
+    if wins and gated(cut_kind, figures) and not joins_hide(figures):
         # written, it would be judged at full resolution: a quilt whose joins do not hide is written only
         # where that verdict sees them, never as a tile that passes (on a grid not halved, it was so judged)
         verdict_passes = cut.verdict_passes
@@ -274,8 +279,8 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, kee
                                         [m.is_normal for m in maps], [m.name for m in maps]).passed
         if verdict_passes:
             wins = False
-            made.lattice["quilt_refused"] = {"difference_worst": figures["difference_worst"],
-                                             "most": QUILT_MAX_DIFFERENCE}
+            made.lattice[f"{cut_kind}_refused"] = {"difference_worst": figures["difference_worst"],
+                                                   "most": QUILT_MAX_DIFFERENCE}
     made.lattice.update({"cut": cut_kind, "tile": list(tile_hw), "q_passed": bool(q.passed), "passes": passes,
                          "score": round(score, 3), "chosen": wins, **figures})
     if cut.ratio is not None:
