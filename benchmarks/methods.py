@@ -18,18 +18,30 @@
 ``img2texture``
     The ``img2texture`` package from PyPI (overlap-and-blend of opposite borders through PIL, 8-bit),
     the tool many users reach for today. Normal maps are renormalised afterwards.
+``resynthesizer``
+    GIMP's Resynthesizer (PyPI ``resynthesizer``, GPL-3.0), run in its own environment, never the
+    project's (``RESYNTH_PYTHON`` or ``--resynth-python``: ``benchmarks/peers/resynthesizer_tile.py``):
+    the map offset by half, a band over the seam cross re-synthesised from the rest of it, as artists
+    do by hand. 8-bit RGB: each map on its own (grey maps as RGB), normal maps renormalised afterwards.
 """
 from __future__ import annotations
 
+import os
+import subprocess
+import tempfile
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from seamless_usd.verdict import judge
 
-__all__ = ["MethodResult", "SYNTHESIS_METHODS", "run_synthesis", "img2texture_tile", "to_source_grid"]
+__all__ = ["MethodResult", "SYNTHESIS_METHODS", "run_synthesis", "img2texture_tile", "resynthesizer_tile",
+           "to_source_grid"]
+
+PEER = Path(__file__).resolve().parent / "peers" / "resynthesizer_tile.py"
 
 SYNTHESIS_METHODS = ("seamlessgan", "refine-random", "seamlessgan+refine", "lattice-cut", "seamless-usd")
 _REFINED = ("seamlessgan+refine", "lattice-cut", "seamless-usd")
@@ -62,6 +74,38 @@ def img2texture_tile(pixels: np.ndarray, is_normal: bool = False, overlap: float
     if is_normal and out.shape[2] >= 3:
         out[..., :3] /= np.maximum(np.linalg.norm(out[..., :3], axis=-1, keepdims=True), 1e-12)
     return np.ascontiguousarray(out, dtype=np.float32)
+
+
+def resynthesizer_tile(pixels: np.ndarray, is_normal: bool = False, python: str | None = None,
+                       band: float = 0.15) -> tuple[np.ndarray, float]:
+    """GIMP's Resynthesizer making a network-domain map tileable (through 8-bit RGB), in the environment of
+    ``python`` (default: ``RESYNTH_PYTHON``); returns the tile and the seconds its synthesis took."""
+    from PIL import Image
+
+    python = python or os.environ.get("RESYNTH_PYTHON")
+    if not python:
+        raise RuntimeError("resynthesizer needs its own environment: pass --resynth-python or set RESYNTH_PYTHON "
+                           "(see benchmarks/peers/resynthesizer_tile.py)")
+    c = pixels.shape[2]
+    v = np.clip(np.rint((pixels + 1.0) * 127.5), 0, 255).astype(np.uint8)
+    rgb = np.repeat(v[..., :1], 3, axis=2) if c < 3 else v[..., :3]
+    with tempfile.TemporaryDirectory() as tmp:
+        src, dst = Path(tmp) / "in.png", Path(tmp) / "out.png"
+        Image.fromarray(rgb).save(src)
+        done = subprocess.run([python, str(PEER), str(src), str(dst), "--band", str(band)], capture_output=True,
+                              text=True)
+        if done.returncode != 0:
+            raise RuntimeError(f"resynthesizer failed: {done.stderr.strip()[-300:]}")
+        with Image.open(dst) as im:
+            out = np.asarray(im.convert("RGB"), dtype=np.float32) / 127.5 - 1.0
+    if c < 3:
+        out = out[..., :c] if c == 1 else np.concatenate([out[..., :1], out[..., :1]], axis=2)
+    elif c == 4:
+        alpha, _ = resynthesizer_tile(pixels[..., 3:], False, python, band)
+        out = np.concatenate([out, alpha], axis=2)
+    if is_normal and out.shape[2] >= 3:
+        out[..., :3] /= np.maximum(np.linalg.norm(out[..., :3], axis=-1, keepdims=True), 1e-12)
+    return np.ascontiguousarray(out, dtype=np.float32), float(done.stdout.strip().splitlines()[-1])
 
 
 def preset_config(preset: str, overrides: dict | None = None):

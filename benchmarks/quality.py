@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import resource
 import sys
@@ -39,7 +40,8 @@ ROOT = HERE.parent
 if str(HERE) not in sys.path:  # the baselines sit beside this script
     sys.path.insert(0, str(HERE))
 
-from methods import SYNTHESIS_METHODS, MethodResult, img2texture_tile, preset_config, run_synthesis, to_source_grid
+from methods import (SYNTHESIS_METHODS, MethodResult, img2texture_tile, preset_config, resynthesizer_tile,  # noqa: E402
+                     run_synthesis, to_source_grid)
 from baselines import BASELINES  # noqa: E402
 from quality_md import TARGETS, fmt, to_markdown  # noqa: E402,F401 (re-exported)
 from results_io import write_results  # noqa: E402
@@ -63,7 +65,7 @@ __all__ = [
 
 DEFAULT_OUT = HERE / "results"
 #: Methods by name, in the order the tables list them.
-METHODS: tuple[str, ...] = (*SYNTHESIS_METHODS, "img2texture", *BASELINES)
+METHODS: tuple[str, ...] = (*SYNTHESIS_METHODS, "img2texture", "resynthesizer", *BASELINES)
 
 def _log(line: str) -> None:
     print(line, flush=True)  # flushed: long runs are often watched through a redirected file
@@ -283,6 +285,10 @@ def run(
             elif method == "img2texture":
                 t0 = time.perf_counter()
                 res = MethodResult({k: img2texture_tile(px, n) for k, (px, n) in stack.items()}, time.perf_counter() - t0)
+            elif method == "resynthesizer":  # each map on its own: the peer cannot keep a stack aligned
+                made_maps = {k: resynthesizer_tile(px, n) for k, (px, n) in stack.items()}
+                res = MethodResult({k: t for k, (t, _) in made_maps.items()}, sum(s for _, s in made_maps.values()),
+                                   {"synthesis_s": round(sum(s for _, s in made_maps.values()), 2)})
             else:
                 res = run_baseline(method, stack)
             refs = [res.references[k] if res.references else px for k, (px, _) in stack.items()]  # same grid
@@ -369,8 +375,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-pictures", action="store_true", help="do not write the 2x2 PNGs")
     p.add_argument("--crops", action="store_true",
                    help="also write 1x and 3x crops of the texels for stacks of any size (always above 768 px)")
+    p.add_argument("--resynth-python", help="the Python of an environment holding PyPI resynthesizer, for the "
+                                            "resynthesizer method (default: RESYNTH_PYTHON; without either, left out)")
     a = p.parse_args(argv)
     methods = _names(a.methods, METHODS, "method")
+    if a.resynth_python:
+        os.environ["RESYNTH_PYTHON"] = a.resynth_python
+    if "resynthesizer" in methods and not os.environ.get("RESYNTH_PYTHON"):
+        methods.remove("resynthesizer")
+        print("note: resynthesizer left out (pass --resynth-python; see benchmarks/peers/resynthesizer_tile.py)",
+              file=sys.stderr)
     if a.stacks is None:
         stacks = [n for n in QUALITY_STACKS if STACKS[n].folder == "samples" or a.textures_dir.is_dir()]
         if len(stacks) < len(QUALITY_STACKS):
