@@ -109,7 +109,8 @@ def main(argv: list[str] | None = None) -> int:
     wall = time.perf_counter() - t0
     rate = steady_rate([(i, t) for i, t in points if i <= config.iterations])
     figures = {
-        "device": torch.cuda.get_device_name(device) if device.type == "cuda" else f"cpu ({platform.processor() or 'x86-64'})",
+        "device": (torch.cuda.get_device_name(device) if device.type == "cuda"
+                   else f"cpu ({platform.processor() or 'x86-64'})"),
         "torch": torch.__version__, "threads": torch.get_num_threads(), "preset": a.preset, "size": a.size,
         "maps": len(maps), "seeds": config.seeds, "precision": plan.precision, "compiled": plan.compile,
         "iterations": config.iterations, "it_per_s": round(rate, 2),

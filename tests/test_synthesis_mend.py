@@ -100,7 +100,8 @@ def test_every_map_of_a_stack_is_copied_through_one_field():
     src = _photo("gravel.png", 160)
     rough = np.clip(-src * 0.8 + 0.1, -1, 1)
     field, _ = mend_field([src, rough])
-    assert np.array_equal(rough[field[..., 0], field[..., 1]], np.clip(-src[field[..., 0], field[..., 1]] * 0.8 + 0.1, -1, 1))
+    copied = src[field[..., 0], field[..., 1]]
+    assert np.array_equal(rough[field[..., 0], field[..., 1]], np.clip(-copied * 0.8 + 0.1, -1, 1))
 
 
 def test_a_source_too_small_for_a_block_gets_no_mend():

@@ -150,9 +150,11 @@ class CutCheck:
 
     @property
     def passes(self) -> bool:
-        """The verdict passes the cut and, for a quilt, its joins hide (the verdict misses joins like a quilt's
-        that do not: ``benchmarks/experiments/results/quilt_gate.md``)."""
-        return self.kind is not None and self.verdict_passes and (not gated(self.kind, self.figures) or joins_hide(self.figures))
+        """The verdict passes the cut and, for a quilt or a mend of a texture with long lines (:func:`gated`), its
+        joins hide (the verdict misses joins like a quilt's that do not:
+        ``benchmarks/experiments/results/quilt_gate.md``)."""
+        hide = not gated(self.kind, self.figures) or joins_hide(self.figures)
+        return self.kind is not None and self.verdict_passes and hide
 
 
 def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:

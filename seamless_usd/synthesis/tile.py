@@ -63,8 +63,8 @@ class MadeTile:
     refine_levels: list[dict] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     seeds: list[dict] = field(default_factory=list)  # with config.seeds > 1: each seed's figures and which won
-    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice", "window", "mend", "quilt": a cut (see
-    #                           .lattice)
+    layout_kind: str = "gan"  # "gan" or "random": what seeded the refinement; "lattice", "window", "mend",
+    #                           "quilt": a cut (see .lattice)
     lattice: dict = field(default_factory=dict)  # the stack's lattice, and each layout candidate's figures
     q: QResult | None = None  # Q of the written tile: the GAN sample's, else D's verdict on the tile itself
     alternatives: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)  # the candidate not written

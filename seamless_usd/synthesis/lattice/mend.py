@@ -131,19 +131,19 @@ class _Mend:
         diff = ((self.features(strip) - self.features(had)) ** 2).sum(-1) * canvas.laid[ty, tx]
         use = np.zeros((length, width), dtype=bool)
         use[:, o: width - o] = True
+        laid_here = canvas.laid[ty, tx]
         for side in ("before", "after"):
-            d = diff[:, :o] if side == "before" else diff[:, -o:][:, ::-1]  # the side kept in the first column
-            d = d.copy()
+            near = (lambda a: a[:, :o]) if side == "before" else (lambda a: a[:, -o:][:, ::-1])  # side's texels first
+            d = near(diff).copy()
             d[:, [0, -1]] += _EDGE * self.unrelated
             path = _closed_path(d + 1e-3 * self.unrelated)
-            cols = np.arange(o)[None, :]
-            mine = cols >= path[:, None]  # the band from the path on, the side's texels before it
-            use[:, :o] |= mine if side == "before" else False
-            if side == "after":
+            mine = np.arange(o)[None, :] >= path[:, None]  # the band from the path on, the side's texels before it
+            if side == "before":
+                use[:, :o] |= mine
+            else:
                 use[:, -o:] |= mine[:, ::-1]
-            on = diff[:, :o] if side == "before" else diff[:, -o:][:, ::-1]
-            laid = (canvas.laid[ty, tx][:, :o] if side == "before" else canvas.laid[ty, tx][:, -o:][:, ::-1])
-            at = on[np.arange(length), path][laid[np.arange(length), path]]
+            rows = np.arange(length)
+            at = near(diff)[rows, path][near(laid_here)[rows, path]]
             difference = float(at.mean()) / self.unrelated if at.size else 0.0
             self.joins.append({"seam": "x" if along_y else "y", "block": None, "side": f"across {side}",
                                "cost": round(difference, 4), "difference": round(difference, 4)})
