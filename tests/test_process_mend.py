@@ -1,0 +1,61 @@
+"""A photo that neither repeats nor continues itself, end to end: `process` keeps it whole, mends its seams,
+writes it with no GAN trained, and the report, the JSON and the map on disk agree."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+from pxr import Usd, UsdShade
+
+from seamless_usd_cli.main import main
+
+ROOT = Path(__file__).resolve().parents[1]
+SKIMAGE = Path(__import__("skimage").__file__).parent / "data"
+
+
+def _scene(folder: Path) -> Path:
+    """A ground plane whose UsdPreviewSurface reads a plain 256 px window of scikit-image's gravel photo (CC0)."""
+    sys.path.insert(0, str(ROOT / "sample_assets"))
+    from usdkit import bind, new_layer, plane, preview_material
+
+    buf = oiio.ImageBuf(str(SKIMAGE / "gravel.png"))
+    window = buf.get_pixels(oiio.UINT8)[30:286, 40:296]
+    grey = np.repeat(window[..., :1], 3, axis=2)
+    out = oiio.ImageBuf(oiio.ImageSpec(256, 256, 3, oiio.UINT8))
+    out.set_pixels(oiio.ROI(0, 256, 0, 256, 0, 1, 0, 3), grey)
+    assert out.write(str(folder / "gravel.png"))
+    stage = new_layer(folder / "scene.usda", "World")
+    stage.DefinePrim("/World", "Xform")
+    bind(plane(stage, "/World/Ground", 4.0, 1.0, cells=1).GetPrim(), "/World/Looks/Gravel")
+    preview_material(stage, "/World/Looks/Gravel", {"diffuseColor": ("./gravel.png", "rgb", "sRGB")})
+    stage.Save()
+    return folder / "scene.usda"
+
+
+def test_a_gravel_photo_is_mended_and_passed_without_training(tmp_path, capsys):
+    scene = _scene(tmp_path)
+    code = main(["process", str(scene), "--cache-dir", str(tmp_path / "cache"), "--json",
+                 "--report", str(tmp_path / "report.html")])
+    payload = json.loads(capsys.readouterr().out)
+    [stack] = payload["stacks"]
+    gan = stack["resampled"]["gan"]
+    assert code == 0 and stack["status"] == "passed", stack
+    assert gan["layout"] == "mend" and "not trained" in gan["lattice"]["gan"]
+    assert gan["lattice"]["band"] and gan["lattice"]["lines"] is False
+    # the written map is the source's size, 8-bit RGB, and wraps where the photo's edges did not
+    layer = Usd.Stage.Open(str(tmp_path / "scene.seamless.usda"))
+    shader = UsdShade.Shader(layer.GetPrimAtPath("/World/Looks/Gravel/diffuseColorTex"))
+    path = Path(shader.GetInput("file").Get().resolvedPath)
+    written = oiio.ImageBuf(str(path))
+    assert (written.spec().width, written.spec().height, written.spec().nchannels) == (256, 256, 3)
+    assert written.spec().format == oiio.UINT8
+    source = oiio.ImageBuf(str(tmp_path / "gravel.png")).get_pixels(oiio.UINT8)
+    tile = written.get_pixels(oiio.UINT8)
+    rolled = np.roll(source, (128, 128), (0, 1))
+    kept = np.all(tile == rolled, axis=-1)
+    assert kept[:80, :80].all() and 0.6 < kept.mean() < 1.0  # the photo kept whole away from the band
+    page = (tmp_path / "report.html").read_text()
+    assert "the source kept whole and rolled by half" in page
