@@ -27,9 +27,8 @@ import math
 
 import numpy as np
 
-from ..refinement.refine import spread
 from .cut import CUT_MARGIN, _closed_path, _sample
-from .quilt import _ANALYSIS, _Canvas, _bounds, _cut, _levels, _place
+from .quilt import _Canvas, _bounds, _cut, _place, search_levels
 
 __all__ = ["MEND_OVERLAP", "MEND_CORE", "MEND_SEGMENT", "mend_field", "best_mend"]
 
@@ -60,16 +59,10 @@ def _strip_index(along_y: bool, first: int, length: int, width: int, hw: tuple[i
 class _Mend:
     """What every band of one mend shares: the source and its search levels, the tile's canvas, the blocks used."""
 
-    def __init__(self, maps: list[np.ndarray], o: int, b: int, seg: int, seed: int, margin: int):
+    def __init__(self, maps: list[np.ndarray], o: int, b: int, seg: int, seed: int, margin: int, prepared: tuple):
         self.maps, self.o, self.b, self.seg, self.margin = maps, o, b, seg, margin
         H, W = maps[0].shape[:2]
-        self.spreads = [spread(m) for m in maps]
-        coarsest = 1
-        while max(H, W) / coarsest > _ANALYSIS:
-            coarsest *= 2
-        self.levels = _levels(maps, self.spreads, coarsest) or [(_sample(maps, self.spreads, *np.mgrid[0:H, 0:W]), 1)]
-        flat = self.levels[-1][0].reshape(-1, self.levels[-1][0].shape[-1])
-        self.unrelated = 2.0 * float(flat.var(axis=0).sum()) + 1e-12
+        self.spreads, self.levels, self.unrelated = prepared
         self.rng = np.random.default_rng(seed)
         self.canvas = _Canvas((H, W))
         self.used: list[tuple[int, int]] = []
@@ -79,12 +72,17 @@ class _Mend:
     def features(self, field: np.ndarray) -> np.ndarray:
         return _sample(self.maps, self.spreads, field[..., 0], field[..., 1])
 
-    def cut(self, diff: np.ndarray) -> tuple[np.ndarray, float, float]:
-        """:func:`.quilt._cut` on a band (rows along the join, its first column the side kept), never along the
-        band's first or last column: a join there would run straight along a block's edge."""
+    def edged(self, diff: np.ndarray) -> np.ndarray:
+        """A band's cost (rows along the join) with its first and last columns made dear: a join there would run
+        straight along a block's or the band's edge."""
         d = diff.copy()
         d[:, [0, -1]] += _EDGE * self.unrelated
-        return _cut(d, None, None, self.unrelated, 0)
+        return d
+
+    def cut(self, diff: np.ndarray) -> tuple[np.ndarray, float, float]:
+        """:func:`.quilt._cut` on a band (rows along the join, its first column the side kept), never along its
+        edges (:meth:`edged`)."""
+        return _cut(self.edged(diff), None, None, self.unrelated, 0)
 
     def band(self, along_y: bool, seam: int) -> None:
         """Clear and re-lay the band over one seam (along y: the seam is tile column ``seam``): blocks along it,
@@ -96,12 +94,11 @@ class _Mend:
         strip, have = np.zeros((length, width, 2), dtype=np.int64), np.zeros((length, width), dtype=bool)
         n = max(2, round(length / self.seg))
         bounds = _bounds(length, n)
+        view = _Canvas((H, W))  # what the search sees: the tile with the band's blocks laid so far over it
+        view.field, view.laid = canvas.field.copy(), canvas.laid.copy()
         for i in range(n):
             size_along = bounds[i + 1] - bounds[i] + o
             rows = (bounds[i] + np.arange(size_along)) % length  # the block's rows of the strip
-            view = _Canvas((H, W))  # the search sees the tile with the blocks laid so far over it
-            view.field, view.laid = canvas.field.copy(), canvas.laid.copy()
-            view.field[ty[have], tx[have]], view.laid[ty[have], tx[have]] = strip[have], True
             top, left = (bounds[i], first) if along_y else (first, bounds[i])
             size = (size_along, width) if along_y else (width, size_along)
             py, px = _place(view, top, left, size, self.levels, self.maps, self.spreads, self.used, self.rng,
@@ -126,6 +123,8 @@ class _Mend:
             keep |= ~laid
             strip[rows[:, None], dk[:1]] = np.where(keep[..., None], block, strip[rows])
             have[rows] |= keep
+            vy, vx = ty[rows][keep], tx[rows][keep]
+            view.field[vy, vx], view.laid[vy, vx] = strip[rows][keep], True
         # the band against what lies on each side of it: one closed path along the whole seam
         had = canvas.field[ty, tx]
         diff = ((self.features(strip) - self.features(had)) ** 2).sum(-1) * canvas.laid[ty, tx]
@@ -134,9 +133,7 @@ class _Mend:
         laid_here = canvas.laid[ty, tx]
         for side in ("before", "after"):
             near = (lambda a: a[:, :o]) if side == "before" else (lambda a: a[:, -o:][:, ::-1])  # side's texels first
-            d = near(diff).copy()
-            d[:, [0, -1]] += _EDGE * self.unrelated
-            path = _closed_path(d + 1e-3 * self.unrelated)
+            path = _closed_path(self.edged(near(diff)) + 1e-3 * self.unrelated)
             mine = np.arange(o)[None, :] >= path[:, None]  # the band from the path on, the side's texels before it
             if side == "before":
                 use[:, :o] |= mine
@@ -152,12 +149,12 @@ class _Mend:
 
 
 def mend_field(maps: list[np.ndarray], overlap: float = MEND_OVERLAP, core: float = MEND_CORE,
-               segment: float = MEND_SEGMENT, seed: int = 0, margin: int = CUT_MARGIN
+               segment: float = MEND_SEGMENT, seed: int = 0, margin: int = CUT_MARGIN, prepared: tuple | None = None
                ) -> tuple[np.ndarray, dict] | None:
     """The (H, W, 2) int64 source (y, x) of every texel of the source rolled by half with its seams mended (see
     the module notes), and figures: ``joins`` (each join with its cost and difference), their mean and worst,
     the worst difference, the blocks' source places, the band (core, overlap); None when the source is too
-    small for a block.
+    small for a block. ``prepared``: the maps' :func:`.quilt.search_levels`, when several mends share them.
 
     >>> rng = np.random.default_rng(0)
     >>> noise = rng.normal(size=(128, 128, 1)).astype(np.float32)
@@ -172,7 +169,7 @@ def mend_field(maps: list[np.ndarray], overlap: float = MEND_OVERLAP, core: floa
     seg = max(2 * o, round(o * segment))
     if 2 * (b + o) + seg > min(H, W) - 2 * margin:
         return None
-    mend = _Mend(maps, o, b, seg, seed, margin)
+    mend = _Mend(maps, o, b, seg, seed, margin, prepared or search_levels(maps))
     canvas = mend.canvas
     cy, cx = _seams(H, W)
     canvas.field[..., 0] = ((np.arange(H) + H // 2) % H)[:, None]
@@ -192,7 +189,8 @@ def mend_field(maps: list[np.ndarray], overlap: float = MEND_OVERLAP, core: floa
 def best_mend(maps: list[np.ndarray], tries: int, seed: int = 0) -> tuple[np.ndarray, dict] | None:
     """Of ``tries`` mends (seeds ``seed``, ``seed + 1``, ...), the one whose worst join costs least, then whose
     mean join does; None when the source is too small for one."""
-    made = [m for m in (mend_field(maps, seed=seed + k) for k in range(tries)) if m is not None]
+    prepared = search_levels([np.asarray(m) for m in maps])  # the same for every seed
+    made = [m for m in (mend_field(maps, seed=seed + k, prepared=prepared) for k in range(tries)) if m is not None]
     if not made:
         return None
     return min(made, key=lambda m: (m[1]["join_worst"], m[1]["join_mean"]))

@@ -71,6 +71,21 @@ def _levels(maps: list[np.ndarray], spreads: list[float], coarsest: int) -> list
     return out
 
 
+def search_levels(maps: list[np.ndarray]) -> tuple[list[float], list[tuple[np.ndarray, int]], float]:
+    """What a block search over ``maps`` needs, the same for every block and every seed: each map's spread, the
+    joint features halved down to the coarse search's size (:func:`_levels`; the full resolution itself for a
+    source already that small), and the squared difference of two unrelated texels (the unit of every join's
+    cost)."""
+    H, W = maps[0].shape[:2]
+    spreads = [spread(m) for m in maps]
+    coarsest = 1
+    while max(H, W) / coarsest > _ANALYSIS:
+        coarsest *= 2
+    levels = _levels(maps, spreads, coarsest) or [(_sample(maps, spreads, *np.mgrid[0:H, 0:W]), 1)]
+    flat = levels[-1][0].reshape(-1, levels[-1][0].shape[-1])
+    return spreads, levels, 2.0 * float(flat.var(axis=0).sum()) + 1e-12
+
+
 def line_sigma(overlap: tuple[int, int]) -> float:
     """The high-pass scale (px) of :func:`line_mask` for a quilt whose overlap bands are ``overlap`` px."""
     return max(2.0, min(overlap) / 8)
@@ -296,13 +311,7 @@ def quilt_field(maps: list[np.ndarray], tile_hw: tuple[int, int], cells: tuple[i
     big = (max(ys[i + 1] - ys[i] for i in range(cells[0])) + oy, max(xs[j + 1] - xs[j] for j in range(cells[1])) + ox)
     if big[0] > H - 2 * margin or big[1] > W - 2 * margin:
         return None
-    spreads = [spread(m) for m in maps]
-    coarsest = 1
-    while max(H, W) / coarsest > _ANALYSIS:
-        coarsest *= 2
-    levels = _levels(maps, spreads, coarsest) or [(_sample(maps, spreads, *np.mgrid[0:H, 0:W]), 1)]
-    flat = levels[-1][0].reshape(-1, levels[-1][0].shape[-1])
-    unrelated = 2.0 * float(flat.var(axis=0).sum()) + 1e-12
+    spreads, levels, unrelated = search_levels(maps)
     lines = line_mask(maps, line_sigma((oy, ox))) if lines else None
     reach = max(2, min(oy, ox) // 10)
     rng = np.random.default_rng(seed)
