@@ -59,3 +59,24 @@ def test_a_gravel_photo_is_mended_and_passed_without_training(tmp_path, capsys):
     assert kept[:80, :80].all() and 0.6 < kept.mean() < 1.0  # the photo kept whole away from the band
     page = (tmp_path / "report.html").read_text()
     assert "the source kept whole and rolled by half" in page
+
+
+def test_an_unchanged_rerun_takes_everything_back_without_torch(tmp_path, capsys):
+    """The second run of the same scene finds the tile in the cache, the written map unchanged on disk and the
+    triage's figures kept: it measures nothing, so it never imports torch, and says what the first run said."""
+    import subprocess
+
+    scene = _scene(tmp_path)
+    args = ["process", str(scene), "--cache-dir", str(tmp_path / "cache"), "--json"]
+    assert main(args) == 0
+    first = json.loads(capsys.readouterr().out)
+    code = ("import json, sys\nfrom seamless_usd_cli.main import main\n"
+            f"rc = main({args!r})\nprint(json.dumps({{'rc': rc, 'torch': 'torch' in sys.modules}}))")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    lines = run.stdout.strip().splitlines()
+    again, facts = json.loads("\n".join(lines[:-1])), json.loads(lines[-1])
+    assert facts == {"rc": 0, "torch": False}, run.stderr[-2000:]
+    [before], [after] = first["stacks"], again["stacks"]
+    assert after["status"] == before["status"] == "passed" and after["origin"] == "cache"
+    assert after["verdict"] == before["verdict"] and after["maps"] == before["maps"]
+    assert after["intent_reason"] == before["intent_reason"]

@@ -35,6 +35,7 @@ from enum import Enum
 import numpy as np
 
 from seamless_usd.discover.atlas import atlas_evidence
+from seamless_usd.discover.triagememo import TriageMemo
 from seamless_usd.textures import TextureMap, TextureStack
 
 __all__ = ["Intent", "IntentDecision", "Thresholds", "classify_stacks", "measure_map", "THRESHOLDS"]
@@ -212,8 +213,8 @@ def _geometry_decision(stack: TextureStack, factor, stats, bound: int, explored:
     )
 
 
-def classify(stack: TextureStack, bound: int, stats: Sequence, measures: dict, explored: int = 1) -> IntentDecision:
-    """Class of one stack from its maps, its bound geometry's UV stats and the pixel measures."""
+def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo, explored: int = 1) -> IntentDecision:
+    """Class of one stack from its maps, its bound geometry's UV stats and the pixel measures (kept in ``memo``)."""
     clamped = [m for m in stack.maps if m.wrap_s in _CLAMPED or m.wrap_t in _CLAMPED]
     if clamped:
         m = clamped[0]
@@ -226,18 +227,13 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, measures: dict, e
         decision = _geometry_decision(stack, factor, stats, bound, explored)
         if decision.intent is not Intent.TILING:
             return decision
-    figures = []
-    for m in stack.maps:
-        key = (m.resolved, m.channels_used)
-        if key not in measures:
-            measures[key] = measure_map(m)
-        figures.append(measures[key])
+    figures = [memo.get("measure", [m], lambda m=m: measure_map(m)) for m in stack.maps]
     if figures and all(f is not None for f in figures):
         ps = max(f[0] for f in figures)
         seam = max(f[1] for f in figures)
         measured = f"periodic-plus-smooth {ps:.3f}, seam ratio {seam:.2f}"
         if ps <= THRESHOLDS.ps_max and seam <= THRESHOLDS.seam_max:
-            inside = interior_seam(stack)
+            inside = memo.get("inside", stack.maps, lambda: interior_seam(stack))
             if inside is not None:
                 return IntentDecision(Intent.TILING, f"{decision.reason}; seamless at the wrap ({measured}) but "
                                                      f"with a seam inside, {inside}")
@@ -248,18 +244,21 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, measures: dict, e
     return decision
 
 
-def classify_stacks(stacks: list[TextureStack], geometry, explored=lambda stack: 0) -> list[TextureStack]:
+def classify_stacks(stacks: list[TextureStack], geometry, explored=lambda stack: 0,
+                    memo: TriageMemo | None = None) -> list[TextureStack]:
     """Stacks with ``intent`` / ``intent_reason`` set. ``geometry(stack) -> (bound, stats)`` gives
     the number of mesh uses bound to the stack's material and their UV stats (0, [] when none),
-    over the ``explored(stack)`` variant selections of its stage (0: not on a stage)."""
+    over the ``explored(stack)`` variant selections of its stage (0: not on a stage). ``memo`` keeps the
+    pixel figures (on disk when it has a folder: see :mod:`.triagememo`)."""
+    memo = memo if memo is not None else TriageMemo(None, repr(THRESHOLDS))
     measures: dict = {}
     out = []
     for stack in stacks:
         bound, stats = geometry(stack)
-        decision = classify(stack, bound, stats, measures, explored(stack))
+        decision = classify(stack, bound, stats, memo, explored(stack))
         # nothing binds it: do its pixels say atlas? (a flat border also wraps around seamlessly)
         if not bound and decision.intent in (Intent.TILING, Intent.ALREADY_TILEABLE):
-            evidence = atlas_evidence(stack, measures)
+            evidence = memo.get("atlas", stack.maps, lambda: atlas_evidence(stack, measures))
             if evidence is not None:
                 border = " (its flat border is what wraps around)" if decision.intent is Intent.ALREADY_TILEABLE else ""
                 decision = IntentDecision(Intent.UV_ATLAS_PIXELS, f"{evidence}; {decision.reason}{border}")

@@ -10,7 +10,8 @@ from pxr import Sdf, Tf, Usd
 
 from seamless_usd.discover import mtlx, usd, uvgeom
 from seamless_usd.discover.bound import Geometry as _Geometry
-from seamless_usd.discover.intent import classify_stacks
+from seamless_usd.discover.intent import THRESHOLDS, classify_stacks
+from seamless_usd.discover.triagememo import TriageMemo
 from seamless_usd.discover.maps import HeaderCache, TextureUse, build_maps
 from seamless_usd.discover.stacks import build_stacks
 from seamless_usd.discover.tokens import MTLX_SUFFIX, Codes
@@ -72,7 +73,8 @@ def _mtlx_target(target: str) -> tuple[str, bool]:
 class _Scan:
     """Accumulates one scan over any number of stages and documents."""
 
-    def __init__(self) -> None:
+    def __init__(self, triage_dir: Path | None = None) -> None:
+        self.triage = TriageMemo(triage_dir, repr(THRESHOLDS))  # pixel figures of the triage, by content
         self.result = ScanResult()
         self.uses: list[TextureUse] = []
         self.cache = HeaderCache()
@@ -176,26 +178,28 @@ class _Scan:
         stacks = build_stacks(maps)
         with quiet_mtlx():  # composing each selection again
             self.geometry.measure(stacks)
-        self.result.stacks = classify_stacks(stacks, self.geometry, explored=self.geometry.explored_for)
+        self.result.stacks = classify_stacks(stacks, self.geometry, explored=self.geometry.explored_for,
+                                             memo=self.triage)
         return self.result
 
 
-def scan_stage(stage: Usd.Stage) -> ScanResult:
-    """Scan an open stage (possibly in memory, as a DCC export hook has it).
+def scan_stage(stage: Usd.Stage, triage_dir: Path | None = None) -> ScanResult:
+    """Scan an open stage (possibly in memory, as a DCC export hook has it). ``triage_dir``: where the
+    triage's pixel figures are kept between runs (see ``triagememo.py``); None keeps them for this scan only.
 
     >>> from pxr import Usd
     >>> scan_stage(Usd.Stage.CreateInMemory()).stacks
     []
     """
-    scan = _Scan()
+    scan = _Scan(triage_dir)
     layer = stage.GetRootLayer()
     scan.add_stage(stage, layer.realPath or layer.identifier)
     return scan.finish()
 
 
-def scan_mtlx(path: str | Path) -> ScanResult:
-    """Scan one MaterialX document."""
-    scan = _Scan()
+def scan_mtlx(path: str | Path, triage_dir: Path | None = None) -> ScanResult:
+    """Scan one MaterialX document (``triage_dir``: as for :func:`scan_stage`)."""
+    scan = _Scan(triage_dir)
     scan.add_document(path)
     return scan.finish()
 

@@ -21,7 +21,7 @@ from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
-from seamless_usd.pipeline.cache import JobIndex, job_fingerprint
+from seamless_usd.pipeline.cache import JobIndex, StackCache, job_fingerprint
 from seamless_usd.pipeline.executors import Executor, InProcessExecutor, make_executor
 from seamless_usd.pipeline.options import Options, ProgressEvent, check_device
 from seamless_usd.pipeline.inputs import expand_inputs
@@ -233,17 +233,18 @@ class _Source:
     stacks: list[TextureStack]
 
 
-def _scan_source(path: Path, patterns: Sequence[str]) -> _Source:
-    """Open and scan one input; InputError when it cannot be read."""
+def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = None) -> _Source:
+    """Open and scan one input; InputError when it cannot be read. ``triage_dir`` keeps the triage's pixel
+    figures between runs."""
     if not path.exists():
         raise InputError(f"{asset_ref(path)} does not exist")
     suffix = path.suffix.lower()
     if suffix in MTLX_SUFFIXES:
-        scan, kind = scan_mtlx(path), "mtlx"
+        scan, kind = scan_mtlx(path, triage_dir), "mtlx"
     elif suffix in USD_SUFFIXES:
         _authoring()  # registers the schema plugin before the stage is opened
         stage = open_stage(path)
-        scan, kind = scan_stage(stage), "usd"
+        scan, kind = scan_stage(stage, triage_dir), "usd"
     else:
         raise InputError(f"{asset_ref(path)} is neither a USD stage (.usd/.usda/.usdc/.usdz) nor a .mtlx document")
     return _Source(path, kind, scan, select_stacks(scan, patterns))
@@ -323,6 +324,11 @@ def _new_run(options: Options) -> Run:
     return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
 
 
+def _triage_dir(options: Options) -> Path:
+    """Where the triage's pixel figures are kept between runs: beside the trained stacks."""
+    return StackCache(options.cache_dir).root / "triage"
+
+
 def process_paths(paths: Sequence[str | Path], options: Options | None = None) -> Report:
     """Process stages and MaterialX documents (files, folders, glob patterns); the report owns the exit code.
 
@@ -339,7 +345,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
     for path in inputs:
         run.report.sources.append(str(path))
         try:
-            src = _scan_source(path, run.options.materials)
+            src = _scan_source(path, run.options.materials, _triage_dir(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
             run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
             sources.append(src)
@@ -366,7 +372,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     source = None if root.anonymous else Path(root.realPath)
     label = root.identifier
     run.report.sources.append(label)
-    scan = scan_stage(stage)
+    scan = scan_stage(stage, _triage_dir(run.options))
     run.report.findings += scan.findings
     run.report.variants += [v.to_dict() for v in scan.variants]
     stacks = select_stacks(scan, run.options.materials)

@@ -18,7 +18,7 @@ from seamless_usd.fileio import atomic_write_text
 from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page, seams_svg
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
-from seamless_usd.synthesis.tile import structure_advice
+from seamless_usd.synthesis.advice import structure_advice
 from seamless_usd.verdict.lines import Seam
 from seamless_usd.report.verdicts import LABELS, SEAM_KEYS, TORUS_NOTE, target_text, targets, verdict
 

@@ -13,15 +13,36 @@ Three methods, one folder each, composed by ``tile.make_tile``:
 >>> result = sample(train(maps, get_preset("tiny")), maps)   # doctest: +SKIP
 """
 # OMP_WAIT_POLICY=PASSIVE is set by the package itself (seamless_usd/__init__.py), before torch is first imported.
+# The presets and the input types are plain Python; every other name is imported when first used (PEP 562), so
+# that a run which finds every stack in its cache never pays for importing torch (about 1.5 s).
+from importlib import import_module
+
 from .config import PRESETS, SynthesisConfig, get_preset
-from .gan.sample import SamplingProgress, sample
-from .gan.train import TrainedModel, train
-from .lattice.cut import LATTICE_TARGET
-from .refinement.refine import RefineConfig, RefineResult, refine
-from .tile import MadeTile, downsample_maps, make_tile, structure_advice, written_lattice_ratio
+from .advice import structure_advice, written_lattice_ratio
+from .refinement.settings import RefineConfig
 from .types import Candidate, MapInput, QResult, TileResult, TrainingProgress
+
+_LAZY = {
+    "SamplingProgress": ".gan.sample", "sample": ".gan.sample",
+    "TrainedModel": ".gan.train", "train": ".gan.train",
+    "LATTICE_TARGET": ".lattice.cut",
+    "RefineResult": ".refinement.refine", "refine": ".refinement.refine",
+    "MadeTile": ".tile", "downsample_maps": ".tile", "make_tile": ".tile",
+}
 
 __all__ = ["SynthesisConfig", "PRESETS", "get_preset", "MapInput", "train", "sample", "TrainedModel",
            "TileResult", "QResult", "Candidate", "TrainingProgress", "SamplingProgress",
            "RefineConfig", "RefineResult", "refine", "MadeTile", "make_tile", "downsample_maps", "LATTICE_TARGET",
            "written_lattice_ratio", "structure_advice"]
+
+
+def __getattr__(name: str):
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_LAZY[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -20,7 +20,8 @@ from .grid import on_grid, resized
 from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
 from .lattice.mend import best_mend
 from .lattice.quilt import best_quilt, line_mask, line_sigma
-from .lattice.window import WINDOW_MAX_DIFFERENCE, continues_itself, window_tile_size
+from .advice import QUILT_MAX_DIFFERENCE, WINDOW_MAX_DIFFERENCE, joins_hide
+from .lattice.window import continues_itself, window_tile_size
 from .types import MapInput
 
 __all__ = ["GAN_MIN_SIDE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
@@ -35,12 +36,6 @@ GAN_MIN_SIDE = 100
 QUILT_CELLS = (2, 2)
 #: Quilts tried (seeds) for a stack; the one whose worst join costs least is weighed.
 QUILT_TRIES = 3
-#: A quilt whose two blocks differ along some cut by more than this (mean squared difference over that of
-#: two unrelated texels) may be written only where the verdict does not pass it. The window cut's
-#: threshold, fixed on window cuts looked at along their wraps (``benchmarks/experiments/results/window_gate.md``);
-#: quilts looked at afterwards: the two the verdict passed at or under it are seamless, the three it
-#: passed over it (0.10-0.36) show two-tone stones, stepped tone patches and stripes ending at a cut.
-QUILT_MAX_DIFFERENCE = WINDOW_MAX_DIFFERENCE
 
 #: Mends tried (seeds) for a stack; the one whose worst join costs least is weighed.
 MEND_TRIES = 3
@@ -110,15 +105,6 @@ def cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes
     if quilt is not None:
         keys = ("cells", "overlap", "blocks", "join_mean", "join_worst", "difference_worst")
         yield "quilt", quilt[0], {k: quilt[1][k] for k in keys}
-
-
-def joins_hide(figures: dict) -> bool:
-    """Whether the joins of a quilt, or of a mend of a texture with long lines, hide: the two sides agree along
-    every cut to within QUILT_MAX_DIFFERENCE (its ``difference_worst``). Where they do not, the verdict passed
-    seamed quilts (two-tone stones, tone patches, stripes ending at a cut:
-    ``benchmarks/experiments/results/quilt_gate.md``) and the mend of curved stripes whose lines end in its band
-    (``tests/test_synthesis_mend.py``)."""
-    return figures["difference_worst"] <= QUILT_MAX_DIFFERENCE
 
 
 def gated(kind: str | None, figures: dict) -> bool:

@@ -22,8 +22,8 @@ from seamless_usd.verdict import judge as verdict_of
 
 from seamless_usd.errors import SeamlessUsdError
 
-from .candidates import (GAN_MIN_SIDE, QUILT_CELLS, QUILT_MAX_DIFFERENCE, QUILT_TRIES, SCORE_SIDE, CutCheck, check_cut,
-                         gated, joins_hide, judged)
+from .advice import QUILT_MAX_DIFFERENCE, joins_hide, structure_advice, written_lattice_ratio
+from .candidates import GAN_MIN_SIDE, QUILT_CELLS, QUILT_TRIES, SCORE_SIDE, CutCheck, check_cut, gated, judged
 from .config import SynthesisConfig
 from .gan.data import effective_k
 from .gan.sample import judge, sample
@@ -215,35 +215,6 @@ def _level_pictures(layout: np.ndarray, used: bool, result) -> list[tuple[str, n
         how = "carried (no search)" if info["iterations"] == 0 else f"searched, {info['iterations']} iterations"
         out.append((f"refinement level {tw} x {th} px, {how}", pic))
     return out
-
-
-def written_lattice_ratio(lattice: dict, layout_kind: str | None) -> float | None:
-    """The lattice ratio of the written tile, from ``MadeTile.lattice`` and ``MadeTile.layout_kind`` (as
-    recorded, e.g. in a cached stack's metadata); None when the stack does not repeat."""
-    cut = layout_kind in ("lattice", "window", "quilt", "mend")  # the cut's figures carry no suffix
-    return lattice.get("lattice_ratio" if cut else f"lattice_ratio_{layout_kind}")
-
-
-def structure_advice(lattice: dict, layout_kind: str | None) -> str | None:
-    """What would help a stack whose written tile's joins cannot hide, from ``MadeTile.lattice`` and
-    ``MadeTile.layout_kind`` as recorded; None for any other. Such a stack neither repeats (no lattice) nor
-    continues itself at a window's lags (its window was refused), and what was written is a mend, the refined
-    tile or a quilt whose blocks differ along a cut: every lever measured on such stacks leaves joins that show
-    (two-tone stones, stepped tone patches, jogging courses, stripes that end;
-    ``benchmarks/experiments/results/levers*.md``). Every join is drawn from the source itself, so what helps is
-    more of the same surface to draw from, or a source made to repeat; never retouching by hand, which a
-    stochastic texture (gravel, grass, soil) does not need."""
-    refused = lattice.get("window_refused")
-    if refused is None or any(p is not None for p in lattice.get("period_px") or []):
-        return None
-    if layout_kind == lattice.get("cut") and lattice.get("passes"):  # the cut written passed
-        return None
-    if layout_kind == "quilt" and joins_hide(lattice):
-        return None
-    lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
-    return (f"the texture neither repeats nor continues itself (its window lags differ by {lags}; a cut hides at "
-            f"{refused['most']:.2f} or less), so joins between copies of it show: a larger photo of the same "
-            "surface (more to draw each join from) or a source made to repeat would help")
 
 
 def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, keep_alternatives: bool) -> None:

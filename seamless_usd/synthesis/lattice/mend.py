@@ -23,8 +23,6 @@ join's cost and difference (over two unrelated texels' difference), their mean a
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .cut import CUT_MARGIN, _closed_path, _sample

@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from ..refinement.refine import spread
+from ..advice import WINDOW_MAX_DIFFERENCE
 from .cut import CUT_MARGIN, _joint_small, box_sums
 
 __all__ = ["WINDOW_MIN", "WINDOW_BAND", "WINDOW_MAX_DIFFERENCE", "continues_itself", "window_tile_size"]
@@ -41,11 +42,6 @@ WINDOW_MIN = 0.7
 #: The band across each wrap, as a share of the side: where the minimum-error cut may run.
 WINDOW_BAND = 0.1
 _ANALYSIS = 256  # longest side (px) the lags are compared at
-#: The most a chosen lag's difference (see :func:`window_tile_size`) may be, on either axis, for the window
-#: cut to be offered. Window cuts looked at along their wraps: the clean ones (a weave whose windows repeat
-#: exactly, a repeating brick with a slight tone ramp or scale drift) read at most 0.039 on their worse axis,
-#: the broken ones 0.059 and more (``benchmarks/experiments/results/window_gate.md``).
-WINDOW_MAX_DIFFERENCE = 0.05
 
 
 def _lag_costs(u: np.ndarray, axis: int, lags: np.ndarray, band: int, length: int) -> np.ndarray:
