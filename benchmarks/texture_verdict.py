@@ -9,17 +9,17 @@ held-back part was never looked at while a rule's settings were chosen.
     .venv/bin/python benchmarks/texture_verdict.py --sizes 256      # one size
 
 Rules:
-    ``verdict``             the product's verdict on a texture judged against itself (what ``check`` says of a
-                            picture): the classifier fitted on the texture's own lines, a seam 1.0 above its
-                            4th-strongest line;
-    ``scan-triage``         what the scan calls not already tileable: periodic-plus-smooth above 0.075, or the
-                            wrap's seam ratio above 2, or the verdict's seam;
-    ``line-breaks``         experiment: every line's straddling differences at every lag against all parallel
-                            lines (``experiments/line_breaks.py``);
-    ``verdict+line-breaks`` experiment: the verdict with the line breaks' seams added;
-    ``periodic-plus-smooth``, ``seam-ratios``  the scan's two wrap gates alone.
+    ``verdict``             the product's verdict on a texture judged against itself (what ``check`` and the scan's
+                            triage both say of a picture): the classifier fitted on the texture's own lines, a seam
+                            1.0 above its 4th-strongest line, and the line breaks' seams (``seamless_usd/verdict/
+                            breaks.py``: every line's straddling differences at every lag against all parallel
+                            lines);
+    ``line-breaks``         the line breaks alone;
+    ``periodic-plus-smooth``, ``seam-ratios``  the wrap gates the scan's triage used before it judged with the
+                            verdict (above 0.075, above 2).
 
-Also counts the pictures on which ``check`` (the verdict) and the scan's triage disagree.
+The classifier alone (the verdict before the line breaks joined it) and the old triage are in the history of
+``results/texture_verdict.md``.
 
 Writes ``results/texture_verdict.md`` and ``.json``: per part and class the share right, and every item's
 figures.
@@ -37,9 +37,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-sys.path.insert(0, str(ROOT / "benchmarks" / "experiments"))
 
-from line_breaks import line_breaks, with_line_breaks  # noqa: E402
 from results_io import write_results  # noqa: E402
 from texture_corpus import build  # noqa: E402
 
@@ -50,20 +48,19 @@ def rules(item) -> dict[str, tuple]:
     """Each rule's call (True: seamed) and its figure on one item."""
     from seamless_usd.metrics import ps_score, seam_ratios
     from seamless_usd.verdict import judge
+    from seamless_usd.verdict.breaks import line_breaks
+    from seamless_usd.verdict.prepare import prepare_maps
 
     pic, normal = item.picture, [item.is_normal]
     out = {}
     t0 = time.perf_counter()
     v = judge([pic], None, normal, [item.name], fidelity=False)
     out["verdict"] = (not v.seamless, round(v.strongest - v.margin, 3), round(time.perf_counter() - t0, 3))
+    found, strongest = line_breaks(prepare_maps([pic], normal), [item.name])
+    out["line-breaks"] = (bool(found), round(strongest - 1.0, 3))
     ps = float(ps_score(pic.astype(np.float64)))
     ratios = seam_ratios(pic.astype(np.float64))
     seam = float(max(ratios["seam_ratio_x"], ratios["seam_ratio_y"]))
-    out["scan-triage"] = (ps > 0.075 or seam > 2.0 or not v.seamless, round(ps, 4))
-    found, strongest = line_breaks([pic], normal, [item.name])
-    out["line-breaks"] = (bool(found), round(strongest, 3))
-    seamed, figure = with_line_breaks([pic], normal, [item.name])
-    out["verdict+line-breaks"] = (seamed, round(figure, 3))
     out["periodic-plus-smooth"] = (ps > 0.075, round(ps, 4))
     out["seam-ratios"] = (seam > 2.0, round(seam, 3))
     return out
@@ -98,8 +95,6 @@ def markdown(rows: list[dict], shares: list[dict], seconds: float, load: float) 
         call = r["rules"]["verdict"][0]
         if r["split"] == "held-back" and call == r["seamless"]:
             lines.append(f"- {r['name']} ({'seamless' if r['seamless'] else 'seamed'}): verdict {r['rules']['verdict'][1]}")
-    differ = [r["name"] for r in rows if r["rules"]["verdict"][0] != r["rules"]["scan-triage"][0]]
-    lines += ["", f"`check` (the verdict) and the scan's triage disagree on {len(differ)} of {len(rows)} pictures."]
     times = sorted(r["rules"]["verdict"][2] for r in rows)
     lines += ["", f"The verdict took {np.median(times):.2f} s per picture (median), {times[-1]:.2f} s at most."]
     return "\n".join(lines) + "\n"

@@ -65,7 +65,7 @@ def test_check_a_folder_with_json_and_a_contact_sheet(tmp_path, capsys):
     assert set(items) == {"tileable.png", "window.png", "with_alpha.png", "one_pixel.png", "nan.exr", "broken.png"}
     assert items["tileable.png"]["passed"] and items["with_alpha.png"]["passed"]  # alpha is not part of the look
     assert not items["window.png"]["passed"] and items["window.png"]["verdict"]["seams"]
-    for bad, why in (("one_pixel.png", "at least 8 px"), ("nan.exr", "non-finite"), ("broken.png", "broken.png")):
+    for bad, why in (("one_pixel.png", "at least 8 px"), ("nan.exr", "NaN or infinite"), ("broken.png", "broken.png")):
         assert not items[bad]["passed"] and why in items[bad]["error"], items[bad]
     assert _digests(lib) == before  # nothing written beside the pictures, nothing changed
     html = sheet.read_text(encoding="utf-8")

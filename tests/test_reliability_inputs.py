@@ -36,12 +36,14 @@ PROCESS_ARGS = (*PLUMBING, "--max-size", str(TEX))
 
 
 def texture(seed: int, size: int = TEX, channels: int = 3) -> np.ndarray:
-    """A non-tileable pattern (bricks with noise), float32 in [0, 1], (H, W, C)."""
+    """A non-tileable pattern (bricks with noise, lit unevenly as a photo is: the wrap steps in tone), float32
+    in [0, 1], (H, W, C)."""
     rng = np.random.default_rng(seed)
     y, x = np.mgrid[0:size, 0:size].astype(np.float32)
     bricks = ((x + 8 * (y // 16 % 2)) % 32 > 2) & (y % 16 > 1)
     base = 0.25 + 0.5 * bricks[..., None] + 0.15 * rng.random((size, size, channels))
-    return np.clip(base * (0.6 + 0.4 * np.linspace(0, 1, channels)), 0, 1).astype(np.float32)
+    lit = (0.75 + 0.35 * x / max(size - 1, 1))[..., None]
+    return np.clip(base * lit * (0.6 + 0.4 * np.linspace(0, 1, channels)), 0, 1).astype(np.float32)
 
 
 def write_image(path: Path, pixels: np.ndarray, fmt=oiio.UINT8) -> Path:
@@ -434,10 +436,11 @@ def test_read_only_output_folder(tmp_path, capsys, shared_cache):
 
 def test_full_disk_real_small_filesystem(tmp_path, capsys, shared_cache):
     scene = _three_materials(tmp_path / "lib")
-    with small_filesystem(tmp_path / "full", "200k") as out:
+    with small_filesystem(tmp_path / "full", "90k") as out:
         if out is None:
             pytest.skip("cannot mount a small tmpfs here; the fault-injecting test covers a full disk")
-        # the paper's 2c tiles (4x the source's area): the first stack fits in 200 KB, the three do not
+        # the paper's 2c tiles (4x the source's area, 50-70 KB each as PNG): the first stack fits in 90 KB, the
+        # three do not
         code, report, _ = run_cli(capsys, str(scene), "--output-dir", str(out), "--cache-dir", str(shared_cache),
                                   "--tile-size", "paper", "--refine", "on")
         failures = _write_failures(report)

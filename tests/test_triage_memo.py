@@ -34,17 +34,20 @@ def test_figures_are_kept_by_content_and_taken_back(tmp_path):
     assert first[0] == "already-tileable", first
     kept = sorted(memo.rglob("*.json"))
     kinds = sorted(json.loads(p.read_text())["kind"] for p in kept)
-    assert kinds == ["inside", "measure", "measure"]  # each map's wrap figures, and the verdict inside the stack
-    # a second scan reads them back: a kept figure changed by hand is what it decides on
-    [measure] = [p for p in kept if json.loads(p.read_text())["kind"] == "measure"
-                 and json.loads(p.read_text())["value"][0] > 0][:1]
-    body = json.loads(measure.read_text())
-    measure.write_text(json.dumps({**body, "value": [0.5, body["value"][1]]}))
-    assert _decision(scene, memo)[0] == "tiling" and "periodic-plus-smooth 0.500" in _decision(scene, memo)[1]
+    assert kinds == ["verdict"]  # the stack's maps judged together against themselves, as `check` judges them
+    # a second scan reads it back: a kept verdict changed by hand is what it decides on
+    [kept_verdict] = kept
+    body = json.loads(kept_verdict.read_text())
+    verdict = body["value"]["verdict"]
+    planted = {"map": "stack", "axis": "x", "position": 17, "start": 0, "end": 99, "figure": 3.5}
+    kept_verdict.write_text(json.dumps({**body, "value": {"verdict": {
+        **verdict, "seamless": False, "passed": False, "seams": [planted]}}}))
+    intent, reason = _decision(scene, memo)
+    assert intent == "tiling" and "(+3.50)" in reason, reason
     # an unreadable figure is measured again, and the decision is the first one
-    measure.write_text("{not json")
+    kept_verdict.write_text("{not json")
     assert _decision(scene, memo) == first
-    assert json.loads(measure.read_text())["value"] == body["value"]
+    assert json.loads(kept_verdict.read_text())["value"] == body["value"]
 
 
 def test_a_file_that_changes_is_measured_again(tmp_path):

@@ -13,18 +13,14 @@ and some that are already tile. Each stack gets one class, with the measured rea
   and UVs read under the variant selection they are authored in, see ``bound.py``);
 - ``uv-atlas (pixels)``: nothing binds it, but its pixels show an atlas's layout (islands on a
   flat background; see ``atlas.py``): flagged for review, processed only when forced;
-- ``already-tileable``: a would-be *tiling* stack whose every map is already seamless across its
-  wrap-around, measured on the pixels (decoded at most 512 px, reduced with bins that keep the
-  wrap-around exact), *and* has no seam anywhere inside: the verdict (:mod:`seamless_usd.verdict`),
-  judging the maps against themselves, finds no line unlike the texture's own (a spliced strip or
-  a clone-stamped near-tile is processed, its reason naming where the seam is).
+- ``already-tileable``: a would-be *tiling* stack in which the verdict (:mod:`seamless_usd.verdict`),
+  judging its maps against themselves, finds no seam at the wrap or inside: the same files read the
+  same way (:mod:`seamless_usd.verdict.alone`) and the same rule as ``seamless-usd check``, so the two
+  always agree. A stack whose files are not on disk, too large (over ``measure_max_pixels``) or
+  unreadable is left *tiling*, its reason saying why.
 
-Thresholds come from measurements on real files, recorded in ``tests/test_intent_classify.py``:
-periodic-plus-smooth score (Moisan) of the MaterialX example maps that tile (wood colour 0.044,
-wood roughness 0.049, brick mask 0.037, brick roughness 0.019 at 512 px) against off-grid
-windows of the same images and the bundled non-tiling samples (0.105 .. 0.808, the lowest a
-brick normal window). Brick colour and brick normal, though periodic, score 0.127 and 0.346
-at 512 px (a low-frequency shading gradient): they are classed *tiling*, the safe side.
+The verdict's figures on labelled textures it was not tuned on are in ``docs/verdict.md``
+(``benchmarks/texture_verdict.py``).
 """
 from __future__ import annotations
 
@@ -32,13 +28,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from enum import Enum
 
-import numpy as np
-
 from seamless_usd.discover.atlas import atlas_evidence
 from seamless_usd.discover.triagememo import TriageMemo
-from seamless_usd.textures import TextureMap, TextureStack
+from seamless_usd.textures import TextureStack
+from seamless_usd.verdict import Verdict
 
-__all__ = ["Intent", "IntentDecision", "Thresholds", "classify_stacks", "measure_map", "THRESHOLDS"]
+__all__ = ["Intent", "IntentDecision", "Thresholds", "classify_stacks", "judged_alone", "THRESHOLDS"]
 
 
 class Intent(str, Enum):
@@ -61,10 +56,7 @@ class Thresholds:
 
     repeat_span: float = 1.02  # UVs (after existing transforms) spanning more than this many periods repeat
     repeat_factor: float = 1.01  # an existing transform scaling UVs by more than this repeats the texture
-    ps_max: float = 0.075  # periodic-plus-smooth score at most this: seamless (tiling 0.019-0.049, not 0.105+)
-    seam_max: float = 2.0  # and worst wrap-around seam ratio at most this (tiling 0.48-1.45, windows 1.36-74)
-    measure_size: int = 512  # longest side the pixels are reduced to before measuring
-    measure_max_pixels: int = 1 << 26  # larger files are not decoded for the measure (left "tiling")
+    measure_max_pixels: int = 1 << 26  # larger files are not decoded before processing (left "tiling")
 
 
 THRESHOLDS = Thresholds()
@@ -85,92 +77,24 @@ def _repeat_factor(stack: TextureStack) -> tuple[tuple[float, float], list[str]]
     return (fu, fv), parts
 
 
-def _reduce(a: np.ndarray, size: int) -> np.ndarray:
-    """Mean over near-equal bins covering the whole image: a periodic image stays periodic."""
-    for axis in (0, 1):
-        n = a.shape[axis]
-        k = min(size, n)
-        edges = np.round(np.linspace(0, n, k + 1)).astype(int)
-        counts = np.diff(edges)
-        shape = [1] * a.ndim
-        shape[axis] = -1
-        a = np.add.reduceat(a, edges[:-1], axis=axis) / counts.reshape(shape)
-    return a
+def judged_alone(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> dict:
+    """The verdict on the stack's files judged against themselves, exactly as ``check`` judges them
+    (:func:`seamless_usd.verdict.alone.judge_alone`): ``{"verdict": Verdict.as_dict()}``, or ``{"error": why}``
+    when they are not judged (a file not on disk, too large to decode before processing, unreadable, too small)."""
+    from seamless_usd.errors import InputError
+    from seamless_usd.verdict.alone import FileMap, judge_alone
 
-
-def measure_map(m: TextureMap, thresholds: Thresholds = THRESHOLDS) -> tuple[float, float] | None:
-    """(periodic-plus-smooth score, worst wrap-around seam ratio) of the channels ``m`` uses,
-    or None when the file is not measured (in a package, too large, unreadable, non-finite)."""
-    if not m.resolved or m.in_package or m.image is None:
-        return None
-    if m.image.width * m.image.height > thresholds.measure_max_pixels:
-        return None
-    try:
-        return _measure(m, thresholds)
-    except (ValueError, RuntimeError, OSError):  # a file imaging will report on: not measured here
-        return None
-
-
-def _measure(m: TextureMap, thresholds: Thresholds) -> tuple[float, float] | None:
-    from seamless_usd.metrics import ps_score, seam_ratios
-
-    pixels = measured_pixels(m, thresholds)
-    if pixels is None:
-        return None
-    if float(np.ptp(pixels)) == 0.0:
-        return 0.0, 1.0  # a constant map repeats seamlessly
-    seams = seam_ratios(pixels)
-    seam = max(seams["seam_ratio_x"], seams["seam_ratio_y"])
-    return float(ps_score(pixels)), float(seam if np.isfinite(seam) else 0.0)
-
-
-def measured_pixels(m: TextureMap, thresholds: Thresholds = THRESHOLDS) -> np.ndarray | None:
-    """The channels ``m`` uses, reduced to at most ``measure_size`` px with bins that keep the wrap exact
-    (file values, float64), or None when the file cannot be decoded or has non-finite texels."""
-    import OpenImageIO as oiio
-
-    inp = oiio.ImageInput.open(m.resolved)
-    if inp is None:
-        return None
-    try:
-        level = 0
-        while inp.seek_subimage(0, level + 1) and max(inp.spec().width, inp.spec().height) >= thresholds.measure_size:
-            level += 1  # a MIP level still at least the measuring size: cheaper to decode
-        inp.seek_subimage(0, level)
-        pixels = inp.read_image(0, 0, 0, inp.spec().nchannels, oiio.FLOAT)
-    finally:
-        inp.close()
-    if pixels is None:
-        return None
-    pixels = np.asarray(pixels, dtype=np.float64)
-    pixels = pixels.reshape(pixels.shape[0], pixels.shape[1], -1)
-    if not np.isfinite(pixels).all():
-        return None  # NaN / inf texels: no wrap-around measure (imaging reports them)
-    channels = [i for i, c in enumerate("rgba") if c in m.channels_used and i < pixels.shape[2]]
-    return _reduce(pixels[..., channels or [0]], thresholds.measure_size)
-
-
-def interior_seam(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> str | None:
-    """Where the verdict, judging the stack's maps against themselves, finds a seam (None: none found,
-    or the pixels could not be read, in which case the wrap figures alone decide)."""
-    from seamless_usd.verdict import judge
-
-    maps, shapes = [], set()
     for m in stack.maps:
-        px = measured_pixels(m, thresholds) if m.resolved and not m.in_package and m.image is not None else None
-        if px is None or min(px.shape[:2]) < 32:
-            return None
-        maps.append(px)
-        shapes.add(px.shape[:2])
-    if len(shapes) > 1:  # maps of different sizes: judge each alone
-        verdicts = [judge([p], None, [False], [m.asset], fidelity=False) for p, m in zip(maps, stack.maps)]
-    else:
-        verdicts = [judge(maps, None, [False] * len(maps), [m.asset for m in stack.maps], fidelity=False)]
-    for v in verdicts:
-        if v.seams:
-            s = v.seams[0]
-            return f"{'@' + s.map + '@' if s.map != 'stack' else 'the maps together'}: {s.where(v.size)}"
-    return None
+        if not m.resolved or m.in_package or m.image is None:
+            return {"error": f"@{m.asset}@ is not a file on disk"}
+        if m.image.width * m.image.height > thresholds.measure_max_pixels:
+            return {"error": f"@{m.asset}@ is {m.image.width}x{m.image.height} px, too large to judge before "
+                             "processing"}
+    try:
+        verdict, _ = judge_alone([FileMap(m.resolved, m.channels_used, m.is_normal, m.asset) for m in stack.maps])
+    except (InputError, ValueError, RuntimeError, OSError) as exc:
+        return {"error": str(exc)}
+    return {"verdict": verdict.as_dict()}
 
 
 def _in(stats) -> str:
@@ -227,21 +151,19 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo,
         decision = _geometry_decision(stack, factor, stats, bound, explored)
         if decision.intent is not Intent.TILING:
             return decision
-    figures = [memo.get("measure", [m], lambda m=m: measure_map(m)) for m in stack.maps]
-    if figures and all(f is not None for f in figures):
-        ps = max(f[0] for f in figures)
-        seam = max(f[1] for f in figures)
-        measured = f"periodic-plus-smooth {ps:.3f}, seam ratio {seam:.2f}"
-        if ps <= THRESHOLDS.ps_max and seam <= THRESHOLDS.seam_max:
-            inside = memo.get("inside", stack.maps, lambda: interior_seam(stack))
-            if inside is not None:
-                return IntentDecision(Intent.TILING, f"{decision.reason}; seamless at the wrap ({measured}) but "
-                                                     f"with a seam inside, {inside}")
-            return IntentDecision(Intent.ALREADY_TILEABLE,
-                                  f"{measured} (at most {THRESHOLDS.ps_max:g}, {THRESHOLDS.seam_max:g}): "
-                                  f"already seamless; {decision.reason}")
-        return IntentDecision(Intent.TILING, f"{decision.reason}; not seamless ({measured})")
-    return decision
+    judged = memo.get("verdict", stack.maps, lambda: judged_alone(stack))
+    if "verdict" not in judged:
+        return IntentDecision(Intent.TILING, f"{decision.reason}; its pixels were not judged ({judged['error']})")
+    v = Verdict.from_dict(judged["verdict"])
+    if v.seamless:
+        return IntentDecision(Intent.ALREADY_TILEABLE,
+                              f"already seamless: the verdict, judging its maps against themselves, finds no seam "
+                              f"(strongest line {v.strongest:+.2f}, a seam above {v.margin:g}); {decision.reason}")
+    s = v.seams[0]
+    where = "the maps together" if s.map == "stack" else f"@{s.map}@"
+    more = f" and {len(v.seams) - 1} more" if len(v.seams) > 1 else ""
+    return IntentDecision(Intent.TILING, f"{decision.reason}; not seamless: a seam in {where}, {s.where(v.size)} "
+                                         f"({s.figure:+.2f}){more}")
 
 
 def classify_stacks(stacks: list[TextureStack], geometry, explored=lambda stack: 0,

@@ -1,8 +1,8 @@
 """The triage's pixel figures kept on disk, by the content of the files they were measured from.
 
-Deciding whether a stack is already tileable decodes its maps and measures them (periodic-plus-smooth, the
-wrap's seam ratio, the verdict inside, an atlas's islands): about 0.15 s for a 512 px map, seconds at 4K, and
-the verdict's resampling imports torch. A library processed again, unchanged, would pay that for every stack
+Deciding whether a stack is already tileable decodes its maps and judges them (the verdict against
+themselves, an atlas's islands): a few tenths of a second for a 512 px map, seconds at 4K, and the verdict's
+resampling imports torch. A library processed again, unchanged, would pay that for every stack
 before finding its tiles in the cache. The figures depend only on the files' bytes, the channels read and
 the triage's settings, so they are kept here under a digest of exactly that (and of the code's version) and
 taken back instead. A file edited in any way has another digest and is measured again.
@@ -25,7 +25,7 @@ from seamless_usd.version import __version__
 __all__ = ["TriageMemo", "TRIAGE_REVISION"]
 
 #: Bump whenever the same files would be triaged differently (a rule or a figure changed).
-TRIAGE_REVISION = 1
+TRIAGE_REVISION = 2
 
 
 class TriageMemo:

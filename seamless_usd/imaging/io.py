@@ -151,7 +151,7 @@ def read_info(path: str | os.PathLike, *, max_pixels: int | None = DEFAULT_MAX_P
 
 
 def read_image(
-    path: str | os.PathLike, *, max_pixels: int | None = DEFAULT_MAX_PIXELS
+    path: str | os.PathLike, *, max_pixels: int | None = DEFAULT_MAX_PIXELS, min_side: int | None = None
 ) -> tuple[np.ndarray, ImageInfo]:
     """Decode an image's first subimage into float32 file values.
 
@@ -165,13 +165,16 @@ def read_image(
         An image file in any format OpenImageIO reads.
     max_pixels
         As in :func:`read_info`.
+    min_side
+        Decode the smallest MIP level (of a tiled, MIP-mapped file such as a ``.tx``) whose longest side is
+        still at least this; None: the full resolution.
 
     Returns
     -------
     pixels : np.ndarray
         ``(H, W, C)`` float32: integer files normalised to [0, 1], float files as stored.
     info : ImageInfo
-        The header, as :func:`read_info` returns it.
+        The header of the full resolution, as :func:`read_info` returns it.
 
     Raises
     ------
@@ -183,7 +186,13 @@ def read_image(
     try:
         info = _info_from(inp, p)
         _check_size(info, p, max_pixels)
+        level = 0
+        while min_side is not None and inp.seek_subimage(0, level + 1) and \
+                max(inp.spec().width, inp.spec().height) >= min_side:
+            level += 1  # a smaller MIP level still at least min_side: cheaper to decode
+        inp.seek_subimage(0, level)
         pixels = inp.read_image(0, 0, 0, info.channels, oiio.FLOAT)
+        expected = (inp.spec().height, inp.spec().width, info.channels)
         # A truncated JPEG decodes "successfully" (the missing rows grey) with only an error
         # message left behind: any error recorded while decoding makes the pixels untrustworthy.
         error = " ".join(inp.geterror().split())
@@ -199,7 +208,6 @@ def read_image(
         pixels = pixels[..., None]
     if pixels.ndim == 4:  # volume images: first slice
         pixels = pixels[0]
-    expected = (info.height, info.width, info.channels)
     if pixels.shape != expected:
         raise InputError(
             f"{asset_ref(p)}: decoded {pixels.shape} pixels but the header says {expected}; "

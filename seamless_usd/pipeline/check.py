@@ -6,7 +6,9 @@ Each texture stack of a stage or MaterialX document that is meant to tile (inten
 * a map this tool wrote (its texture prim carries ``SeamlessTileAPI`` with ``seamless:sourceAsset``) is
   judged against that source, brought to the tile's texel grid with the recorded ``seamless:uvScale``;
 * anything else has no separate source and is judged against itself: its own interior lines are the
-  reference, and a seam is a line unlike them (no fidelity figure applies).
+  reference, and a seam is a line unlike them (no fidelity figure applies). Its files are read and judged by
+  :func:`seamless_usd.verdict.alone.judge_alone`, exactly as the scan's triage reads and judges them, so a
+  texture ``check`` passes is one the scan calls ``already-tileable`` when it is meant to tile.
 """
 from __future__ import annotations
 
@@ -15,8 +17,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-
-import numpy as np
 
 from seamless_usd.errors import InputError, SeamlessUsdError
 from seamless_usd.findings import asset_ref
@@ -109,26 +109,26 @@ def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path]]:
     return scenes, pictures
 
 
-def _picture(path: Path) -> np.ndarray:
-    from seamless_usd.imaging import read_image
+def _alone(item: CheckItem, files: list) -> None:
+    """``item`` judged against itself from ``files`` (:func:`seamless_usd.verdict.alone.judge_alone`, the reading
+    the scan's triage uses too), with its thumbnail."""
+    from seamless_usd.verdict.alone import judge_alone
 
-    pixels, info = read_image(path)
-    a = np.asarray(pixels, dtype=np.float64)
-    a = a.reshape(a.shape[0], a.shape[1], -1)[..., :3]  # alpha is not part of the look
-    return 2.0 * a - 1.0
+    verdict, reading = judge_alone(files)
+    item.verdict = verdict.as_dict()
+    uri, size, scale = thumbnail(reading)
+    item.thumbnail = (uri, size, scale * reading.shape[1] / verdict.size[1])  # thumbnail px per full-size texel
 
 
 def _judge_picture(path: Path) -> CheckItem:
-    from seamless_usd.verdict import judge
+    from seamless_usd.verdict.alone import FileMap
 
     item = CheckItem(str(path), str(path), [str(path)])
     t0 = time.perf_counter()
     try:
-        pixels = _picture(path)
-        item.verdict = judge([pixels], None, [False], [path.name], fidelity=False).as_dict()
-        item.thumbnail = thumbnail(pixels)
+        _alone(item, [FileMap(str(path), "rgb", False, path.name)])
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
-        item.error = f"{asset_ref(path)}: cannot be judged: {exc}"
+        item.error = str(exc) if asset_ref(path) in str(exc) else f"{asset_ref(path)}: cannot be judged: {exc}"
     item.seconds = time.perf_counter() - t0
     return item
 
@@ -157,23 +157,24 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     from seamless_usd.imaging import WorkingResolution, load_stack_pixels
     from seamless_usd.pipeline.stackjob import on_tile_grid
     from seamless_usd.verdict import judge
+    from seamless_usd.verdict.alone import FileMap
 
     item = CheckItem(stack.material, str(stage_path), [m.asset for m in stack.maps])
     t0 = time.perf_counter()
     try:
-        normals = [m.is_normal for m in stack.maps]
-        tiles = list(load_stack_pixels(list(stack.maps)).values)
         recorded = _sources(stage, stack)
-        sources = None
-        if recorded is not None:
+        if recorded is None:  # no separate source: judged against itself, as the scan's triage judges it
+            _alone(item, [FileMap(m.resolved, m.channels_used, m.is_normal, m.asset) for m in stack.maps])
+        else:
+            normals = [m.is_normal for m in stack.maps]
+            tiles = list(load_stack_pixels(list(stack.maps)).values)
             src_maps, uv = recorded
             grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
             # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
             policy = WorkingResolution(max_size=max(grid))
             sources = on_tile_grid(list(load_stack_pixels(src_maps, policy).values), normals, tiles[0].shape[:2], uv)
-        item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps],
-                             fidelity=sources is not None).as_dict()
-        item.thumbnail = thumbnail(tiles[0])
+            item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps]).as_dict()
+            item.thumbnail = thumbnail(tiles[0])
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
         item.error = str(exc)
     item.seconds = time.perf_counter() - t0

@@ -15,9 +15,12 @@ USD provenance and ``seamless-usd check``):
   tolerances set by the source's own spread (:mod:`.tolerance`). A figure that could not be measured
   (a tile too small) is not inside its tolerance.
 
-A texture with no separate source (``seamless-usd check`` on a picture, or a stack the scan reads as
-already tileable) is judged against itself: the classifier is fitted on its own interior lines, its
-reference is its own 4th-strongest line (:data:`SELF_RANK`), and there is no fidelity to judge.
+A texture with no separate source (``seamless-usd check`` on a picture or a stack, and the scan deciding
+whether a stack is already tileable, both reading its files through :mod:`seamless_usd.discover.alone`) is
+judged against itself, by two rules whose seams are added: the classifier fitted on its own interior lines,
+with its own 4th-strongest line (:data:`SELF_RANK`) as the reference; and each line's breaks at every lag
+against all the texture's parallel lines (:mod:`.breaks`), reported on the same scale (a seam above
+:data:`SELF_MARGIN`). There is no fidelity to judge.
 """
 from __future__ import annotations
 
@@ -26,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..memo import ContentMemo
+from .breaks import line_breaks
 from .classifier import SeamClassifier, fit
 from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, MAP_THRESHOLD, copy_seams
 from .lines import Seam, runs, seams_from_scores
@@ -132,8 +136,9 @@ def _strongest_run(scores: dict[str, np.ndarray], periodic: bool, rank: int = 1)
 
 
 #: Calibrations (fitted classifier, reference run) kept by the content of the image they were fitted on:
-#: a batch judges the same source many times, and the fit is the verdict's dearest part on small maps.
-_CALIBRATIONS: ContentMemo[tuple[SeamClassifier, float]] = ContentMemo()
+#: a batch judges the same source many times, and the fit is the verdict's dearest part on small maps. A fit is a
+#: few kilobytes; 512 of them cover ``check`` on a library stage after its scan judged every stack once.
+_CALIBRATIONS: ContentMemo[tuple[SeamClassifier, float]] = ContentMemo(keep=512)
 
 
 def _calibration(image: np.ndarray, itself: bool, seed: int) -> tuple[SeamClassifier, float]:
@@ -155,6 +160,11 @@ def _find(tile: np.ndarray, source: np.ndarray | None, factor: float, size: tupl
     margin = SELF_MARGIN if source is None else SEAM_MARGIN
     return seams_from_scores(_scores(clf, tile, True), reference, margin, factor=factor, tile_shape=size,
                              length=LENGTH, step=STEP, map_name=name)
+
+
+def _near(seam: Seam, others: list[Seam]) -> bool:
+    """Whether one of ``others`` in the same map runs along the same line (within 4 texels) as ``seam``."""
+    return any(o.map == seam.map and o.axis == seam.axis and abs(o.position - seam.position) <= 4 for o in others)
 
 
 def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: list[bool], names: list[str],
@@ -199,6 +209,14 @@ def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> 
                                seed)
             seams += found
             strongest = max(strongest, top)
+    if ref is None:
+        found, top = line_breaks(reading.maps, reading.names, SELF_MARGIN)
+        strongest = max(strongest, top)
+        kept: list[Seam] = []
+        for s in sorted(seams + found, key=lambda x: -x.figure):  # one line found by both: its stronger figure
+            if not _near(s, kept):
+                kept.append(s)
+        seams = kept
     seams.sort(key=lambda x: -x.figure)
     verdict = Verdict(not seams, True, seams, strongest, margin, "source" if ref is not None else "itself",
                       "classifier", size)

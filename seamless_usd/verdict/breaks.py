@@ -1,8 +1,9 @@
-"""Experiment (not the product's rule yet): a texture judged on its own by where a line breaks the
-texture's own continuation, read against every parallel line of the same texture.
+"""Line breaks: a texture judged on its own, by where a line breaks the texture's own continuation, read
+against every parallel line of the same texture. With the classifier against the texture's own lines
+(:mod:`.judge`), this is how a texture with no separate source is judged.
 
-Measured by ``benchmarks/texture_verdict.py`` beside the product's verdict on textures judged on their own;
-its settings (:data:`RANK`, :data:`MARGIN`) were chosen on the corpus's tuning part only.
+Measured by ``benchmarks/texture_verdict.py`` on textures judged on their own; its settings (:data:`RANK`,
+:data:`MARGIN`) were chosen on the corpus's tuning part only.
 
 With no separate source, a seam is a line unlike the texture's other lines. Across a line, every pair of rows
 ``tau`` apart that straddles it is compared (:func:`_straddle`): inside a texture, such pairs differ as the
@@ -21,11 +22,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from seamless_usd.verdict import judge
-from seamless_usd.verdict.lines import Seam
-from seamless_usd.verdict.prepare import joint, map_weights, prepare_maps, to_working
+from .lines import Seam
+from .prepare import joint, map_weights, to_working
 
-__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "with_line_breaks"]
+__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures"]
 
 #: Longest side (px) the maps are read at: fine enough that a join's texel step survives the area filter.
 WORK_SIDE = 512
@@ -78,7 +78,7 @@ def lag_figures(img: np.ndarray, own: int | None = None) -> dict[int, np.ndarray
     for lag in _lags(img.shape[0], own):
         e = _straddle(img, lag)
         mid = np.median(e)
-        spread = 1.4826 * np.median(np.abs(e - mid)) + 1e-3 * mid + 1e-12
+        spread = 1.4826 * np.median(np.abs(e - mid)) + 1e-3 * mid + 1e-6  # a flat map: no line stands out
         out[lag] = (e - mid) / spread
     return out
 
@@ -112,10 +112,11 @@ def line_figures(img: np.ndarray, own: int | None = None) -> np.ndarray:
     return out
 
 
-def line_breaks(maps: list[np.ndarray], normals: list[bool], names: list[str]) -> tuple[list[Seam], float]:
-    """Seams of a texture judged on its own (the maps together, then each map), strongest first, and the
-    strongest line's break over the reference, less :data:`MARGIN` (above 0: a seam)."""
-    prepared = prepare_maps(maps, normals)
+def line_breaks(prepared: list[np.ndarray], names: list[str], units: float = 1.0) -> tuple[list[Seam], float]:
+    """Seams of a texture judged on its own (``prepared``: its maps in the verdict's form, see
+    :func:`.prepare.prepare_maps`; the maps together, then each map), strongest first, and the strongest line's
+    break over the reference. Figures are scaled so that ``units`` is the margin: a line above ``units`` is a
+    seam (the verdict reports them on its own margin's scale)."""
     size = prepared[0].shape[:2]
     factor = min(1.0, WORK_SIDE / max(size))
     work = to_working(prepared, factor, periodic=True)
@@ -125,24 +126,15 @@ def line_breaks(maps: list[np.ndarray], normals: list[bool], names: list[str]) -
     seams: list[Seam] = []
     strongest = -np.inf
     for name, img in parts:
-        for axis, label, rotated in (("y", "y", img), ("x", "x", np.ascontiguousarray(img.transpose(1, 0, 2)))):
+        for axis, rotated in (("y", img), ("x", np.ascontiguousarray(img.transpose(1, 0, 2)))):
             n = rotated.shape[0]
             f = line_figures(rotated, period(n, rotated.reshape(n, -1)))
-            scale = size[0 if axis == "y" else 1] / n
+            across = size[0 if axis == "y" else 1]
             along = size[1 if axis == "y" else 0]
             for line in np.flatnonzero(np.isfinite(f)):
-                over = float(f[line] - MARGIN)
-                strongest = max(strongest, over)
-                if over > 0:
-                    seams.append(Seam(label, int(round(line * scale)) % size[0 if axis == "y" else 1], 0,
-                                      along - 1, over, name))
+                figure = float(f[line]) * units / MARGIN
+                strongest = max(strongest, figure)
+                if f[line] > MARGIN:
+                    seams.append(Seam(axis, int(round(line * across / n)) % across, 0, along - 1, figure, name))
     seams.sort(key=lambda s: -s.figure)
     return seams, float(strongest)
-
-
-def with_line_breaks(maps: list[np.ndarray], normals: list[bool], names: list[str]) -> tuple[bool, float]:
-    """The product's verdict on a texture judged on its own (the classifier against the texture's own lines),
-    with the line breaks' seams added: (seamed, the strongest figure over its own threshold)."""
-    v = judge(maps, None, normals, names, fidelity=False)
-    found, strongest = line_breaks(maps, normals, names)
-    return bool(v.seams or found), max(v.strongest - v.margin, strongest)

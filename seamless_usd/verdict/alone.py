@@ -1,0 +1,123 @@
+"""A texture judged on its own, read from its files: the one reading that ``check`` and the scan's triage share,
+so that both give the same answer on the same files.
+
+Each file is decoded at its smallest MIP level still at least :data:`READ_SIDE` px, its channels in use are kept
+(alpha only when a role reads it), and it is reduced to at most :data:`READ_SIDE` px with bins that cover the
+whole image (:func:`reduce_bins`: a periodic texture stays periodic, its wrap is not blurred into its far side).
+The maps, in the verdict's domain (``2 v - 1`` of the file values), are judged against themselves by
+:func:`.judge.judge`, and the seams are given back in texels of the full-size file.
+
+Maps of one stack at different resolutions but one aspect are brought to the smallest one's reading and judged
+together; maps of different aspects are judged each alone.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from seamless_usd.errors import InputError
+from seamless_usd.findings import asset_ref
+
+from .judge import Verdict, judge
+from .lines import Seam
+
+__all__ = ["READ_SIDE", "FileMap", "reduce_bins", "read_alone", "judge_alone"]
+
+#: Longest side (px) a texture judged on its own is read at: the line breaks read lines at this size.
+READ_SIDE = 512
+
+
+@dataclass(frozen=True)
+class FileMap:
+    """One file of a texture judged on its own: its path, the channels read (``"rgb"``, ``"r"``, ``"rgba"``...),
+    whether it is a normal map, and its name in the verdict."""
+
+    path: str
+    channels: str = "rgb"
+    is_normal: bool = False
+    name: str = ""
+
+
+def reduce_bins(a: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """The mean over near-equal bins covering the whole image, ``shape`` bins per axis (at most the image's own
+    size): a periodic image stays periodic.
+
+    >>> reduce_bins(np.arange(16.0).reshape(4, 4, 1), (2, 2))[..., 0]
+    array([[ 2.5,  4.5],
+           [10.5, 12.5]])
+    """
+    for axis in (0, 1):
+        n = a.shape[axis]
+        k = min(shape[axis], n)
+        edges = np.round(np.linspace(0, n, k + 1)).astype(int)
+        counts = np.diff(edges)
+        bins = [1] * a.ndim
+        bins[axis] = -1
+        a = np.add.reduceat(a, edges[:-1], axis=axis) / counts.reshape(bins)
+    return a
+
+
+def _reading_shape(h: int, w: int, side: int = READ_SIDE) -> tuple[int, int]:
+    f = min(1.0, side / max(h, w))
+    return max(1, round(h * f)), max(1, round(w * f))
+
+
+def read_alone(m: FileMap) -> tuple[np.ndarray, tuple[int, int]]:
+    """The file's channels in use, reduced to at most :data:`READ_SIDE` px, in the verdict's domain, and its
+    full size ``(h, w)``. Raises :class:`InputError` naming the file when it cannot be read or holds NaN / inf
+    texels."""
+    from seamless_usd.imaging import read_image
+    from seamless_usd.imaging.io import alpha_channel
+
+    pixels, info = read_image(m.path, min_side=READ_SIDE)
+    alpha = alpha_channel(info) if info.channels > 1 else None
+    colour = [i for i in range(info.channels) if i != alpha]
+    picks: list[int] = []
+    for c in m.channels:
+        k = alpha if c == "a" else (colour["rgb".index(c)] if "rgb".index(c) < len(colour) else None)
+        if k is not None and k not in picks:
+            picks.append(k)
+    a = np.asarray(pixels[..., picks or colour[:1] or [0]], dtype=np.float64)
+    if not np.isfinite(a).all():
+        raise InputError(f"{asset_ref(m.path)}: {int((~np.isfinite(a)).sum())} texels are NaN or infinite; it "
+                         "cannot be judged until they are replaced (re-export the image)")
+    return 2.0 * reduce_bins(a, _reading_shape(*a.shape[:2])) - 1.0, (info.height, info.width)
+
+
+def _scaled(v: Verdict, reduced: tuple[int, int], full: tuple[int, int]) -> Verdict:
+    """``v`` (found on a reading of ``reduced`` size) with its seams in texels of the ``full`` size."""
+    sy, sx = full[0] / reduced[0], full[1] / reduced[1]
+
+    def scale(s: Seam) -> Seam:
+        across, along = (sx, sy) if s.axis == "x" else (sy, sx)
+        limit = (full[0] if s.axis == "x" else full[1]) - 1
+        return Seam(s.axis, int(round(s.position * across)) % (full[1] if s.axis == "x" else full[0]),
+                    int(s.start * along), min(limit, int((s.end + 1) * along) - 1), s.figure, s.map)
+
+    v.seams = [scale(s) for s in v.seams]
+    v.size = full
+    return v
+
+
+def judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
+    """The verdict on the files ``maps`` judged against themselves (seams in texels of the first map's full size),
+    and the first map's reading (for a thumbnail). Raises :class:`InputError` on a file that cannot be read and
+    ``ValueError`` on one too small to judge."""
+    read = [read_alone(m) for m in maps]
+    names = [m.name or m.path for m in maps]
+    shapes = [p.shape[:2] for p, _ in read]
+    same_aspect = all(abs(h * shapes[0][1] - w * shapes[0][0]) <= max(h, w, *shapes[0]) for h, w in shapes)
+    if same_aspect:
+        common = min(shapes, key=lambda s: s[0] * s[1])
+        pixels = [p if p.shape[:2] == common else reduce_bins(p, common) for p, _ in read]
+        v = judge(pixels, None, [m.is_normal for m in maps], names, fidelity=False)
+        return _scaled(v, common, read[0][1]), read[0][0]
+    # each map alone, its seams at the same place in the texture (UV) given in texels of the first map
+    verdicts = [_scaled(judge([p], None, [m.is_normal], [n], fidelity=False), p.shape[:2], read[0][1])
+                for (p, _), m, n in zip(read, maps, names)]
+    seams = sorted((s for v in verdicts for s in v.seams), key=lambda s: -s.figure)
+    first = verdicts[0]
+    return Verdict(not seams, True, seams, max(v.strongest for v in verdicts), first.margin, "itself",
+                   first.method, first.size), read[0][0]

@@ -1,0 +1,89 @@
+"""One answer everywhere: ``check`` on a picture, ``check`` on a stage that uses it and the scan's
+``already-tileable`` give the same answer on every picture of the labelled corpus (benchmarks/texture_corpus.py),
+seamless and seamed, colour, scalar and normal maps."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+from pxr import Sdf, Usd, UsdShade
+
+from benchscripts import load_benchmark
+from seamless_usd.discover import scan_paths
+from seamless_usd.pipeline.check import check_paths
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "textures"
+
+
+def _write_png16(path: Path, picture: np.ndarray, is_normal: bool) -> None:
+    """A corpus picture (network domain) as the 16-bit PNG a library would hold: ``(v + 1) / 2``; a normal map
+    encoded the usual way, a scalar map as one channel."""
+    v = np.clip((picture + 1.0) / 2.0, 0.0, 1.0).astype(np.float32)
+    h, w, c = v.shape
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), oiio.ImageSpec(w, h, c, oiio.UINT16)), out.geterror()
+    assert out.write_image(np.ascontiguousarray(v)), out.geterror()
+    out.close()
+
+
+def _library(root: Path, items) -> Path:
+    """One library material per picture (no geometry: meant to tile), each reading it the way its role does:
+    colour to diffuseColor, a scalar to roughness, a normal map to normal with scale 2 and bias -1."""
+    stage = Usd.Stage.CreateNew(str(root / "library.usda"))
+    for k, item in enumerate(items):
+        mat = UsdShade.Material.Define(stage, f"/Library/M{k}")
+        surface = UsdShade.Shader.Define(stage, f"/Library/M{k}/Surface")
+        surface.CreateIdAttr("UsdPreviewSurface")
+        mat.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+        tex = UsdShade.Shader.Define(stage, f"/Library/M{k}/Tex")
+        tex.CreateIdAttr("UsdUVTexture")
+        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(f"./{item.name}.png")
+        tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
+        reader = UsdShade.Shader.Define(stage, f"/Library/M{k}/St")
+        reader.CreateIdAttr("UsdPrimvarReader_float2")
+        reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
+            reader.CreateOutput("result", Sdf.ValueTypeNames.Float2))
+        channels = item.picture.shape[2]
+        if item.is_normal:
+            tex.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((2, 2, 2, 1))
+            tex.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set((-1, -1, -1, 0))
+            out = tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
+            surface.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(out)
+        elif channels == 1:
+            out = tex.CreateOutput("r", Sdf.ValueTypeNames.Float)
+            surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).ConnectToSource(out)
+        else:
+            out = tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
+            surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(out)
+    stage.GetRootLayer().Save()
+    return root / "library.usda"
+
+
+@pytest.mark.skipif(not (SHARED / "wood_color.jpg").is_file(), reason="needs ../shared/textures")
+def test_check_and_scan_agree_on_every_corpus_picture(tmp_path):
+    items = load_benchmark("texture_corpus").build((128,))
+    assert {i.seamless for i in items} == {True, False} and any(i.is_normal for i in items)
+    assert any(i.picture.shape[2] == 1 for i in items)
+    for item in items:
+        _write_png16(tmp_path / f"{item.name}.png", item.picture, item.is_normal)
+    scene = _library(tmp_path, items)
+
+    pictures = {Path(i.name).name: i for i in check_paths([tmp_path / f"{k.name}.png" for k in items]).items}
+    scanned = {Path(s.maps[0].resolved).stem: s for s in scan_paths([scene]).stacks}
+    on_stage = {Path(i.maps[0]).stem: i for i in check_paths([scene]).items}
+    assert len(pictures) == len(scanned) == len(on_stage) == len(items)
+
+    disagree = []
+    for item in items:
+        picture, stack = pictures[f"{item.name}.png"], scanned[item.name]
+        assert not picture.error and stack.intent in ("tiling", "already-tileable"), (item.name, stack.intent_reason)
+        left_alone = stack.intent == "already-tileable"
+        judged = on_stage[item.name]
+        if not (picture.passed == left_alone == judged.passed):
+            disagree.append((item.name, picture.passed, stack.intent, judged.passed, stack.intent_reason))
+    assert not disagree, disagree
+    # the answers are not all one way: the corpus has pictures each side, and the verdict finds both
+    assert {p.passed for p in pictures.values()} == {True, False}
