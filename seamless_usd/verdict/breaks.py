@@ -17,6 +17,11 @@ texture's own period, when it has one, a lattice that the join puts out of phase
 A texture's own lines (mortar joints, plank gaps, slab joints) recur: they lift many lines alike. A join is
 one line (a wrap, a half-rolled window's centre) or two (a spliced strip). So the reference is the texture's
 :data:`RANK`-th strongest line, and a seam is a line whose break stands :data:`MARGIN` above it.
+
+A few large slabs or a grid whose joints differ in strength leave too few alike lines for the rank, so a line
+that breaks is also read across: a joint is a groove (:func:`groove`), a narrow band darker or lighter than
+*both* its sides all along the line, the sides alike; a join is a step or a jumble. A groove is the texture's
+own line, never a seam.
 """
 from __future__ import annotations
 
@@ -25,7 +30,7 @@ import numpy as np
 from .lines import Seam
 from .prepare import joint, map_weights, to_working
 
-__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures"]
+__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "groove"]
 
 #: Longest side (px) the maps are read at: fine enough that a join's texel step survives the area filter.
 WORK_SIDE = 512
@@ -34,6 +39,9 @@ WORK_SIDE = 512
 RANK = 4
 #: A line whose break is more than this above the reference is a seam (robust z units).
 MARGIN = 6.0
+#: A line that recurs one period on at least this share of its own strength is the texture's own line (a grid's
+#: joints differ in strength from one to the next, far more than a robust z-score's units).
+RECUR = 0.5
 #: Lines closer than this (px at the working size), or than the lag read, to a stronger line are the same line.
 SPACING = 3
 
@@ -108,8 +116,41 @@ def line_figures(img: np.ndarray, own: int | None = None) -> np.ndarray:
         for line in peaks[:RANK]:
             # a texture's own line recurs one period on: a line is read against its recurrences too
             again = max(z[(line + d * own + k) % n] for d in (-1, 1) for k in (-1, 0, 1)) if own else -np.inf
+            if again >= RECUR * z[line]:
+                again = np.inf  # it recurs, at most a little weaker: the texture's own line at this lag
             out[line] = max(out[line], float(z[line] - max(reference, again)))
     return out
+
+
+#: A line is a groove when, on at least this share of its length, its most deviant row near it lies beyond
+#: both sides in the same direction ...
+GROOVE_SHARE = 0.8
+#: ... and that row stands this many times further from the sides' mean than the sides stand apart.
+GROOVE_RATIO = 1.5
+
+
+def groove(img: np.ndarray, line: int) -> bool:
+    """Whether horizontal ``line`` of ``img`` (H, W, C, on a torus; the line lies before row ``line``) is a
+    groove. Of the rows ``line - 2 .. line + 1``, the one deviating most from its sides (rows 3-6 away on each
+    side, averaged) is read column by column, each column weighted by how much happens there (its deviation
+    and its sides' difference: a joint that runs along part of the line, as in a running bond, is read where
+    it runs): it lies beyond both sides in the same direction on :data:`GROOVE_SHARE` of the weight, and stands
+    :data:`GROOVE_RATIO` times further from the sides' mean than the sides stand apart."""
+    n = img.shape[0]
+
+    def rows(ks: range) -> np.ndarray:
+        return img[[(line + k) % n for k in ks]]
+
+    left, right = rows(range(-7, -3)).mean(axis=0), rows(range(3, 7)).mean(axis=0)  # (W, C)
+    mid = (left + right) / 2
+    inner = rows(range(-2, 2))
+    centre = inner[int(np.argmax(np.linalg.norm(inner - mid, axis=-1).mean(axis=1)))]  # (W, C)
+    rise = np.linalg.norm(centre - mid, axis=-1)
+    step = np.linalg.norm(left - right, axis=-1)
+    weight = rise + step + 1e-9
+    beyond = (((centre - left) * (centre - right)).sum(axis=-1) > 0)
+    share = float((weight * beyond).sum() / weight.sum())
+    return share >= GROOVE_SHARE and float((weight * rise).sum()) >= GROOVE_RATIO * float((weight * step).sum())
 
 
 def line_breaks(prepared: list[np.ndarray], names: list[str], units: float = 1.0) -> tuple[list[Seam], float]:
@@ -128,10 +169,13 @@ def line_breaks(prepared: list[np.ndarray], names: list[str], units: float = 1.0
     for name, img in parts:
         for axis, rotated in (("y", img), ("x", np.ascontiguousarray(img.transpose(1, 0, 2)))):
             n = rotated.shape[0]
-            f = line_figures(rotated, period(n, rotated.reshape(n, -1)))
+            own = period(n, rotated.reshape(n, -1))
+            f = line_figures(rotated, own)
             across = size[0 if axis == "y" else 1]
             along = size[1 if axis == "y" else 0]
             for line in np.flatnonzero(np.isfinite(f)):
+                if f[line] > MARGIN and own is None and groove(rotated, int(line)):
+                    continue  # the texture's own joint, in a texture with too few to recur
                 figure = float(f[line]) * units / MARGIN
                 strongest = max(strongest, figure)
                 if f[line] > MARGIN:
