@@ -185,11 +185,11 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
                 ) -> CheckReport:
     """The verdict on every stack meant to tile in ``paths`` (stages, documents, folders) and every picture.
     ``progress(name, done, total)`` is called before each input (a stage, document or picture) is judged."""
-    from seamless_usd.discover import scan_paths
-    from seamless_usd.discover.scan import open_stage
-
     report = CheckReport()
     scenes, pictures = _expand(paths)
+    if scenes:  # USD and MaterialX are imported only for scenes: a picture is judged without them
+        from seamless_usd.discover import scan_paths
+        from seamless_usd.discover.scan import open_stage
     total = len(scenes) + len(pictures)
     done = 0
 

@@ -32,14 +32,48 @@ def prepare_maps(maps: list[np.ndarray], normals: list[bool]) -> list[np.ndarray
     return out
 
 
+#: Texels of circular padding around a periodic map before torch resizes it.
+_PAD = 4
+
+
+def _shrink_axis(a: np.ndarray, k: int, periodic: bool) -> np.ndarray:
+    """``a`` shrunk ``k`` times along its first axis with the antialiased bilinear (triangle) filter, as
+    ``torch.nn.functional.interpolate(..., antialias=True)`` weighs it; wrapping when ``periodic``, else the
+    taps past an edge left out and the rest renormalised."""
+    n = a.shape[0]
+    m = n // k
+    start = np.arange(m) * k
+    total = np.zeros((m,) + a.shape[1:])
+    norm = np.zeros(m)
+    for o in range(-k, 2 * k):
+        w = 1.0 - abs(o + 0.5 - 0.5 * k) / k
+        if w <= 0:
+            continue
+        x = start + o
+        if periodic:
+            total += w * a[x % n]
+            norm += w
+        else:
+            ok = (x >= 0) & (x < n)
+            total[ok] += w * a[x[ok]]
+            norm[ok] += w
+    return total / norm.reshape((m,) + (1,) * (a.ndim - 1))
+
+
 def _resize(a: np.ndarray, hw: tuple[int, int], periodic: bool) -> np.ndarray:
     if a.shape[:2] == tuple(hw):
         return a
+    ky, kx = a.shape[0] // hw[0], a.shape[1] // hw[1]
+    exact = ky * hw[0] == a.shape[0] and kx * hw[1] == a.shape[1]
+    if exact and (not periodic or (2 * _PAD % ky == 0 and 2 * _PAD % kx == 0 and max(ky, kx) <= _PAD)):
+        # a whole-number shrink that torch's padding keeps whole too: the same filter in numpy (equal to
+        # torch's within float32 rounding), so a picture checked at 512 px needs no torch
+        return _shrink_axis(_shrink_axis(a, ky, periodic).swapaxes(0, 1), kx, periodic).swapaxes(0, 1)
     import torch  # only where a map is resized: the verdict's import stays light for scan and check
     import torch.nn.functional as F
 
     t = torch.from_numpy(np.ascontiguousarray(a.transpose(2, 0, 1), dtype=np.float32))[None]
-    pad = 4 if periodic else 0
+    pad = _PAD if periodic else 0
     if pad:
         t = F.pad(t, (pad,) * 4, mode="circular")
     sy, sx = hw[0] / a.shape[0], hw[1] / a.shape[1]
