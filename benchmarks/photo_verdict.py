@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from photos import PHOTOS, WINDOW, WINDOW_AT, tileable_photos  # noqa: E402
 from results_io import write_results  # noqa: E402
-from texture_verdict import table  # noqa: E402
+from texture_verdict import heading, share_table, table  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 TUNING = frozenset({"tiles_floor_white_1", "tiles_marble_slabs_1", "metal_plate_1", "wood_table_worn_1",
@@ -76,13 +76,8 @@ def judged(pixels: np.ndarray, folder: Path, name: str) -> tuple:
 
 
 def markdown(rows: list[dict], shares: list[dict], seconds: float, load: float) -> str:
-    lines = ["# Real photos judged on their own", "",
-             "`benchmarks/photo_verdict.py` on `benchmarks/photos`: "
-             f"{len(rows)} pictures; {seconds:.0f} s in all, load average {load:.2f} at the start.", "",
-             "| part | seamless called seamless | seamed called seamed |", "|---|---:|---:|"]
-    for s in shares:
-        lines.append(f"| {s['part']} ({s['seamless']} + {s['seamed']}) | {100 * s['seamless_right']:.0f} % "
-                     f"| {100 * s['seamed_right']:.0f} % |")
+    lines = [*heading("Real photos judged on their own", "`benchmarks/photo_verdict.py` on `benchmarks/photos`",
+                      len(rows), seconds, load), *share_table(shares, rules=False)]
     lines += ["", "| picture | part | label | verdict | strongest - margin | first seam |", "|---|---|---|---|---:|---|"]
     for r in rows:
         seamed, figure, _, where = r["rules"]["verdict"]

@@ -82,14 +82,27 @@ def table(rows: list[dict]) -> list[dict]:
     return out
 
 
-def markdown(rows: list[dict], shares: list[dict], seconds: float, load: float) -> str:
-    lines = ["# Textures judged on their own", "",
-             "`benchmarks/texture_verdict.py` on `benchmarks/texture_corpus.py`: "
-             f"{len(rows)} pictures; {seconds:.0f} s in all, load average {load:.2f} at the start.", "",
-             "| part | rule | seamless called seamless | seamed called seamed |", "|---|---|---:|---:|"]
+def share_table(shares: list[dict], rules: bool = True) -> list[str]:
+    """The shares of :func:`table` as Markdown lines, with or without the rule column."""
+    rule = "rule | " if rules else ""
+    lines = [f"| part | {rule}seamless called seamless | seamed called seamed |",
+             f"|---|{'---|' if rules else ''}---:|---:|"]
     for s in shares:
-        lines.append(f"| {s['part']} ({s['seamless']} + {s['seamed']}) | {s['rule']} | {100 * s['seamless_right']:.0f} % "
+        named = f"{s['rule']} | " if rules else ""
+        lines.append(f"| {s['part']} ({s['seamless']} + {s['seamed']}) | {named}{100 * s['seamless_right']:.0f} % "
                      f"| {100 * s['seamed_right']:.0f} % |")
+    return lines
+
+
+def heading(title: str, run: str, count: int, seconds: float, load: float) -> list[str]:
+    """A results page's title and what was run, how long it took and the load it started at."""
+    return [f"# {title}", "", f"{run}: {count} pictures; {seconds:.0f} s in all, load average {load:.2f} at the start.",
+            ""]
+
+
+def markdown(rows: list[dict], shares: list[dict], seconds: float, load: float) -> str:
+    lines = [*heading("Textures judged on their own", "`benchmarks/texture_verdict.py` on `benchmarks/texture_corpus.py`",
+                      len(rows), seconds, load), *share_table(shares)]
     lines += ["", "Misses of the verdict, held back:", ""]
     for r in rows:
         call = r["rules"]["verdict"][0]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 from pathlib import Path
@@ -33,6 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the result as JSON (schemas/check.schema.json)")
     parser.add_argument("--report", type=Path, metavar="HTML",
                         help="write a contact sheet: each picture repeated 2 x 2 with its seams drawn in red")
+    parser.add_argument("--jobs", type=int, default=0, metavar="N",
+                        help="worker processes judging pictures (default: one per core, at most 8)")
 
 
 def render(report: CheckReport, console: Console) -> None:
@@ -52,8 +55,10 @@ def render(report: CheckReport, console: Console) -> None:
 
 def _checked(args: argparse.Namespace, err: Console) -> CheckReport:
     """check_paths, with a progress bar over the inputs on a terminal."""
+    jobs = args.jobs if args.jobs > 0 else min(8, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                                               else os.cpu_count() or 1)
     if not err.is_terminal:
-        return check_paths(args.paths)
+        return check_paths(args.paths, jobs=jobs)
     with Progress(TextColumn("checking"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                   TimeElapsedColumn(), TimeRemainingColumn(), TextColumn("{task.description}"),
                   console=err, transient=True) as bar:
@@ -62,7 +67,7 @@ def _checked(args: argparse.Namespace, err: Console) -> CheckReport:
         def step(name: str, done: int, total: int) -> None:
             bar.update(task, completed=done, total=total, description=escape(Path(name).name) if name else "")
 
-        return check_paths(args.paths, progress=step)
+        return check_paths(args.paths, progress=step, jobs=jobs)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -86,3 +86,15 @@ def test_progress_counts_every_input_and_ends_at_the_total(tmp_path):
     assert len(report.items) == 6
     assert seen[-1] == ("", 6, 6) and [d for _, d, _ in seen] == list(range(7))
     assert all(t == 6 for _, _, t in seen)
+
+
+def test_pictures_judged_in_worker_processes_give_the_same_answers_in_order(tmp_path):
+    lib = _folder(tmp_path)
+    seen = []
+    serial = check_paths([lib])
+    parallel = check_paths([lib], progress=lambda name, done, total: seen.append((Path(name).name, done, total)),
+                           jobs=2)
+    assert [i.to_dict() | {"seconds": 0} for i in parallel.items] == [i.to_dict() | {"seconds": 0}
+                                                                       for i in serial.items]
+    assert [d for _, d, _ in seen] == list(range(len(serial.items))) + [len(serial.items)]
+    assert {n for n, _, _ in seen[:-1]} == {Path(i.name).name for i in serial.items}

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -181,10 +181,26 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     return item
 
 
-def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int], None] | None = None
-                ) -> CheckReport:
+def _judged_pictures(pictures: list[Path], jobs: int) -> Iterator[CheckItem]:
+    """Each picture's item, in order; ``jobs`` > 1 judges them in that many worker processes (a picture is
+    judged in numpy alone, one core each)."""
+    if jobs <= 1 or len(pictures) < 2 * jobs:
+        yield from map(_judge_picture, pictures)
+        return
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    with ProcessPoolExecutor(jobs, mp_context=context) as pool:
+        yield from pool.map(_judge_picture, pictures, chunksize=max(1, min(8, len(pictures) // (4 * jobs))))
+
+
+def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int], None] | None = None,
+                jobs: int = 1) -> CheckReport:
     """The verdict on every stack meant to tile in ``paths`` (stages, documents, folders) and every picture.
-    ``progress(name, done, total)`` is called before each input (a stage, document or picture) is judged."""
+    ``progress(name, done, total)`` is called before each stage or document is judged and as each picture's
+    verdict comes in. ``jobs``: worker processes judging the pictures (1: in this process)."""
     report = CheckReport()
     scenes, pictures = _expand(paths)
     if scenes:  # USD and MaterialX are imported only for scenes: a picture is judged without them
@@ -212,13 +228,17 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
         stage = open_stage(scene) if judged and scene.suffix.lower() != ".mtlx" else None  # once per stage
         for stack in judged:
             report.items.append(_judge_stack(scene, stage, stack))
+    found = []
     for picture in pictures:
-        emit(str(picture))
-        done += 1
-        if not picture.is_file():
+        if picture.is_file():
+            found.append(picture)
+        else:
+            done += 1
             report.unreadable.append(f"{asset_ref(picture)}: no such file")
-            continue
-        report.items.append(_judge_picture(picture))
+    for item in _judged_pictures(found, jobs):
+        emit(item.name)
+        done += 1
+        report.items.append(item)
     if progress is not None:
         progress("", done, total)
     return report
