@@ -1,6 +1,7 @@
 """Working-resolution policy, load_stack_pixels and write_map on real files."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 from pathlib import Path
@@ -167,6 +168,26 @@ def test_stack_channel_warnings_become_findings(tmp_path: Path) -> None:
     stack = load_stack_pixels([texture_map(path, (("diffuseColor", "rgb"), ("opacity", "a")))])
     [finding] = stack.findings
     assert (finding.code, finding.where) == ("map-channels", "</M/rgb> @textures/rgb.png@")
+
+
+def test_a_normal_map_in_the_wrong_encoding_is_named(samples_dir: Path, tmp_path: Path) -> None:
+    """The bundled brick normal map reads clean; the same vectors stored signed in a float EXR but read with the
+    0-1 scale and bias, or a colour texture wired as a normal map, are named with what to check."""
+    good = load_stack_pixels([sample_map(samples_dir, "brick_normal.png")])
+    assert not good.findings
+    vectors = read_image(str(samples_dir / "textures" / "brick_normal.png"))[0][..., :3] * 2.0 - 1.0
+    signed = write_raw_image(tmp_path / "normal_signed.exr", vectors.astype(np.float32))
+    wood = samples_dir / "textures" / "wood_color.png"
+    for path, length in ((signed, "1.6"), (wood, "")):
+        stack = load_stack_pixels([texture_map(path, (("normal", "rgb"),), ColorSpace.RAW, normal=True)])
+        [finding] = [f for f in stack.findings if "tangent-space normal map" in f.message]
+        assert finding.code == "map-channels" and path.name in finding.where
+        assert "median length is " + length in finding.message and "scale and bias" in finding.message
+    # with nothing authored (scale 1, bias 0), a float file holding signed vectors is read as stored: right
+    plain = load_stack_pixels([dataclasses.replace(texture_map(signed, (("normal", "rgb"),), ColorSpace.RAW),
+                                                   scale=(1.0,) * 4, bias=(0.0,) * 4)])
+    assert not plain.findings and plain.encodings[0].normal_scale == (1.0, 1.0, 1.0)
+    assert np.allclose(plain.values[0], good.values[0], atol=0.02)
 
 
 @pytest.mark.parametrize("name", ["a.tga", "a.tif", "a.jpg"])

@@ -38,7 +38,8 @@ import numpy as np
 from seamless_usd.textures import ColorSpace, ImageInfo, TextureMap
 from seamless_usd.imaging.transfer import file_codes, from_linear, linear_table, to_linear
 from seamless_usd.imaging.io import alpha_channel
-from seamless_usd.imaging.normals import decode_normals, encode_normals, normal_scale_bias, stored_unit_tolerance
+from seamless_usd.imaging.normals import (decode_normals, encode_normals, encoding_doubt, normal_scale_bias,
+                                         signed_as_stored, stored_unit_tolerance)
 
 __all__ = ["Tone", "ValueRange", "MapEncoding", "decode_map", "encode_map"]
 
@@ -159,6 +160,8 @@ class MapEncoding:
         scale_bias = None
         if texture_map.is_normal:
             scale_bias = normal_scale_bias(texture_map.scale, texture_map.bias)
+            if pixels is not None and signed_as_stored(texture_map.scale, texture_map.bias, info.dtype, pixels):
+                scale_bias = ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
         return cls.for_image(
             info,
             texture_map.color_space,
@@ -238,6 +241,9 @@ class MapEncoding:
             if p.shape[-1] != n:
                 raise ValueError(f"pixels have {p.shape[-1]} channels, the header says {n}")
             fill = tuple(float(np.nanmean(p[..., i], dtype=np.float64)) if p[..., i].size else 0.0 for i in range(n))
+            doubt = None if normal is None else encoding_doubt(p[..., list(normal)], scale, bias)
+            if doubt:
+                warnings.append(doubt)
             if info.dtype not in _INTEGER_TYPES:  # float files: fit the range to the data
                 values = [i for i in channels if i != alpha and (normal is None or i not in normal)]
                 if values:

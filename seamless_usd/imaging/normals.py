@@ -92,3 +92,34 @@ def encode_normals(vectors: np.ndarray, scale, bias, keep_within: float = 0.0) -
     :func:`renormalise`), then ``(n - bias) / scale``."""
     n = renormalise(vectors, keep_within)
     return (n - np.asarray(bias, np.float64)) / np.asarray(scale, np.float64)
+
+
+def encoding_doubt(values: np.ndarray, scale, bias) -> str | None:
+    """Why the xyz file values ``(H, W, 3)`` do not read as a tangent-space normal map with this scale and bias
+    (None when they do): decoded, a normal map's vectors are near unit length and face the surface (z > 0).
+    A signed float map read with the 0-1 scale and bias, a colour or height map wired as a normal, or a wrong
+    bias shows as lengths far from 1 or many vectors facing away. Read on at most 64 x 64 texels."""
+    v = np.asarray(values, dtype=np.float64)
+    step = max(1, max(v.shape[:2]) // 64)
+    v = v[::step, ::step].reshape(-1, 3) * np.asarray(scale, np.float64) + np.asarray(bias, np.float64)
+    v = v[np.isfinite(v).all(axis=1)]
+    if not len(v):
+        return None
+    length = float(np.median(np.linalg.norm(v, axis=1)))
+    away = float((v[:, 2] < 0).mean())
+    if 0.8 <= length <= 1.25 and away <= 0.2:
+        return None
+    return (f"does not read as a tangent-space normal map with scale {tuple(round(float(s), 3) for s in scale)} "
+            f"and bias {tuple(round(float(b), 3) for b in bias)}: decoded, its vectors' median length is "
+            f"{length:.2f} (a normal map's is 1) and {100 * away:.0f} % face away (z < 0); check the "
+            "inputs' scale and bias, and that a normal map is connected")
+
+
+def signed_as_stored(scale, bias, dtype: str, values: np.ndarray) -> bool:
+    """Whether a normal map is read as stored (scale 1, bias 0): nothing authored (the identity, which otherwise
+    means the conventional 2 and -1) on a float file whose xyz hold negative values, as a signed map does."""
+    identity = all(float(v) == 1.0 for v in scale[:3]) and all(float(v) == 0.0 for v in bias[:3])
+    if not identity or dtype not in ("half", "float", "double"):
+        return False
+    xyz = np.asarray(values)[..., :3]
+    return xyz.shape[-1] == 3 and float(np.nanmin(xyz)) < -0.01
