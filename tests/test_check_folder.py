@@ -98,3 +98,22 @@ def test_pictures_judged_in_worker_processes_give_the_same_answers_in_order(tmp_
                                                                        for i in serial.items]
     assert [d for _, d, _ in seen] == list(range(len(serial.items))) + [len(serial.items)]
     assert {n for n, _, _ in seen[:-1]} == {Path(i.name).name for i in serial.items}
+
+
+def test_a_stack_inside_a_usdz_package_is_named_not_misread(tmp_path):
+    """A library material packaged with its texture (usd-core's packager): check names the packaged map and
+    says what to do instead of reporting a missing file."""
+    import shutil
+
+    from pxr import Sdf, UsdUtils
+
+    floor = (Path(__file__).resolve().parents[1] / "sample_assets" / "tileable" / "floor.usda").read_text()
+    (tmp_path / "floor.usda").write_text(floor.replace("@../textures/", "@./"))
+    for name in ("wood_tileable.jpg", "wood_tileable_roughness.jpg"):
+        shutil.copy(SAMPLES / name, tmp_path / name)
+    (tmp_path / "pkg").mkdir()
+    assert UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp_path / "floor.usda")), str(tmp_path / "pkg" / "floor.usdz"))
+    report = check_paths([tmp_path / "pkg" / "floor.usdz"])
+    [item] = report.items
+    assert not item.passed and "inside a .usdz package" in item.error and "@./wood_tileable" in item.error
+    assert report.exit_code == 1

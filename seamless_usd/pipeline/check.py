@@ -161,7 +161,11 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
 
     item = CheckItem(stack.material, str(stage_path), [m.asset for m in stack.maps])
     t0 = time.perf_counter()
+    packed = [m for m in stack.maps if m.in_package]
     try:
+        if packed:
+            raise InputError(f"{asset_ref(packed[0].asset)} is inside a .usdz package: its pixels are not judged "
+                             "there (unpack the package, or check the files it was made from)")
         recorded = _sources(stage, stack)
         if recorded is None:  # no separate source: judged against itself, as the scan's triage judges it
             _alone(item, [FileMap(m.resolved, m.channels_used, m.is_normal, m.asset) for m in stack.maps])
