@@ -3,7 +3,7 @@
 
 - a 2K 3-map stack: the end-to-end scene (``endtoend.py``: the MaterialX brick's base colour, normal and
   roughness at ``--size`` px, as PNGs), judged against itself (target 5 s);
-- a 1K picture: a photo of ``benchmarks/photos`` at 1024 px (target 1 s);
+- a 1K picture: a photo of ``benchmarks/photos`` at 1024 px (``--picture``; target 1 s);
 - ``--pictures N``: a folder of N pictures (256 px windows of the photos, some rolled by half, some whole
   tileable textures brought to 256 px) checked with ``--json`` and an HTML contact sheet.
 
@@ -89,10 +89,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--size", type=int, default=2048)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--pictures", type=int, default=0, help="also check a folder of this many pictures")
+    ap.add_argument("--picture", default=PICTURE, help="the photo of benchmarks/photos checked alone")
+    ap.add_argument("--jobs", type=int, default=0, help="check's --jobs for the folder (0: its default)")
     a = ap.parse_args(argv)
     scene = build_scene(a.out / "stack", a.size)
     picture = a.out / "picture.png"
-    Image.open(PHOTOS / PICTURE).convert("RGB").save(picture)
+    with Image.open(PHOTOS / a.picture) as im:
+        im.convert("RGB").save(picture)
+        side = max(im.size)
 
     load = os.getloadavg()[0]
     seconds, payload = timed([str(scene)], a.repeat)
@@ -102,14 +106,15 @@ def main(argv: list[str] | None = None) -> int:
     load = os.getloadavg()[0]
     seconds, payload = timed([str(picture)], a.repeat)
     [item] = payload["items"]
-    print(f"check a 1024 px picture: {seconds:.2f} s (median of {a.repeat}, start-up included), "
+    print(f"check a {side} px picture: {seconds:.2f} s (median of {a.repeat}, start-up included), "
           f"passed {item['passed']}; load {load:.2f}")
     if a.pictures:
         folder = a.out / "library"
         seamless = library(folder, a.pictures)
         load = os.getloadavg()[0]
         t0 = time.perf_counter()
-        done = subprocess.run([_exe(), "check", str(folder), "--json", "--report", str(a.out / "sheet.html")],
+        jobs = ["--jobs", str(a.jobs)] if a.jobs else []
+        done = subprocess.run([_exe(), "check", str(folder), "--json", "--report", str(a.out / "sheet.html"), *jobs],
                               capture_output=True, text=True)
         wall = time.perf_counter() - t0
         payload = json.loads(done.stdout)

@@ -12,6 +12,8 @@ together; maps of different aspects are judged each alone.
 """
 from __future__ import annotations
 
+import os
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -101,10 +103,37 @@ def _scaled(v: Verdict, reduced: tuple[int, int], full: tuple[int, int]) -> Verd
     return v
 
 
+#: Verdicts by the files they were given for (path, size, modification time, channels, normal, name): the scan's
+#: triage and ``check`` on the same stage judge the same files once. A verdict is a few hundred bytes.
+_VERDICTS: OrderedDict[tuple, dict] = OrderedDict()
+_KEEP = 1024
+
+
+def _stamp(maps: Sequence[FileMap]) -> tuple | None:
+    try:
+        return tuple((os.path.realpath(m.path), os.stat(m.path).st_size, os.stat(m.path).st_mtime_ns, m.channels,
+                      m.is_normal, m.name) for m in maps)
+    except OSError:
+        return None
+
+
 def judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
     """The verdict on the files ``maps`` judged against themselves (seams in texels of the first map's full size),
     and the first map's reading (for a thumbnail). Raises :class:`InputError` on a file that cannot be read and
-    ``ValueError`` on one too small to judge."""
+    ``ValueError`` on one too small to judge. The same unchanged files are judged once per process."""
+    key = _stamp(maps)
+    if key is not None and key in _VERDICTS:
+        _VERDICTS.move_to_end(key)
+        return Verdict.from_dict(_VERDICTS[key]), read_alone(maps[0])[0]
+    verdict, reading = _judge_alone(maps)
+    if key is not None:
+        _VERDICTS[key] = verdict.as_dict()
+        while len(_VERDICTS) > _KEEP:
+            _VERDICTS.popitem(last=False)
+    return verdict, reading
+
+
+def _judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
     read = [read_alone(m) for m in maps]
     names = [m.name or m.path for m in maps]
     shapes = [p.shape[:2] for p, _ in read]
