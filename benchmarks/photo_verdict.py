@@ -14,6 +14,8 @@ Seamed
     ``window``     a plain window (75 % of each side, from 10 % in) of any photo;
     ``half-roll``  that window rolled by half: its wrap is clean, its seams run through the middle.
 
+The 2048 px versions in ``full/`` (four photos made to tile) are added the same way, written as 16-bit PNGs.
+
 Split: the *tuning* part (:data:`TUNING`: four structured textures made to tile and four others) is what a
 rule may be tuned on; the rest is *held back*.
 
@@ -57,8 +59,9 @@ def variants(pixels: np.ndarray, tileable: bool) -> list[tuple[str, bool, np.nda
     return out
 
 
-def judged(pixels: np.ndarray, folder: Path, name: str) -> tuple:
-    """(seamed, strongest - margin, seconds, where) of ``pixels`` written as a PNG and judged as ``check`` does."""
+def judged(pixels: np.ndarray, folder: Path, name: str, bits: int = 8) -> tuple:
+    """(seamed, strongest - margin, seconds, where) of ``pixels`` (uint8) written as an 8- or 16-bit PNG and judged
+    as ``check`` does."""
     import OpenImageIO as oiio
 
     from seamless_usd.verdict.alone import FileMap, judge_alone
@@ -66,8 +69,8 @@ def judged(pixels: np.ndarray, folder: Path, name: str) -> tuple:
     path = folder / f"{name}.png"
     h, w, c = pixels.shape
     out = oiio.ImageOutput.create(str(path))
-    out.open(str(path), oiio.ImageSpec(w, h, c, oiio.UINT8))
-    out.write_image(np.ascontiguousarray(pixels))
+    out.open(str(path), oiio.ImageSpec(w, h, c, oiio.UINT8 if bits == 8 else oiio.UINT16))
+    out.write_image(np.ascontiguousarray(pixels if bits == 8 else pixels.astype(np.uint16) * 257))
     out.close()
     t0 = time.perf_counter()
     v, _ = judge_alone([FileMap(str(path))])
@@ -102,14 +105,16 @@ def main(argv: list[str] | None = None) -> int:
     load = os.getloadavg()[0]
     t0 = time.perf_counter()
     rows = []
+    photos = [(p, 8, "") for p in sorted(a.photos.glob("*.jpg"))]
+    photos += [(p, 16, "-2048") for p in sorted((a.photos / "full").glob("*.jpg"))]  # full size, as 16-bit files
     with tempfile.TemporaryDirectory() as tmp:
-        for path in sorted(a.photos.glob("*.jpg")):
+        for path, bits, tag in photos:
             with Image.open(path) as im:
                 pixels = np.asarray(im.convert("RGB"))
             split = "tuning" if path.stem in TUNING else "held-back"
             for kind, seamless, px in variants(pixels, path.name in made_to_tile):
-                name = f"{path.stem}-{kind}"
-                r = {"verdict": judged(px, Path(tmp), name)}
+                name = f"{path.stem}{tag}-{kind}"
+                r = {"verdict": judged(px, Path(tmp), name, bits)}
                 rows.append({"name": name, "photo": path.name, "kind": kind, "split": split, "seamless": seamless,
                              "size": list(px.shape[:2]), "rules": r})
                 print(f"{name:40s} {'seamless' if seamless else 'seamed  '} {'S' if r['verdict'][0] else '-'} "
