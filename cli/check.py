@@ -55,8 +55,7 @@ def render(report: CheckReport, console: Console) -> None:
 
 def _checked(args: argparse.Namespace, err: Console) -> CheckReport:
     """check_paths, with a progress bar over the inputs on a terminal."""
-    jobs = args.jobs if args.jobs > 0 else min(8, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-                                               else os.cpu_count() or 1)
+    jobs = args.jobs if args.jobs > 0 else min(8, os.cpu_count() or 1)
     if not err.is_terminal:
         return check_paths(args.paths, jobs=jobs)
     with Progress(TextColumn("checking"), BarColumn(), TextColumn("{task.completed}/{task.total}"),

@@ -6,8 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import OpenImageIO as oiio
 import pytest
+from imagefiles import write_raw_image
 from pxr import Sdf, Usd, UsdShade
 
 from benchscripts import load_benchmark
@@ -17,15 +17,11 @@ from seamless_usd.pipeline.check import check_paths
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "textures"
 
 
-def _write_png16(path: Path, picture: np.ndarray, is_normal: bool) -> None:
+def _write_png16(path: Path, picture: np.ndarray) -> None:
     """A corpus picture (network domain) as the 16-bit PNG a library would hold: ``(v + 1) / 2``; a normal map
-    encoded the usual way, a scalar map as one channel."""
-    v = np.clip((picture + 1.0) / 2.0, 0.0, 1.0).astype(np.float32)
-    h, w, c = v.shape
-    out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), oiio.ImageSpec(w, h, c, oiio.UINT16)), out.geterror()
-    assert out.write_image(np.ascontiguousarray(v)), out.geterror()
-    out.close()
+    thus encoded the usual way, a scalar map as one channel."""
+    v = np.clip((picture + 1.0) / 2.0, 0.0, 1.0)
+    write_raw_image(path, np.round(v * 65535.0).astype(np.uint16))
 
 
 def _library(root: Path, items) -> Path:
@@ -68,7 +64,7 @@ def test_check_and_scan_agree_on_every_corpus_picture(tmp_path):
     assert {i.seamless for i in items} == {True, False} and any(i.is_normal for i in items)
     assert any(i.picture.shape[2] == 1 for i in items)
     for item in items:
-        _write_png16(tmp_path / f"{item.name}.png", item.picture, item.is_normal)
+        _write_png16(tmp_path / f"{item.name}.png", item.picture)
     scene = _library(tmp_path, items)
 
     pictures = {Path(i.name).name: i for i in check_paths([tmp_path / f"{k.name}.png" for k in items]).items}

@@ -111,10 +111,11 @@ _KEEP = 1024
 
 def _stamp(maps: Sequence[FileMap]) -> tuple | None:
     try:
-        return tuple((os.path.realpath(m.path), os.stat(m.path).st_size, os.stat(m.path).st_mtime_ns, m.channels,
-                      m.is_normal, m.name) for m in maps)
+        stats = [os.stat(m.path) for m in maps]
     except OSError:
         return None
+    return tuple((os.path.realpath(m.path), st.st_size, st.st_mtime_ns, m.channels, m.is_normal, m.name)
+                 for m, st in zip(maps, stats))
 
 
 def judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
