@@ -120,6 +120,17 @@ def pictures(name: str, method: str, tile: np.ndarray, source: np.ndarray, folde
     Image.fromarray(zoom).save(folder / f"{name}__{method}_zoom.png")
 
 
+def _shown(path) -> str | None:
+    """A path for the results: relative to the repository when inside it, else its last two parts."""
+    if path is None:
+        return None
+    p = Path(path).resolve()
+    try:
+        return str(p.relative_to(HERE.parent))
+    except ValueError:
+        return str(Path(*p.parts[-2:]))
+
+
 def run_photo(path: Path, a: argparse.Namespace, window: bool) -> dict:
     from seamless_usd.verdict import judge
 
@@ -216,7 +227,9 @@ def main(argv: list[str] | None = None) -> int:
             f"{m} {'error' if 'error' in row[m] else ('passed' if row[m]['passed'] else 'not passed')}"
             for m in a.methods if m in row), flush=True)
     load = (load0, os.getloadavg()[0])
-    data = {"settings": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(a).items()},
+    # paths as the settings name them, never the machine's: the repository's own relative to it, others by name
+    data = {"settings": {k: (_shown(v) if isinstance(v, Path) or k == "resynth_python" else v)
+                         for k, v in vars(a).items()},
             "load": load, "rows": rows}
     page, _ = write_results(a.out, "photos", markdown(rows, a, load), data)
     print(page.read_text())

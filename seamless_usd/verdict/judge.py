@@ -31,6 +31,7 @@ import numpy as np
 from ..memo import ContentMemo
 from .breaks import line_breaks
 from .classifier import SeamClassifier, fit
+from .ghosts import ghost_bands
 from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, MAP_THRESHOLD, copy_seams
 from .lines import Seam, runs, seams_from_scores
 from .prepare import WORK_SIDE, joint, map_weights, to_working
@@ -203,6 +204,10 @@ def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> 
     margin = SEAM_MARGIN if ref is not None else SELF_MARGIN
     seams, strongest = _find(joint(tw, weights), None if sw is None else joint(sw, weights), factor, size, "stack",
                              seed)
+    if sw is not None:  # against a source: bands where the tile's detail fades (a crossfade)
+        found, top = ghost_bands(joint(tw, weights), joint(sw, weights), factor, size, margin)
+        seams += found
+        strongest = max(strongest, top)
     if len(t) > 1:
         for k, name in enumerate(reading.names):
             found, top = _find(tw[k] * weights[k], None if sw is None else sw[k] * weights[k], factor, size, name,

@@ -26,7 +26,9 @@ class Seam:
     ``axis`` ``"x"``: a vertical line at column ``position`` (between ``position - 1`` and ``position``,
     0 being the wrap), over rows ``start`` to ``end``; ``"y"``: a horizontal line at row ``position``
     over columns ``start`` to ``end``. ``figure`` is how far the run scores above the strongest run of
-    the reference's own lines (classifier units; above the verdict's margin is a seam)."""
+    the reference's own lines (classifier units; above the verdict's margin is a seam). ``kind``
+    ``"ghost"``: not a line but a band centred there, where the tile's detail fades against its source's
+    (:mod:`.ghosts`: a crossfade)."""
 
     axis: str
     position: int
@@ -34,19 +36,23 @@ class Seam:
     end: int
     figure: float
     map: str = "stack"  # the map it was found in, or "stack" for the maps together
+    kind: str = "line"  # "line", or "ghost": a ghosted band centred on the line
 
     def where(self, size: tuple[int, int]) -> str:
         """Words for the report: ``"vertical line at x=256 (the centre), rows 0-511"``."""
         h, w = size
         n = w if self.axis == "x" else h
         line = "vertical line at x" if self.axis == "x" else "horizontal line at y"
+        if self.kind == "ghost":
+            line = "ghosted band (detail fading) around " + line
         place = " (the wrap)" if self.position in (0, n) else " (the centre)" if abs(self.position - n / 2) <= 2 else ""
         span = "rows" if self.axis == "x" else "columns"
         return f"{line}={self.position}{place}, {span} {self.start}-{self.end}"
 
     def as_dict(self) -> dict:
-        return {"map": self.map, "axis": self.axis, "position": self.position, "start": self.start,
-                "end": self.end, "figure": round(float(self.figure), 3)}
+        out = {"map": self.map, "axis": self.axis, "position": self.position, "start": self.start,
+               "end": self.end, "figure": round(float(self.figure), 3)}
+        return out if self.kind == "line" else {**out, "kind": self.kind}
 
 
 def runs(z: np.ndarray, run: int = RUN, periodic: bool = True) -> np.ndarray:
