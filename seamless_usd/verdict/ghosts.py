@@ -66,7 +66,7 @@ def detail_ratios(tile: np.ndarray, source: np.ndarray) -> np.ndarray | None:
     """Per tile patch (a grid every TILE_STRIDE working px), the log of its detail's norm over that of the
     source patch it correlates best with; NaN where the tile's patch is flat. ``tile`` and ``source`` are
     working-resolution arrays (H, W, C) in the verdict's joint form. None: the source is too small or flat."""
-    s, grid_s = _patches(_detail(source, False), SOURCE_STRIDE, False)
+    s, _ = _patches(_detail(source, False), SOURCE_STRIDE, False)
     t, grid = _patches(_detail(tile, True), TILE_STRIDE, True)
     if s.shape[0] == 0 or t.shape[0] == 0:
         return None
@@ -99,7 +99,7 @@ def ghost_bands(tile: np.ndarray, source: np.ndarray, factor: float, size: tuple
     >>> seams, _ = ghost_bands((1 - ramp) * a + ramp * b, src, 1.0, (128, 128), 0.5)
     >>> [(s.axis, s.kind, 56 <= s.position <= 72) for s in seams]
     [('y', 'ghost', True)]
-    >>> ghost_bands(np.roll(src, 5, 0), src, 1.0, (96, 96), 0.5)[0]
+    >>> ghost_bands(np.roll(src, 5, 0), src, 1.0, (192, 192), 0.5)[0]
     []
     """
     ratios = detail_ratios(tile, source)
