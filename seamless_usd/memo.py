@@ -39,7 +39,11 @@ class ContentMemo(Generic[T]):
 
     def get(self, arrays: tuple[np.ndarray, ...], settings: Hashable, compute: Callable[[], T]) -> T:
         """The kept result for these arrays and settings, else ``compute()`` (kept; the oldest is dropped)."""
-        k = self.key(arrays, settings)
+        return self.get_keyed(self.key(arrays, settings), compute)
+
+    def get_keyed(self, k: Hashable, compute: Callable[[], T]) -> T:
+        """The kept result for a key the caller made (e.g. a file's path, size and modification time), else
+        ``compute()``, kept as :meth:`get` keeps it."""
         with self._lock:
             if k in self._items:
                 self._items.move_to_end(k)

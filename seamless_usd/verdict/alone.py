@@ -13,7 +13,6 @@ together; maps of different aspects are judged each alone.
 from __future__ import annotations
 
 import os
-from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -21,6 +20,7 @@ import numpy as np
 
 from seamless_usd.errors import InputError
 from seamless_usd.findings import asset_ref
+from seamless_usd.memo import ContentMemo
 
 from .judge import Verdict, judge
 from .lines import Seam
@@ -105,8 +105,7 @@ def _scaled(v: Verdict, reduced: tuple[int, int], full: tuple[int, int]) -> Verd
 
 #: Verdicts by the files they were given for (path, size, modification time, channels, normal, name): the scan's
 #: triage and ``check`` on the same stage judge the same files once. A verdict is a few hundred bytes.
-_VERDICTS: OrderedDict[tuple, dict] = OrderedDict()
-_KEEP = 1024
+_VERDICTS: ContentMemo[dict] = ContentMemo(keep=1024)
 
 
 def _stamp(maps: Sequence[FileMap]) -> tuple | None:
@@ -123,15 +122,18 @@ def judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
     and the first map's reading (for a thumbnail). Raises :class:`InputError` on a file that cannot be read and
     ``ValueError`` on one too small to judge. The same unchanged files are judged once per process."""
     key = _stamp(maps)
-    if key is not None and key in _VERDICTS:
-        _VERDICTS.move_to_end(key)
-        return Verdict.from_dict(_VERDICTS[key]), read_alone(maps[0])[0]
-    verdict, reading = _judge_alone(maps)
-    if key is not None:
-        _VERDICTS[key] = verdict.as_dict()
-        while len(_VERDICTS) > _KEEP:
-            _VERDICTS.popitem(last=False)
-    return verdict, reading
+    if key is None:
+        return _judge_alone(maps)
+    made: list[tuple[Verdict, np.ndarray]] = []
+
+    def compute() -> dict:
+        made.append(_judge_alone(maps))
+        return made[0][0].as_dict()
+
+    kept = _VERDICTS.get_keyed(key, compute)
+    if made:  # judged now: its reading is at hand
+        return made[0]
+    return Verdict.from_dict(kept), read_alone(maps[0])[0]
 
 
 def _judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:

@@ -202,10 +202,10 @@ def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> 
     sw = None if ref is None else to_working(ref.maps, factor, periodic=False)
     weights = map_weights(sw if sw is not None else tw)
     margin = SEAM_MARGIN if ref is not None else SELF_MARGIN
-    seams, strongest = _find(joint(tw, weights), None if sw is None else joint(sw, weights), factor, size, "stack",
-                             seed)
-    if sw is not None:  # against a source: bands where the tile's detail fades (a crossfade)
-        found, top = ghost_bands(joint(tw, weights), joint(sw, weights), factor, size, margin)
+    tile_joint, source_joint = joint(tw, weights), None if sw is None else joint(sw, weights)
+    seams, strongest = _find(tile_joint, source_joint, factor, size, "stack", seed)
+    if source_joint is not None:  # against a source: bands where the tile's detail fades (a crossfade)
+        found, top = ghost_bands(tile_joint, source_joint, factor, size, margin)
         seams += found
         strongest = max(strongest, top)
     if len(t) > 1:
