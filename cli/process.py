@@ -31,7 +31,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("paths", nargs="+", metavar="PATH",
                    help="USD stages (.usd/.usda/.usdc/.usdz), .mtlx documents, folders (walked) or glob patterns")
     p.add_argument("--preset", default="default",
-                   help="synthesis preset: default (CPU), draft (minutes; often not faithful), paper (GPU) "
+                   help="synthesis preset: default (CPU), long (4x the default's training, for structured stacks), "
+                        "draft (minutes; often not faithful), paper (GPU) "
                         "(default: %(default)s)")
     p.add_argument("--materials", action="append", default=[], metavar="GLOB",
                    help="only materials whose path or name matches (repeatable)")
@@ -62,6 +63,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tile-size", choices=TILE_SIZES, default="source",
                    help="source: the tile has the source's pixel size (same texture memory); "
                         "paper: the paper's 2c x 2c tile (default: %(default)s)")
+    p.add_argument("--straighten", action="store_true",
+                   help="a stack whose lines (planks, courses, tiles) run at an angle is turned until they run "
+                        "along the axes, and that is tiled: the tile is written straight, so the pattern on the "
+                        "asset turns by the angle the report and seamless:straightened record")
     p.add_argument("--force", action="store_true",
                    help="process every stack, also those classed uv-atlas, already-tileable or other")
     p.add_argument("--force-materials", action="append", default=[], metavar="GLOB",
@@ -102,6 +107,7 @@ def _options(args: argparse.Namespace, progress) -> Options:
         scheduler=args.scheduler,
         refine=args.refine,
         tile_size=args.tile_size,
+        straighten=args.straighten,
         force=args.force,
         force_materials=tuple(args.force_materials),
         progress=progress,

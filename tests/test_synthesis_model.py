@@ -85,10 +85,14 @@ def test_train_and_sample_shapes_per_map_rectangular():
 
 
 def test_presets_registry_and_clear_error():
-    assert set(PRESETS) == {"paper", "default", "draft", "tiny"}
+    assert set(PRESETS) == {"paper", "default", "long", "draft", "tiny"}
     paper = get_preset("paper")
     assert (paper.k, paper.n_res_blocks, paper.iterations, paper.lambda_l1, paper.lr) == (128, 5, 50_000, 10.0, 2e-4)
-    with pytest.raises(ValueError, match="default, draft, paper, tiny"):
+    # long: the default's networks and search, four times the training
+    default, long = get_preset("default"), get_preset("long")
+    assert long.iterations == 4 * default.iterations and long.training_fields() == {
+        **default.training_fields(), "iterations": long.iterations}
+    with pytest.raises(ValueError, match="default, draft, long, paper, tiny"):
         get_preset("fast")
 
 

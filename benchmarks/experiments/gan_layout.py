@@ -41,21 +41,23 @@ def main(argv: list[str] | None = None) -> int:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--stack", default="stripes_512")
-    ap.add_argument("--iterations", type=int, default=2400)
-    ap.add_argument("--preset", default="default", help="the networks' preset (its iterations are replaced)")
+    ap.add_argument("--iterations", type=int, default=None, help="training iterations (default: the preset's)")
+    ap.add_argument("--preset", default="default", help="the networks' preset")
+    ap.add_argument("--seeds", type=int, default=1, help="seeds trained side by side (the best tile is kept)")
     ap.add_argument("--out", type=Path, default=HERE / "results" / "gan_layout")
     a = ap.parse_args(argv)
     stack = load_stack(a.stack)
     keys = list(stack)
     maps = [MapInput(k, stack[k][0], stack[k][1]) for k in keys]
-    config = dataclasses.replace(get_preset(a.preset), iterations=a.iterations, seeds=1,
-                                 checkpoint_every=max(200, a.iterations))
+    base = get_preset(a.preset)
+    a.iterations = a.iterations or base.iterations
+    config = dataclasses.replace(base, iterations=a.iterations, seeds=a.seeds, checkpoint_every=max(200, a.iterations))
     load, t0 = os.getloadavg()[0], time.perf_counter()
     # no cut first: the GAN trains even where a tile cut from the source would pass (its layout is the subject)
     made = make_tile(maps, config, refine_config=RefineConfig(lattice=False), seed=0, keep_alternatives=True)
     layout = made.gan.maps[keys[0]]
     source = downsample_maps([maps[0]], layout.shape[:2])[0].pixels
-    row = {"stack": a.stack, "iterations": a.iterations, "seconds": round(time.perf_counter() - t0),
+    row = {"stack": a.stack, "iterations": a.iterations, "seeds": a.seeds, "seconds": round(time.perf_counter() - t0),
            "preset": a.preset, "working": list(layout.shape[:2]), "layout_structure": structure_figures(layout, source)["structure"],
            "layout_scale": made.layout_scale, "layout_used": made.layout_used, "written": made.layout_kind,
            "load": [round(load, 2), round(os.getloadavg()[0], 2)]}
@@ -68,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     a.out.mkdir(parents=True, exist_ok=True)
     buf = oiio.ImageBuf(np.ascontiguousarray(pic))
     buf.specmod().attribute("Compression", "jpeg:80")
-    buf.write(str(a.out / f"gan_layout_{a.stack}_{a.iterations}.jpg"))
+    buf.write(str(a.out / f"gan_layout_{a.stack}_{a.iterations}{'' if a.seeds == 1 else f'_seeds{a.seeds}'}.jpg"))
     return 0
 
 

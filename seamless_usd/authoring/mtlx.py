@@ -57,6 +57,7 @@ class MtlxNames:
     Q_BAND_MIN = "seamless_qbandmin"
     MODEL_HASH = "seamless_modelhash"
     TOOL_VERSION = "seamless_toolversion"
+    STRAIGHTENED = "seamless_straightened"
 
 
 def default_output_document(document_path: Path) -> Path:
@@ -140,6 +141,7 @@ def read_mtlx_provenance(node: mx.Node) -> Provenance | None:
         tool_version=node.getAttribute(MtlxNames.TOOL_VERSION),
         passed=node.getAttribute(MtlxNames.PASSED) == "true",
         verdict=node.getAttribute(MtlxNames.VERDICT),
+        straightened=floats(MtlxNames.STRAIGHTENED, 1)[0],
     )
 
 
@@ -351,6 +353,7 @@ class _MtlxAuthor:
             (MtlxNames.Q_BAND_MIN, None if p.q_passed is None else _fmt(p.q_band_min)),
             (MtlxNames.MODEL_HASH, p.model_hash),
             (MtlxNames.TOOL_VERSION, p.tool_version),
+            (MtlxNames.STRAIGHTENED, _fmt([float(p.straightened)]) if p.straightened else None),
         ):
             self._set(node, name, value, name)
         if len(self.result.plan) > before and prim_ref(node_path) not in self.result.edited_prims:

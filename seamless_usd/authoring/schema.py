@@ -41,6 +41,7 @@ class Schema:
     Q_BAND_MIN = "seamless:qBandMin"
     MODEL_HASH = "seamless:modelHash"
     TOOL_VERSION = "seamless:toolVersion"
+    STRAIGHTENED = "seamless:straightened"
 
 
 # Property name -> (Sdf type, how a Provenance value becomes a USD value).
@@ -55,6 +56,7 @@ PROPERTIES = {
     Schema.Q_BAND_MIN: (Sdf.ValueTypeNames.Double2, lambda p: Gf.Vec2d(*p.q_band_min)),
     Schema.MODEL_HASH: (Sdf.ValueTypeNames.String, lambda p: str(p.model_hash)),
     Schema.TOOL_VERSION: (Sdf.ValueTypeNames.String, lambda p: str(p.tool_version)),
+    Schema.STRAIGHTENED: (Sdf.ValueTypeNames.Double, lambda p: float(p.straightened)),
 }
 
 
@@ -135,6 +137,7 @@ def read_provenance(prim: Usd.Prim) -> Provenance | None:
         tool_version=str(get(Schema.TOOL_VERSION, "")),
         passed=bool(get(Schema.PASSED, False)),
         verdict=str(get(Schema.VERDICT, "")),
+        straightened=float(get(Schema.STRAIGHTENED, 0.0)),
     )
 
 

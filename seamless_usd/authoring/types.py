@@ -67,6 +67,7 @@ class Provenance:
     tool_version: str
     passed: bool = False  # the verdict: seamless at the wrap and inside, and faithful to the source
     verdict: str = ""  # the verdict in words: "seamless and faithful", or why not
+    straightened: float = 0.0  # degrees the source was turned clockwise before tiling (0: not straightened)
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,8 @@ Pixels in, pixels out; no USD and no torch here.
 * :mod:`.resample`: :class:`WorkingResolution` and resampling.
 * :mod:`.stack`: :func:`load_stack_pixels` -> :class:`StackPixels`.
 * :mod:`.write`: :func:`write_map`.
+* :mod:`.orientation`: how far a stack's lines are turned from the axes.
+* :mod:`.straighten`: the maps turned back and cut to source texels (``process --straighten``).
 """
 from __future__ import annotations
 

@@ -57,6 +57,8 @@ class Options:
     #                     (lattice periods, one window or a quilt) when that passes or scores better; "gan": the
     #                     refined GAN tile only; "off": the pure SeamlessGAN tile
     tile_size: str = "source"  # "source": tile has the source's pixel size; "paper": the paper's 2c x 2c tile
+    straighten: bool = False  # turn a stack whose lines run at an angle until they run along the axes, and tile
+    #                         that (the tile is written straight; the pattern on the asset turns)
     force: bool = False  # process every stack whatever its tiling intent (uv-atlas, already-tileable, other)
     force_materials: tuple[str, ...] = ()  # fnmatch patterns of materials processed whatever their intent
     progress: Callable[[ProgressEvent], None] | None = field(default=None, compare=False)
@@ -75,7 +77,7 @@ class Options:
         for name in (
             "preset", "materials", "mode", "plan_mode", "output_layer", "output_dir", "device", "seed",
             "cache_dir", "max_size", "max_pixels", "iterations", "seeds", "scheduler", "jobs", "refine", "tile_size",
-            "force", "force_materials",
+            "straighten", "force", "force_materials",
         ):
             value = getattr(self, name)
             if isinstance(value, Path):

@@ -43,6 +43,7 @@ class JobSettings:
     max_pixels: int | None = DEFAULT_MAX_PIXELS  # header limit per image file (width * height)
     refine: str = "on"  # refinement or lattice cut ("gan": no lattice cut; "off": the pure GAN tile)
     tile_size: str = "source"  # "source" (same pixel size as the source) or "paper" (2c x 2c)
+    straighten: bool = False  # turn the stack's lines onto the axes before tiling (imaging.straighten)
 
     @classmethod
     def from_options(cls, options) -> "JobSettings":
@@ -50,6 +51,7 @@ class JobSettings:
             preset=options.preset, iterations=options.iterations, seeds=options.seeds, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
             max_pixels=options.max_pixels, refine=options.refine, tile_size=options.tile_size,
+            straighten=options.straighten,
         )
 
 
@@ -154,6 +156,7 @@ class StackOutcome:
             tool_version=__version__,
             passed=self.passed,
             verdict="seamless and faithful" if self.passed else "; ".join(self.reasons()),
+            straightened=float((self.resampled.get("straightened") or {}).get("degrees", 0.0)),
         )
         maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
         return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
@@ -170,6 +173,10 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     policy = imaging.WorkingResolution(max_size=settings.max_size)
     pixels = imaging.load_stack_pixels(list(stack.maps), policy, max_pixels=settings.max_pixels)
     timings["load"] = time.perf_counter() - t0
+    straightened = None
+    if settings.straighten:  # from here on the straightened maps are the stack's source
+        pixels, straightened = _straightened(pixels, stack)
+        timings["straighten"] = time.perf_counter() - t0 - timings["load"]
 
     names = [f"m{i}" for i in range(len(stack.maps))]
     inputs = [
@@ -232,7 +239,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
         again = load_judged(entry.root, out_dir, stack.id)
         if again is not None:
-            return _outcome(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir)
+            return _outcome(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir,
+                            straightened=straightened)
     discriminator = tiles.pop("__discriminator__", None)
     captions = meta["scale"].get("level_pictures", [])
     levels = [(c, tiles.pop(f"__level{i}__")) for i, c in enumerate(captions) if f"__level{i}__" in tiles]
@@ -284,12 +292,32 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                                                 "source_metrics": o.source_metrics} for k, o in outcomes.items()},
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
     save_judged(entry.root, out_dir, stack.id, record, previews)
-    return _outcome(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
+    return _outcome(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir,
+                    straightened=straightened)
+
+
+def _straightened(pixels, stack: TextureStack):
+    """(pixels, facts): the stack's maps turned until their lines run along the axes, when they are turned
+    (:func:`.imaging.orientation.dominant_orientation`), and what was found and done."""
+    from seamless_usd.imaging.orientation import dominant_orientation
+    from seamless_usd.imaging.straighten import straighten_maps
+
+    found = dominant_orientation(pixels.values)
+    facts = {"orientation": found.as_dict(), "degrees": 0.0, "source_size": list(pixels.working_size)}
+    if not found.straightens:
+        return pixels, facts
+    values = straighten_maps(pixels.values, [m.is_normal for m in stack.maps], found.degrees)
+    h, w = values[0].shape[:2]
+    facts.update(degrees=found.degrees, size=[w, h])
+    return dataclasses.replace(pixels, values=tuple(values), working_size=(w, h)), facts
 
 
 def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
-             out_dir: Path) -> StackOutcome:
-    """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`)."""
+             out_dir: Path, straightened: dict | None = None) -> StackOutcome:
+    """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`).
+
+    ``straightened``: the facts of :func:`_straightened`; the tile was made from the straightened maps, and its
+    UV scale, read against them, is brought back to the source's texel density."""
     maps = {tuple(json.loads(k)): MapOutcome(Path(o["path"]), dict(o["metrics"]), dict(o["source_metrics"]))
             for k, o in record["outputs"].items()}
     verdict = dict(record["verdict"])
@@ -299,10 +327,11 @@ def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Pr
         crop_size=tuple(int(v) for v in meta["crop_size"]),
         tile_size=tuple(int(v) for v in record["tile_size"]),
         working_size=tuple(int(v) for v in meta["scale"]["gan_working_size"]),
-        resampled={**pixels.policy_record, "gan": dict(meta["scale"])},
+        resampled={**pixels.policy_record, "gan": dict(meta["scale"]),
+                   **({"straightened": straightened} if straightened else {})},
         failing=list(verdict.get("failing", [])),
         verdict=verdict,
-        uv_scale=tuple(float(v) for v in meta["uv_scale"]),
+        uv_scale=_source_uv_scale(meta["uv_scale"], straightened),
         q=dict(meta["q"]),
         candidates=int(meta["candidates"]),
         timings=dict(record["timings"]),
@@ -315,6 +344,16 @@ def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Pr
         previews=previews,
         findings=list(pixels.findings),
     )
+
+
+def _source_uv_scale(uv_scale, straightened: dict | None) -> tuple[float, float]:
+    """The UV scale that keeps the source's texel density: ``uv_scale`` was read against the maps the tile was
+    made from, which straightening cut smaller than the source (its texels keep their size)."""
+    u, v = (float(x) for x in uv_scale)
+    if straightened and straightened.get("size"):
+        (sw, sh), (w, h) = straightened["source_size"], straightened["size"]
+        u, v = u * sw / w, v * sh / h
+    return (u, v)
 
 
 def on_tile_grid(sources: list[np.ndarray], normals: list[bool], tile_hw: tuple[int, int],

@@ -297,6 +297,21 @@ def _q_text(q: dict) -> str | None:
     return f"{state} ({rest})" if state and rest else (state or rest)
 
 
+def _straightened_text(facts: dict | None) -> str | None:
+    """What ``--straighten`` found and did (None when it was not asked for)."""
+    from seamless_usd.imaging.orientation import MIN_DEGREES, MIN_STRENGTH
+
+    if not facts:
+        return None
+    found = facts.get("orientation", {})
+    if not facts.get("degrees"):
+        return (f"not turned: lines at {found.get('degrees', 0):g} degrees, strength {found.get('strength', 0):g} "
+                f"(turned from {MIN_DEGREES:g} degrees at a strength of {MIN_STRENGTH:g})")
+    w, h = facts.get("size", (0, 0))
+    return (f"turned {facts['degrees']:g} degrees clockwise (strength {found.get('strength', 0):g}) and cut to "
+            f"{w} x {h}; the tile is written straight, so the pattern on the asset turns by that angle")
+
+
 def _facts(stack: StackReport) -> tuple[str, str]:
     uv = stack.uv_scale
     cover = f" (one tile covers {fmt(tuple(1.0 / v for v in uv))} of the source's UV square)" if uv else ""
@@ -307,6 +322,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
         "UV scale": f"{fmt(tuple(uv))}{cover}" if uv else None,
         "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size and stack.model_hash else None,  # GAN crop
         "Q (the discriminator's view)": _q_text(stack.q),
+        "straightened": _straightened_text(stack.resampled.get("straightened")),
         "same as": stack.duplicate_of,
         "result from": stack.origin or None,
     }

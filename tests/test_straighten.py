@@ -1,0 +1,126 @@
+"""Straightening turned structure: the orientation read off real textures, the maps turned back (normals as
+vectors), and ``process --straighten`` end to end on a turned brick stack."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+from pxr import Usd, UsdShade
+
+from seamless_usd.imaging.orientation import MIN_STRENGTH, dominant_orientation
+from seamless_usd.imaging.straighten import inscribed_size, straighten_maps
+from seamless_usd_cli.main import main
+
+ROOT = Path(__file__).resolve().parents[1]
+TEXTURES = ROOT / "sample_assets" / "textures"
+SKIMAGE = Path(__import__("skimage").__file__).parent / "data"
+
+
+def _read(path: Path) -> np.ndarray:
+    return np.asarray(oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT), dtype=np.float32)
+
+
+def _turned_tileable(values: np.ndarray, degrees: float, side: int) -> np.ndarray:
+    """A ``side`` px centre window of a tileable picture repeated and turned counter-clockwise (as seen)
+    by ``degrees``: a turned texture with no border, at the picture's own texel size."""
+    reps = int(np.ceil(side * 1.5 / min(values.shape[:2]))) + 1  # the window's turned corners stay inside
+    big = oiio.ImageBuf(np.ascontiguousarray(np.tile(values, (reps, reps, 1))))
+    turned = oiio.ImageBufAlgo.rotate(big, math.radians(-degrees), filtername="lanczos3", recompute_roi=False)
+    pixels = np.asarray(turned.get_pixels(oiio.FLOAT), dtype=np.float32)
+    y0, x0 = (pixels.shape[0] - side) // 2, (pixels.shape[1] - side) // 2
+    return np.ascontiguousarray(pixels[y0:y0 + side, x0:x0 + side])
+
+
+@pytest.mark.parametrize("degrees", [17.0, -31.0])
+def test_the_turn_of_a_brick_wall_is_read_to_a_fraction_of_a_degree(degrees):
+    brick = _read(TEXTURES / "brick_albedo.png")
+    found = dominant_orientation([_turned_tileable(brick, degrees, 320)])
+    assert abs(found.degrees - degrees) <= 0.3, found
+    assert found.straightens and found.strength > 2 * MIN_STRENGTH
+
+
+def test_straight_bricks_and_stochastic_photos_are_left_as_they_are():
+    brick = dominant_orientation([_read(TEXTURES / "brick_albedo.png")])
+    assert abs(brick.degrees) < 0.5 and not brick.straightens
+    for photo in ("gravel.png", "grass.png"):  # no direction of lines to straighten
+        found = dominant_orientation([_read(SKIMAGE / photo)])
+        assert found.strength < MIN_STRENGTH and not found.straightens, (photo, found)
+
+
+def test_straightening_undoes_the_turn_with_source_texels_only():
+    brick = _read(TEXTURES / "brick_albedo.png")
+    source = _turned_tileable(brick, 0.0, 256)
+    turned = _turned_tileable(brick, 23.0, 256)
+    [straight] = straighten_maps([turned], [False], 23.0)
+    h, w = straight.shape[:2]
+    assert (w, h) == tuple(v - 6 for v in inscribed_size(256, 256, 23.0))
+    y0, x0 = (256 - h) // 2, (256 - w) // 2
+    # the texture turned and turned back: the source's own centre, softened only by two resamplings
+    assert np.abs(straight - source[y0:y0 + h, x0:x0 + w]).mean() < 0.03
+    assert straight.min() >= turned.min() and straight.max() <= turned.max()  # no black corners, no overshoot
+
+
+def _normals_of(height: np.ndarray) -> np.ndarray:
+    """Unit normals (x right, y up) of a height field whose rows run downwards."""
+    dy, dx = np.gradient(height.astype(np.float64))
+    n = np.stack([-dx, dy, np.ones_like(dx)], axis=-1)  # rows down: the upward slope is -dy
+    return (n / np.linalg.norm(n, axis=-1, keepdims=True)).astype(np.float32)
+
+
+def test_normal_vectors_turn_with_the_picture():
+    y, x = np.mgrid[0:256, 0:256].astype(np.float64)
+    a = math.radians(20.0)  # ridges turned 20 degrees counter-clockwise, as seen
+    height = 4.0 * np.sin(2 * np.pi * (x * math.cos(a) - y * math.sin(a)) / 24.0)
+    found = dominant_orientation([height[..., None]])
+    assert abs(found.degrees - 20.0) <= 0.3
+    grey, normals = straighten_maps([height[..., None].astype(np.float32), _normals_of(height)], [False, True],
+                                    found.degrees)
+    expected = _normals_of(grey[..., 0])
+    inner = (slice(4, -4), slice(4, -4))
+    assert np.abs(normals[inner] - expected[inner]).max() < 0.05
+    assert np.allclose(np.linalg.norm(normals, axis=-1), 1.0, atol=1e-4)
+
+
+def _turned_scene(folder: Path, degrees: float) -> Path:
+    """A ground plane whose UsdPreviewSurface reads the bundled brick colour map turned by ``degrees``."""
+    sys.path.insert(0, str(ROOT / "sample_assets"))
+    from usdkit import bind, new_layer, plane, preview_material
+
+    turned = _turned_tileable(_read(TEXTURES / "brick_albedo.png"), degrees, 256)
+    out = oiio.ImageBuf(np.ascontiguousarray(np.clip(turned, 0.0, 1.0)))
+    out.set_write_format(oiio.UINT8)
+    assert out.write(str(folder / "brick_turned.png"))
+    stage = new_layer(folder / "scene.usda", "World")
+    stage.DefinePrim("/World", "Xform")
+    bind(plane(stage, "/World/Ground", 4.0, 1.0, cells=1).GetPrim(), "/World/Looks/Brick")
+    preview_material(stage, "/World/Looks/Brick", {"diffuseColor": ("./brick_turned.png", "rgb", "sRGB")})
+    stage.Save()
+    return folder / "scene.usda"
+
+
+def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_turn(tmp_path, capsys, model_cache):
+    scene = _turned_scene(tmp_path, 17.0)
+    code = main(["process", str(scene), "--straighten", "--preset", "tiny", "--cache-dir", str(model_cache),
+                 "--json", "--report", str(tmp_path / "report.html")])
+    payload = json.loads(capsys.readouterr().out)
+    [stack] = payload["stacks"]
+    facts = stack["resampled"]["straightened"]
+    assert abs(facts["degrees"] - 17.0) <= 0.3, facts
+    w, h = facts["size"]
+    assert (w, h) == tuple(v - 6 for v in inscribed_size(256, 256, facts["degrees"]))
+    layer = Usd.Stage.Open(str(tmp_path / "scene.seamless.usda"))
+    prim = layer.GetPrimAtPath("/World/Looks/Brick/diffuseColorTex")
+    assert prim.GetAttribute("seamless:straightened").Get() == pytest.approx(facts["degrees"])
+    tile_path = Path(UsdShade.Shader(prim).GetInput("file").Get().resolvedPath)
+    tile = _read(tile_path)
+    # written straight: the courses run along the axes, at the source's texel size
+    assert abs(dominant_orientation([tile]).degrees) < 0.5
+    th, tw = tile.shape[:2]
+    assert stack["uv_scale"] == pytest.approx([256 / tw, 256 / th], rel=1e-6)
+    assert (code == 0) == (stack["status"] == "passed")
+    assert f"turned {facts['degrees']:g} degrees clockwise" in (tmp_path / "report.html").read_text()
