@@ -124,3 +124,8 @@ def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_tur
     assert stack["uv_scale"] == pytest.approx([256 / tw, 256 / th], rel=1e-6)
     assert (code == 0) == (stack["status"] == "passed")
     assert f"turned {facts['degrees']:g} degrees clockwise" in (tmp_path / "report.html").read_text()
+    # check judges the written tile against its source straightened the same way: one answer
+    main(["check", str(tmp_path / "scene.seamless.usda"), "--json"])
+    [item] = json.loads(capsys.readouterr().out)["items"]
+    assert item["verdict"]["passed"] == (stack["status"] == "passed")
+    assert item["verdict"]["strongest"] == pytest.approx(stack["verdict"]["strongest"], abs=0.05)

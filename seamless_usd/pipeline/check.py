@@ -133,14 +133,14 @@ def _judge_picture(path: Path) -> CheckItem:
     return item
 
 
-def _sources(stage, stack) -> tuple[list, tuple[float, float]] | None:
-    """The maps' recorded sources and UV scale, when every map is a tile this tool wrote into the USD
-    ``stage`` (None for a MaterialX document)."""
+def _sources(stage, stack) -> tuple[list, tuple[float, float], float] | None:
+    """The maps' recorded sources, UV scale and straightening turn (degrees), when every map is a tile this
+    tool wrote into the USD ``stage`` (None for a MaterialX document)."""
     if stage is None:
         return None
     from seamless_usd.authoring.schema import Schema, read_provenance
 
-    sources, scale = [], (1.0, 1.0)
+    sources, scale, turn = [], (1.0, 1.0), 0.0
     for m in stack.maps:
         prim = stage.GetPrimAtPath(m.node.strip("<>"))
         prov = read_provenance(prim) if prim else None
@@ -149,8 +149,8 @@ def _sources(stage, stack) -> tuple[list, tuple[float, float]] | None:
         if not resolved:
             return None
         sources.append(dataclasses.replace(m, resolved=resolved, asset=prov.source_asset))
-        scale = prov.uv_scale
-    return sources, scale
+        scale, turn = prov.uv_scale, prov.straightened
+    return sources, scale, turn
 
 
 def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
@@ -172,11 +172,18 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
         else:
             normals = [m.is_normal for m in stack.maps]
             tiles = list(load_stack_pixels(list(stack.maps)).values)
-            src_maps, uv = recorded
+            src_maps, uv, turn = recorded
             grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
             # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
             policy = WorkingResolution(max_size=max(grid))
-            sources = on_tile_grid(list(load_stack_pixels(src_maps, policy).values), normals, tiles[0].shape[:2], uv)
+            sources = list(load_stack_pixels(src_maps, policy).values)
+            if turn:  # made from the source straightened: judged against it straightened the same way
+                from seamless_usd.imaging.straighten import straighten_maps
+
+                h, w = sources[0].shape[:2]
+                sources = straighten_maps(sources, normals, turn)
+                uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
+            sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
             item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps]).as_dict()
             item.thumbnail = thumbnail(tiles[0])
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
