@@ -173,10 +173,6 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     policy = imaging.WorkingResolution(max_size=settings.max_size)
     pixels = imaging.load_stack_pixels(list(stack.maps), policy, max_pixels=settings.max_pixels)
     timings["load"] = time.perf_counter() - t0
-    straightened = None
-    if settings.straighten:  # from here on the straightened maps are the stack's source
-        pixels, straightened = _straightened(pixels, stack)
-        timings["straighten"] = time.perf_counter() - t0 - timings["load"]
 
     names = [f"m{i}" for i in range(len(stack.maps))]
     inputs = [
@@ -195,13 +191,20 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             for n, p, m in zip(names, inputs, stack.maps)
         ),
         {**dataclasses.asdict(config), "tile_size": settings.tile_size,
-         "refine": None if refine_config is None else dataclasses.asdict(refine_config)},
+         "refine": None if refine_config is None else dataclasses.asdict(refine_config),
+         **({"straighten": True} if settings.straighten else {})},
         settings.seed,
     )
     entry = StackCache(settings.cache_dir).entry(key)
     with entry.lock():
         cached = entry.load()
         if cached is None:
+            straightened = None
+            if settings.straighten:  # from here on the straightened maps are the stack's source
+                t1 = time.perf_counter()
+                pixels, straightened = _straightened(pixels, stack)
+                inputs = [dataclasses.replace(i, pixels=p) for i, p in zip(inputs, pixels.values)]
+                timings["straighten"] = time.perf_counter() - t1
             _drop_unusable_checkpoint(entry.checkpoint_dir, config.seeds)
             made = synthesis.make_tile(
                 inputs, config, refine_config=refine_config, tile_size=settings.tile_size, seed=settings.seed,
@@ -212,6 +215,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                 "q": _q_dict(made),  # of the written tile; empty when Q never ran
                 "timings": {**timings, **made.timings},
                 "uv_scale": list(made.uv_scale),
+                "straightened": straightened,  # the turn found (and made) before the tile, found once
                 "scale": {
                     "structure_px": round(made.structure_px, 1),
                     "working_factor": made.working_factor,
@@ -235,12 +239,15 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             entry.store(tiles, meta)
         else:
             tiles, meta = cached
+    straightened = meta.get("straightened")
     out_dir = Path(job.output_dir)
     if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
         again = load_judged(entry.root, out_dir, stack.id)
         if again is not None:
             return _outcome(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir,
                             straightened=straightened)
+        if straightened and straightened.get("size"):  # the tile was cut from the maps turned by the turn found
+            pixels = _turned(pixels, stack, straightened["degrees"])
     discriminator = tiles.pop("__discriminator__", None)
     captions = meta["scale"].get("level_pictures", [])
     levels = [(c, tiles.pop(f"__level{i}__")) for i, c in enumerate(captions) if f"__level{i}__" in tiles]
@@ -300,16 +307,23 @@ def _straightened(pixels, stack: TextureStack):
     """(pixels, facts): the stack's maps turned until their lines run along the axes, when they are turned
     (:func:`.imaging.orientation.dominant_orientation`), and what was found and done."""
     from seamless_usd.imaging.orientation import dominant_orientation
-    from seamless_usd.imaging.straighten import straighten_maps
 
     found = dominant_orientation(pixels.values)
     facts = {"orientation": found.as_dict(), "degrees": 0.0, "source_size": list(pixels.working_size)}
     if not found.straightens:
         return pixels, facts
-    values = straighten_maps(pixels.values, [m.is_normal for m in stack.maps], found.degrees)
+    turned = _turned(pixels, stack, found.degrees)
+    facts.update(degrees=found.degrees, size=list(turned.working_size))
+    return turned, facts
+
+
+def _turned(pixels, stack: TextureStack, degrees: float):
+    """``pixels`` with every map turned clockwise by ``degrees`` and cut to source texels (:mod:`.imaging.straighten`)."""
+    from seamless_usd.imaging.straighten import straighten_maps
+
+    values = straighten_maps(pixels.values, [m.is_normal for m in stack.maps], degrees)
     h, w = values[0].shape[:2]
-    facts.update(degrees=found.degrees, size=[w, h])
-    return dataclasses.replace(pixels, values=tuple(values), working_size=(w, h)), facts
+    return dataclasses.replace(pixels, values=tuple(values), working_size=(w, h))
 
 
 def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
