@@ -86,19 +86,26 @@ def to_uint8(a: np.ndarray) -> np.ndarray:
 def product_tile(pixels: np.ndarray, gan: bool, preset: str, seed: int) -> tuple[np.ndarray, dict]:
     """The product's tile of a one-map stack and how it was made."""
     from seamless_usd.synthesis import MapInput, get_preset, make_tile
-    from seamless_usd.synthesis.candidates import check_cut
+    from seamless_usd.synthesis.candidates import check_cut, check_levelled
 
     maps = [MapInput("color", pixels)]
     if gan:
         made = make_tile(maps, get_preset(preset), seed=seed)
         return made.maps["color"], {"kind": made.layout_kind, "gan": made.gan is not None,
                                     "candidates": made.lattice.get("candidates"),
-                                    "difference_worst": made.lattice.get("difference_worst")}
+                                    "difference_worst": made.lattice.get("difference_worst"),
+                                    **({"levelled": made.levelled} if made.levelled else {})}
     cut = check_cut(maps, True, seed)
+    levelled = None
+    if not cut.passes:  # as the product does: the same cuts of the photo with its light levelled
+        even = check_levelled(maps, seed)
+        if even is not None:
+            cut, levelled = even
     if cut.kind is None:
         raise ValueError("no tile can be cut from this photo")
     return cut.tiles["color"], {"kind": cut.kind, "gan": False, "candidates": cut.notes.get("candidates"),
-                                "difference_worst": cut.figures.get("difference_worst"), "cut_passes": cut.passes}
+                                "difference_worst": cut.figures.get("difference_worst"), "cut_passes": cut.passes,
+                                **({"levelled": levelled} if levelled else {})}
 
 
 def pictures(name: str, method: str, tile: np.ndarray, source: np.ndarray, folder: Path) -> None:
@@ -151,8 +158,14 @@ def run_photo(path: Path, a: argparse.Namespace, window: bool) -> dict:
             continue
         seconds = time.perf_counter() - t0
         # a tile of another size (img2texture crops) is judged against the source as it is: the verdict
-        # compares texel scales, not sizes
-        verdict = judge([tile], [source], [False], ["color"])
+        # compares texel scales, not sizes; a tile cut from the photo with its light levelled, against the
+        # levelled photo (as the product judges it)
+        against = source
+        if info.get("levelled"):
+            from seamless_usd.imaging.level import level_maps
+
+            against = level_maps([source], [False])[0][0]
+        verdict = judge([tile], [against], [False], ["color"])
         row[method] = {"passed": verdict.passed, "seamless": verdict.seamless, "faithful": verdict.faithful,
                        "strongest": round(verdict.strongest, 3), "margin": verdict.margin,
                        "reasons": verdict.reasons(2), "seconds": round(seconds, 2), "tile": list(tile.shape[:2]),
@@ -184,6 +197,8 @@ def markdown(rows: list[dict], a: argparse.Namespace, load: tuple[float, float])
             extra = f" {d['kind']}" if "kind" in d else ""
             if d.get("difference_worst") is not None:
                 extra += f" d={d['difference_worst']:.3f}"
+            if d.get("levelled"):
+                extra += f" levelled {100 * d['levelled']['moved']:.0f} %"
             cells.append(f"{'passed' if d['passed'] else 'not passed'} {d['strongest']:.2f}{extra}, {d['seconds']:.1f} s")
         name = r["photo"] + (" (window)" if r.get("window") else "")
         lines.append(f"| {name} | {r['size'][1]}x{r['size'][0]} | " + " | ".join(cells) + " |")

@@ -119,9 +119,10 @@ def test_a_stochastic_photo_is_mended_before_any_quilt_and_the_tries_are_recorde
 
 
 def test_a_mend_of_a_texture_with_long_lines_passes_only_where_its_joins_hide():
-    """Curved stripes: their mend ends stripes in its band and leaves a tone patch, and the verdict passes it;
-    a texture with long lines is gated as a quilt is (its joins must hide), so the mend is refused and the
-    quilt after it, whose stripes run unbroken, is the stack's cut."""
+    """Curved stripes: their mend ends stripes in its band and leaves a tone patch. A texture with long lines is
+    gated as a quilt is (its joins must hide), so the mend is refused and the quilt after it, whose stripes run
+    unbroken, is the stack's cut. The verdict alone passed the mend until it read broad steps of tone; it now
+    finds the tone patch's edge too."""
     stack = synthetic.stripes(160, 30, seed=7)
     maps = [MapInput(k, v[0], v[1]) for k, v in stack.items()]
     check = check_cut(maps, True, 0)
@@ -131,4 +132,5 @@ def test_a_mend_of_a_texture_with_long_lines_passes_only_where_its_joins_hide():
     field, figures = best_mend([m.pixels for m in maps], 3)
     mended = {m.name: m.pixels[field[..., 0], field[..., 1]] for m in maps}
     assert figures["difference_worst"] > 0.05  # the stripes' mend does not hide its joins
-    assert judge(list(mended.values()), [m.pixels for m in maps], [m.is_normal for m in maps], list(mended)).seamless
+    verdict = judge(list(mended.values()), [m.pixels for m in maps], [m.is_normal for m in maps], list(mended))
+    assert not verdict.seamless and {s.kind for s in verdict.seams} == {"tone"}

@@ -58,6 +58,7 @@ class MtlxNames:
     MODEL_HASH = "seamless_modelhash"
     TOOL_VERSION = "seamless_toolversion"
     STRAIGHTENED = "seamless_straightened"
+    LEVELLED = "seamless_levelled"
 
 
 def default_output_document(document_path: Path) -> Path:
@@ -142,6 +143,7 @@ def read_mtlx_provenance(node: mx.Node) -> Provenance | None:
         passed=node.getAttribute(MtlxNames.PASSED) == "true",
         verdict=node.getAttribute(MtlxNames.VERDICT),
         straightened=floats(MtlxNames.STRAIGHTENED, 1)[0],
+        levelled=floats(MtlxNames.LEVELLED, 1)[0],
     )
 
 
@@ -354,6 +356,7 @@ class _MtlxAuthor:
             (MtlxNames.MODEL_HASH, p.model_hash),
             (MtlxNames.TOOL_VERSION, p.tool_version),
             (MtlxNames.STRAIGHTENED, _fmt([float(p.straightened)]) if p.straightened else None),
+            (MtlxNames.LEVELLED, _fmt([float(p.levelled)]) if p.levelled else None),
         ):
             self._set(node, name, value, name)
         if len(self.result.plan) > before and prim_ref(node_path) not in self.result.edited_prims:

@@ -42,6 +42,7 @@ class Schema:
     MODEL_HASH = "seamless:modelHash"
     TOOL_VERSION = "seamless:toolVersion"
     STRAIGHTENED = "seamless:straightened"
+    LEVELLED = "seamless:levelled"
 
 
 # Property name -> (Sdf type, how a Provenance value becomes a USD value).
@@ -57,6 +58,7 @@ PROPERTIES = {
     Schema.MODEL_HASH: (Sdf.ValueTypeNames.String, lambda p: str(p.model_hash)),
     Schema.TOOL_VERSION: (Sdf.ValueTypeNames.String, lambda p: str(p.tool_version)),
     Schema.STRAIGHTENED: (Sdf.ValueTypeNames.Double, lambda p: float(p.straightened)),
+    Schema.LEVELLED: (Sdf.ValueTypeNames.Double, lambda p: float(p.levelled)),
 }
 
 
@@ -138,6 +140,7 @@ def read_provenance(prim: Usd.Prim) -> Provenance | None:
         passed=bool(get(Schema.PASSED, False)),
         verdict=str(get(Schema.VERDICT, "")),
         straightened=float(get(Schema.STRAIGHTENED, 0.0)),
+        levelled=float(get(Schema.LEVELLED, 0.0)),
     )
 
 

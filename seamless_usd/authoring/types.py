@@ -68,6 +68,7 @@ class Provenance:
     passed: bool = False  # the verdict: seamless at the wrap and inside, and faithful to the source
     verdict: str = ""  # the verdict in words: "seamless and faithful", or why not
     straightened: float = 0.0  # degrees the source was turned clockwise before tiling (0: not straightened)
+    levelled: float = 0.0  # the most a texel value was scaled by (share) to level the source's light (0: not levelled)
 
 
 @dataclass(frozen=True)

@@ -133,14 +133,15 @@ def _judge_picture(path: Path) -> CheckItem:
     return item
 
 
-def _sources(stage, stack) -> tuple[list, tuple[float, float], float] | None:
-    """The maps' recorded sources, UV scale and straightening turn (degrees), when every map is a tile this
-    tool wrote into the USD ``stage`` (None for a MaterialX document)."""
+def _sources(stage, stack) -> tuple[list, tuple[float, float], float, float] | None:
+    """The maps' recorded sources, UV scale, straightening turn (degrees) and levelling (the most a texel value was
+    scaled by; 0: not levelled), when every map is a tile this tool wrote into the USD ``stage`` (None for a
+    MaterialX document)."""
     if stage is None:
         return None
     from seamless_usd.authoring.schema import Schema, read_provenance
 
-    sources, scale, turn = [], (1.0, 1.0), 0.0
+    sources, scale, turn, levelled = [], (1.0, 1.0), 0.0, 0.0
     for m in stack.maps:
         prim = stage.GetPrimAtPath(m.node.strip("<>"))
         prov = read_provenance(prim) if prim else None
@@ -149,13 +150,13 @@ def _sources(stage, stack) -> tuple[list, tuple[float, float], float] | None:
         if not resolved:
             return None
         sources.append(dataclasses.replace(m, resolved=resolved, asset=prov.source_asset))
-        scale, turn = prov.uv_scale, prov.straightened
-    return sources, scale, turn
+        scale, turn, levelled = prov.uv_scale, prov.straightened, prov.levelled
+    return sources, scale, turn, levelled
 
 
 def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     from seamless_usd.imaging import WorkingResolution, load_stack_pixels
-    from seamless_usd.pipeline.stackjob import on_tile_grid
+    from seamless_usd.pipeline.madefrom import on_tile_grid
     from seamless_usd.verdict import judge
     from seamless_usd.verdict.alone import FileMap
 
@@ -172,7 +173,7 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
         else:
             normals = [m.is_normal for m in stack.maps]
             tiles = list(load_stack_pixels(list(stack.maps)).values)
-            src_maps, uv, turn = recorded
+            src_maps, uv, turn, levelled = recorded
             grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
             # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
             policy = WorkingResolution(max_size=max(grid))
@@ -183,6 +184,10 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
                 h, w = sources[0].shape[:2]
                 sources = straighten_maps(sources, normals, turn)
                 uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
+            if levelled:  # cut from the source with its light levelled: judged against it levelled the same way
+                from seamless_usd.imaging.level import level_maps
+
+                sources = level_maps(sources, normals)[0]
             sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
             item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps]).as_dict()
             item.thumbnail = thumbnail(tiles[0])

@@ -20,6 +20,7 @@ from seamless_usd.fileio import confine
 from seamless_usd.findings import Finding
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
+from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straightened as straighten_source
 from seamless_usd.naming import tile_filename
 from seamless_usd.pipeline.rerun import load_judged, save_judged
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
@@ -157,6 +158,7 @@ class StackOutcome:
             passed=self.passed,
             verdict="seamless and faithful" if self.passed else "; ".join(self.reasons()),
             straightened=float((self.resampled.get("straightened") or {}).get("degrees", 0.0)),
+            levelled=float((self.resampled.get("levelled") or {}).get("moved", 0.0)),
         )
         maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
         return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
@@ -202,7 +204,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             straightened = None
             if settings.straighten:  # from here on the straightened maps are the stack's source
                 t1 = time.perf_counter()
-                pixels, straightened = _straightened(pixels, stack)
+                pixels, straightened = straighten_source(pixels, [m.is_normal for m in stack.maps])
                 inputs = [dataclasses.replace(i, pixels=p) for i, p in zip(inputs, pixels.values)]
                 timings["straighten"] = time.perf_counter() - t1
             _drop_unusable_checkpoint(entry.checkpoint_dir, config.seeds)
@@ -216,6 +218,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                 "timings": {**timings, **made.timings},
                 "uv_scale": list(made.uv_scale),
                 "straightened": straightened,  # the turn found (and made) before the tile, found once
+                "levelled": made.levelled or None,  # the light levelled: the cut of the levelled maps passed
                 "scale": {
                     "structure_px": round(made.structure_px, 1),
                     "working_factor": made.working_factor,
@@ -239,15 +242,16 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             entry.store(tiles, meta)
         else:
             tiles, meta = cached
-    straightened = meta.get("straightened")
+    straightened, levelled = meta.get("straightened"), meta.get("levelled")
     out_dir = Path(job.output_dir)
+    normals = [m.is_normal for m in stack.maps]
     if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
         again = load_judged(entry.root, out_dir, stack.id)
         if again is not None:
-            return _outcome(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir,
-                            straightened=straightened)
-        if straightened and straightened.get("size"):  # the tile was cut from the maps turned by the turn found
-            pixels = _turned(pixels, stack, straightened["degrees"])
+            return _outcome(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir)
+        # the tile was cut from the maps turned by the turn found (made above when the tile was made)
+        pixels = as_made(pixels, normals, straightened, None)
+    pixels = as_made(pixels, normals, None, levelled)  # the tile's cut was made of the levelled maps
     discriminator = tiles.pop("__discriminator__", None)
     captions = meta["scale"].get("level_pictures", [])
     levels = [(c, tiles.pop(f"__level{i}__")) for i, c in enumerate(captions) if f"__level{i}__" in tiles]
@@ -278,7 +282,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     scale = dict(meta["scale"])
     t4 = time.perf_counter()
     # the written maps read against the sources once, for the verdict and the join figures alike
-    normals, assets = [m.is_normal for m in stack.maps], [m.asset for m in stack.maps]
+    assets = [m.asset for m in stack.maps]
     reading = Reading(written_values, normals, assets, Reference(sources, normals, assets, keep_index=False))
     verdict = judge_reading(reading)
     ratio = synthesis.written_lattice_ratio(scale.get("lattice") or {}, scale.get("layout"))
@@ -299,39 +303,17 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                                                 "source_metrics": o.source_metrics} for k, o in outcomes.items()},
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
     save_judged(entry.root, out_dir, stack.id, record, previews)
-    return _outcome(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir,
-                    straightened=straightened)
-
-
-def _straightened(pixels, stack: TextureStack):
-    """(pixels, facts): the stack's maps turned until their lines run along the axes, when they are turned
-    (:func:`.imaging.orientation.dominant_orientation`), and what was found and done."""
-    from seamless_usd.imaging.orientation import dominant_orientation
-
-    found = dominant_orientation(pixels.values)
-    facts = {"orientation": found.as_dict(), "degrees": 0.0, "source_size": list(pixels.working_size)}
-    if not found.straightens:
-        return pixels, facts
-    turned = _turned(pixels, stack, found.degrees)
-    facts.update(degrees=found.degrees, size=list(turned.working_size))
-    return turned, facts
-
-
-def _turned(pixels, stack: TextureStack, degrees: float):
-    """``pixels`` with every map turned clockwise by ``degrees`` and cut to source texels (:mod:`.imaging.straighten`)."""
-    from seamless_usd.imaging.straighten import straighten_maps
-
-    values = straighten_maps(pixels.values, [m.is_normal for m in stack.maps], degrees)
-    h, w = values[0].shape[:2]
-    return dataclasses.replace(pixels, values=tuple(values), working_size=(w, h))
+    return _outcome(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
 
 
 def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
-             out_dir: Path, straightened: dict | None = None) -> StackOutcome:
+             out_dir: Path) -> StackOutcome:
     """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`).
 
-    ``straightened``: the facts of :func:`_straightened`; the tile was made from the straightened maps, and its
-    UV scale, read against them, is brought back to the source's texel density."""
+    ``meta["straightened"]``: the tile was made from the straightened maps, and its UV scale, read against them,
+    is brought back to the source's texel density; ``meta["levelled"]``: from the maps with their light levelled
+    (:mod:`.madefrom`)."""
+    straightened = meta.get("straightened")
     maps = {tuple(json.loads(k)): MapOutcome(Path(o["path"]), dict(o["metrics"]), dict(o["source_metrics"]))
             for k, o in record["outputs"].items()}
     verdict = dict(record["verdict"])
@@ -342,10 +324,11 @@ def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Pr
         tile_size=tuple(int(v) for v in record["tile_size"]),
         working_size=tuple(int(v) for v in meta["scale"]["gan_working_size"]),
         resampled={**pixels.policy_record, "gan": dict(meta["scale"]),
-                   **({"straightened": straightened} if straightened else {})},
+                   **({"straightened": straightened} if straightened else {}),
+                   **({"levelled": meta["levelled"]} if meta.get("levelled") else {})},
         failing=list(verdict.get("failing", [])),
         verdict=verdict,
-        uv_scale=_source_uv_scale(meta["uv_scale"], straightened),
+        uv_scale=source_uv_scale(meta["uv_scale"], straightened),
         q=dict(meta["q"]),
         candidates=int(meta["candidates"]),
         timings=dict(record["timings"]),
@@ -358,29 +341,6 @@ def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Pr
         previews=previews,
         findings=list(pixels.findings),
     )
-
-
-def _source_uv_scale(uv_scale, straightened: dict | None) -> tuple[float, float]:
-    """The UV scale that keeps the source's texel density: ``uv_scale`` was read against the maps the tile was
-    made from, which straightening cut smaller than the source (its texels keep their size)."""
-    u, v = (float(x) for x in uv_scale)
-    if straightened and straightened.get("size"):
-        (sw, sh), (w, h) = straightened["source_size"], straightened["size"]
-        u, v = u * sw / w, v * sh / h
-    return (u, v)
-
-
-def on_tile_grid(sources: list[np.ndarray], normals: list[bool], tile_hw: tuple[int, int],
-                  uv_scale: tuple[float, float]) -> list[np.ndarray]:
-    """The sources resampled to the texel grid of the tile (the UV square holds ``uv_scale`` tiles), so
-    a tile at the GAN's working resolution is measured against a source at that resolution, not at full."""
-    from seamless_usd.synthesis import MapInput, downsample_maps
-
-    grid = (round(tile_hw[0] * uv_scale[1]), round(tile_hw[1] * uv_scale[0]))
-    if grid == tuple(sources[0].shape[:2]):
-        return sources
-    maps = [MapInput(f"m{i}", s, n) for i, (s, n) in enumerate(zip(sources, normals))]
-    return [m.pixels for m in downsample_maps(maps, grid)]
 
 
 def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:

@@ -312,6 +312,15 @@ def _straightened_text(facts: dict | None) -> str | None:
             f"{w} x {h}; the tile is written straight, so the pattern on the asset turns by that angle")
 
 
+def _levelled_text(facts: dict | None) -> str | None:
+    """How far levelling the source's light moved texel values (None when it was not levelled)."""
+    if not facts:
+        return None
+    return (f"the source's light was levelled before the cut (its texel values scaled by up to "
+            f"{100 * facts.get('moved', 0):.0f} %, {100 * facts.get('moved_mean', 0):.1f} % on average); the tile "
+            "is judged against the levelled source")
+
+
 def _facts(stack: StackReport) -> tuple[str, str]:
     uv = stack.uv_scale
     cover = f" (one tile covers {fmt(tuple(1.0 / v for v in uv))} of the source's UV square)" if uv else ""
@@ -323,6 +332,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
         "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size and stack.model_hash else None,  # GAN crop
         "Q (the discriminator's view)": _q_text(stack.q),
         "straightened": _straightened_text(stack.resampled.get("straightened")),
+        "levelled": _levelled_text(stack.resampled.get("levelled")),
         "same as": stack.duplicate_of,
         "result from": stack.origin or None,
     }

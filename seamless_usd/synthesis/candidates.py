@@ -18,6 +18,7 @@ from seamless_usd.verdict import Reading, Reference, judge_reading
 from .gan.seeds import fidelity_score
 from .grid import on_grid, resized
 from .lattice.cut import LATTICE_TARGET, Lattice, find_lattice, lattice_cut, lattice_ratio, lattice_tile_size
+from .lattice.lines import has_thin_lines
 from .lattice.mend import best_mend
 from .lattice.quilt import best_quilt, line_mask, line_sigma
 from .advice import QUILT_MAX_DIFFERENCE, WINDOW_MAX_DIFFERENCE, joins_hide
@@ -25,7 +26,7 @@ from .lattice.window import continues_itself, window_tile_size
 from .types import MapInput
 
 __all__ = ["GAN_MIN_SIDE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
-           "cut_candidates", "joins_hide", "gated", "MEND_TRIES"]
+           "cut_candidates", "joins_hide", "gated", "MEND_TRIES", "check_levelled"]
 
 #: The smallest side (px) SeamlessGAN is trained on (its minimum crop, ``discover.tokens.MIN_CROP``): a smaller
 #: stack gets the tile cut from its source only, passed or not.
@@ -99,7 +100,7 @@ def cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes
     if mend is not None:
         keys = ("band", "segment", "blocks", "join_mean", "join_worst", "difference_worst")
         overlap = mend[1]["band"][1]
-        lines = line_mask(pixels, line_sigma((overlap, overlap))) is not None
+        lines = line_mask(pixels, line_sigma((overlap, overlap))) is not None or has_thin_lines(pixels)
         yield "mend", mend[0], {**{k: mend[1][k] for k in keys}, "lines": lines}
     quilt = best_quilt(pixels, (H, W), QUILT_CELLS, QUILT_TRIES, seed)
     if quilt is not None:
@@ -109,7 +110,8 @@ def cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes
 
 def gated(kind: str | None, figures: dict) -> bool:
     """Whether a cut of ``kind`` passes only where its joins hide (:func:`joins_hide`), not on the verdict alone:
-    a quilt, and a mend of a texture with long lines (``figures["lines"]``: joints, plank gaps, stripes). A mend
+    a quilt, and a mend of a texture with long lines (``figures["lines"]``: joints, plank gaps, stripes, as broad
+    as :func:`.lattice.quilt.line_mask` sees them or as thin as :func:`.lattice.lines.has_thin_lines` does). A mend
     of a texture without them has no such gate: on real photos its worst difference does not tell the seamless
     from the seamed (bark and grass mends seamless at 0.37, a veneer's seamed at 0.27; docs/decisions.md,
     "Keep and mend")."""
@@ -172,3 +174,20 @@ def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
     if len(tried) > 1:
         notes["candidates"] = tried
     return best
+
+
+def check_levelled(maps: list[MapInput], seed: int = 0) -> tuple[CutCheck, dict] | None:
+    """(cut, facts) of the cuts made of ``maps`` with their light levelled (:func:`.imaging.level.level_maps`) when
+    one passes, judged against the levelled maps; None when none does, or the light is already even.
+
+    Copies of a photo lit unevenly meet in a step of tone that no cut hides (the rusty panel, a stone wall, a
+    bowl of chopped tomatoes: ``docs/decisions.md``, "Levelling a photo's light"); levelled, every texel keeps
+    its place and the cut is still made of copies, so the verdict judges its joins as any other cut's."""
+    from seamless_usd.imaging.level import level_maps
+
+    values, facts = level_maps([m.pixels for m in maps], [m.is_normal for m in maps])
+    if not facts["moved"]:
+        return None
+    even = [dataclasses.replace(m, pixels=v) for m, v in zip(maps, values)]
+    cut = check_cut(even, True, seed)
+    return (cut, facts) if cut.passes else None

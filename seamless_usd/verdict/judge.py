@@ -37,6 +37,7 @@ from .lines import Seam, runs, seams_from_scores
 from .prepare import WORK_SIDE, joint, map_weights, to_working
 from .reference import Reading, Reference
 from .tolerance import faithfulness
+from .tone import tone_steps
 
 __all__ = ["SEAM_MARGIN", "SELF_MARGIN", "LENGTH", "STEP", "Verdict", "judge", "judge_reading"]
 
@@ -116,6 +117,17 @@ def _copied(reading: Reading) -> tuple[list[Seam], float] | None:
     return seams, strongest
 
 
+def _tone_seams(reading: Reading) -> list[Seam]:
+    """Broad tone steps of a tile made of its source's copies (:mod:`.tone`), the maps together. Only there: away
+    from its joins such a tile's strip steps are the source's own, so the source's strongest is a tight
+    reference; a tile of new pixels (noise drawn again, the GAN's) has strip steps of its own, whose strongest
+    reads 1.1-1.75 times the source's on seamless noise (``docs/decisions.md``, "A broad tone step rule")."""
+    factor = min(1.0, WORK_SIDE / max(reading.size))
+    weights, reference = reading.reference.tone(factor)
+    tile = joint(to_working(reading.maps, factor, periodic=True), weights)
+    return tone_steps(tile, reference, factor, reading.size)[0]
+
+
 def _scores(clf, img: np.ndarray, periodic: bool) -> dict[str, np.ndarray]:
     return {axis: clf.scores(img, axis, periodic) for axis in ("x", "y")}
 
@@ -191,6 +203,7 @@ def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> 
         copied = _copied(reading)
         if copied is not None:
             seams, strongest = copied
+            seams = sorted(seams + _tone_seams(reading), key=lambda x: -x.figure)
             verdict = Verdict(not seams, True, seams, strongest, COPY_THRESHOLD, "source", "copies", size)
             if fidelity:
                 verdict.figures, verdict.tolerances, verdict.failing = faithfulness(

@@ -28,7 +28,8 @@ class Seam:
     over columns ``start`` to ``end``. ``figure`` is how far the run scores above the strongest run of
     the reference's own lines (classifier units; above the verdict's margin is a seam). ``kind``
     ``"ghost"``: not a line but a band centred there, where the tile's detail fades against its source's
-    (:mod:`.ghosts`: a crossfade)."""
+    (:mod:`.ghosts`: a crossfade); ``"tone"``: a broad step of tone along the line, larger than any in the source
+    (:mod:`.tone`; its figure is the share above the source's strongest, less the margin)."""
 
     axis: str
     position: int
@@ -36,7 +37,7 @@ class Seam:
     end: int
     figure: float
     map: str = "stack"  # the map it was found in, or "stack" for the maps together
-    kind: str = "line"  # "line", or "ghost": a ghosted band centred on the line
+    kind: str = "line"  # "line"; "ghost": a ghosted band centred on the line; "tone": a broad step of tone
 
     def where(self, size: tuple[int, int]) -> str:
         """Words for the report: ``"vertical line at x=256 (the centre), rows 0-511"``."""
@@ -45,6 +46,8 @@ class Seam:
         line = "vertical line at x" if self.axis == "x" else "horizontal line at y"
         if self.kind == "ghost":
             line = "ghosted band (detail fading) around " + line
+        elif self.kind == "tone":
+            line = "step of tone along " + line
         place = " (the wrap)" if self.position in (0, n) else " (the centre)" if abs(self.position - n / 2) <= 2 else ""
         span = "rows" if self.axis == "x" else "columns"
         return f"{line}={self.position}{place}, {span} {self.start}-{self.end}"

@@ -14,7 +14,8 @@ from functools import cached_property
 import numpy as np
 
 from .copies import INFER, SourceIndex, copy_origins, step_unit
-from .prepare import joined, prepare_maps
+from .prepare import joint, joined, map_weights, prepare_maps, to_working
+from .tone import tone_reference
 
 __all__ = ["Reference", "Reading"]
 
@@ -38,6 +39,7 @@ class Reference:
         # for a reference read against a single tile
         self.keep_index = keep_index
         self._units: dict[int | None, dict[int, float]] = {}
+        self._tone: dict[float, tuple[list[float], dict[str, float]]] = {}
 
     @cached_property
     def index(self) -> SourceIndex:
@@ -51,6 +53,16 @@ class Reference:
             source = self.joint if which is None else np.ascontiguousarray(self.maps[which])
             self._units[which] = {axis: step_unit(source, axis) for axis in (0, 1)}
         return self._units[which]
+
+
+    def tone(self, factor: float) -> tuple[list[float], dict[str, float]]:
+        """At the working resolution ``factor``: each map's weight in the joint image (:func:`.prepare.map_weights`)
+        and the source's strongest strip steps (:func:`.tone.tone_reference`) of that image."""
+        if factor not in self._tone:
+            working = to_working(self.maps, factor, periodic=False)
+            weights = map_weights(working)
+            self._tone[factor] = (weights, tone_reference(joint(working, weights)))
+        return self._tone[factor]
 
 
 class Reading:

@@ -40,6 +40,7 @@ import numpy as np
 from ..refinement.refine import spread
 from ..scale import box_downsample
 from .cut import CUT_MARGIN, _sample
+from .lines import long_share, principal_tone
 
 __all__ = ["QUILT_OVERLAP", "LINE_SHARE", "LINE_LONG", "line_sigma", "line_mask", "quilt_field", "best_quilt",
            "quilt_order"]
@@ -100,17 +101,7 @@ def line_mask(maps: list[np.ndarray], sigma: float) -> np.ndarray | None:
     pieces that span a quarter of the map; short strokes of grain or pores do not make lines."""
     from scipy import ndimage
 
-    parts = [(np.asarray(m, dtype=np.float32) / spread(m)).reshape(*m.shape[:2], -1) for m in maps]
-    H, W = parts[0].shape[:2]
-    step = max(1, round(math.sqrt(H * W / 65536)))
-    flat = np.concatenate([p[::step, ::step].reshape(-1, p.shape[-1]) for p in parts], -1)
-    axis = np.ones(1, dtype=np.float32)
-    if flat.shape[-1] > 1:  # the polarity of the axis does not matter: both are tried below
-        axis = np.linalg.eigh(np.cov(flat - flat.mean(0), rowvar=False))[1][:, -1].astype(np.float32)
-    u, at = np.zeros((H, W), dtype=np.float32), 0
-    for p in parts:  # one map at a time: a 4K stack never holds its joint features
-        u += p @ axis[at: at + p.shape[-1]]
-        at += p.shape[-1]
+    u = principal_tone(maps)
     u = ndimage.gaussian_filter(u, sigma / 8, mode="reflect")  # the lines' edges smooth, not the grain's noise
     hp = u - ndimage.gaussian_filter(u, sigma, mode="reflect")
     sample = hp[:: max(1, hp.shape[0] // 512), :: max(1, hp.shape[1] // 512)]
@@ -118,12 +109,7 @@ def line_mask(maps: list[np.ndarray], sigma: float) -> np.ndarray | None:
     best, best_share = None, LINE_LONG
     for mask in (hp < np.quantile(sample, LINE_SHARE), hp > np.quantile(sample, 1 - LINE_SHARE)):
         mask = ndimage.binary_closing(ndimage.binary_opening(mask, iterations=r), iterations=r)
-        labels, count = ndimage.label(mask, structure=np.ones((3, 3)))
-        if count == 0:
-            continue
-        spans = np.array([max(sl[0].stop - sl[0].start, sl[1].stop - sl[1].start) for sl in ndimage.find_objects(labels)])
-        sizes = np.bincount(labels.ravel())[1:]
-        share = float(sizes[spans >= max(H, W) / 4].sum()) / max(1, int(mask.sum()))
+        share = long_share(mask)
         if share >= best_share:
             best, best_share = mask, share
     # with the lines' soft edges, so a block that keeps its line keeps all of it

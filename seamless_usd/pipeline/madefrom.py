@@ -1,0 +1,74 @@
+"""The source as a stack's tile was made from it: turned until its lines run along the axes (``--straighten``,
+:mod:`.imaging.straighten`), and with its light levelled (:mod:`.imaging.level`) when the cut made of the
+levelled maps is the one that passed. The tile is judged against the source made so, in ``process`` as in
+``check``, and its UV scale is brought back to the source's texel density.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+__all__ = ["straightened", "turned", "levelled", "as_made", "source_uv_scale", "on_tile_grid"]
+
+
+def straightened(pixels, normals: list[bool]):
+    """(pixels, facts): the stack's maps turned until their lines run along the axes, when they are turned
+    (:func:`.imaging.orientation.dominant_orientation`), and what was found and done."""
+    from seamless_usd.imaging.orientation import dominant_orientation
+
+    found = dominant_orientation(pixels.values)
+    facts = {"orientation": found.as_dict(), "degrees": 0.0, "source_size": list(pixels.working_size)}
+    if not found.straightens:
+        return pixels, facts
+    done = turned(pixels, normals, found.degrees)
+    facts.update(degrees=found.degrees, size=list(done.working_size))
+    return done, facts
+
+
+def turned(pixels, normals: list[bool], degrees: float):
+    """``pixels`` with every map turned clockwise by ``degrees`` and cut to source texels (:mod:`.imaging.straighten`)."""
+    from seamless_usd.imaging.straighten import straighten_maps
+
+    values = straighten_maps(pixels.values, normals, degrees)
+    h, w = values[0].shape[:2]
+    return dataclasses.replace(pixels, values=tuple(values), working_size=(w, h))
+
+
+def levelled(pixels, normals: list[bool]):
+    """``pixels`` with every map's light levelled as the tile's cut levelled it (:func:`.imaging.level.level_maps`)."""
+    from seamless_usd.imaging.level import level_maps
+
+    return dataclasses.replace(pixels, values=tuple(level_maps(pixels.values, normals)[0]))
+
+
+def as_made(pixels, normals: list[bool], straightened_facts: dict | None, levelled_facts: dict | None):
+    """``pixels`` made as the tile's source was: turned by the recorded turn, then levelled, as recorded."""
+    if straightened_facts and straightened_facts.get("size"):
+        pixels = turned(pixels, normals, straightened_facts["degrees"])
+    if levelled_facts:
+        pixels = levelled(pixels, normals)
+    return pixels
+
+
+def source_uv_scale(uv_scale, straightened_facts: dict | None) -> tuple[float, float]:
+    """The UV scale that keeps the source's texel density: ``uv_scale`` was read against the maps the tile was
+    made from, which straightening cut smaller than the source (its texels keep their size)."""
+    u, v = (float(x) for x in uv_scale)
+    if straightened_facts and straightened_facts.get("size"):
+        (sw, sh), (w, h) = straightened_facts["source_size"], straightened_facts["size"]
+        u, v = u * sw / w, v * sh / h
+    return (u, v)
+
+
+def on_tile_grid(sources: list[np.ndarray], normals: list[bool], tile_hw: tuple[int, int],
+                 uv_scale: tuple[float, float]) -> list[np.ndarray]:
+    """The sources resampled to the texel grid of the tile (the UV square holds ``uv_scale`` tiles), so
+    a tile at the GAN's working resolution is measured against a source at that resolution, not at full."""
+    from seamless_usd.synthesis import MapInput, downsample_maps
+
+    grid = (round(tile_hw[0] * uv_scale[1]), round(tile_hw[1] * uv_scale[0]))
+    if grid == tuple(sources[0].shape[:2]):
+        return sources
+    maps = [MapInput(f"m{i}", s, n) for i, (s, n) in enumerate(zip(sources, normals))]
+    return [m.pixels for m in downsample_maps(maps, grid)]
