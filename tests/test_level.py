@@ -3,11 +3,9 @@ the thin joints that gate a mend, and ``process`` end to end on an unevenly lit 
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
-import OpenImageIO as oiio
 import pytest
 from PIL import Image
 from pxr import Usd, UsdShade
@@ -21,8 +19,8 @@ from seamless_usd.synthesis.lattice.mend import best_mend
 from seamless_usd.synthesis.lattice.quilt import line_mask, line_sigma
 from seamless_usd.verdict import judge
 from seamless_usd_cli.main import main
+from scenes import ground_scene
 
-ROOT = Path(__file__).resolve().parents[1]
 SKIMAGE = Path(__import__("skimage").__file__).parent / "data"
 
 
@@ -108,19 +106,8 @@ def test_joints_one_texel_wide_are_long_lines_and_grain_is_not():
 
 def _lit_scene(folder: Path) -> Path:
     """A ground plane whose UsdPreviewSurface reads a gravel photo lit unevenly (8-bit sRGB PNG)."""
-    sys.path.insert(0, str(ROOT / "sample_assets"))
-    from usdkit import bind, new_layer, plane, preview_material
-
     lit = _lit(_photo("gravel.png", 192), 0.75, 1.25)
-    out = oiio.ImageBuf(np.ascontiguousarray((lit + 1) / 2))
-    out.set_write_format(oiio.UINT8)
-    assert out.write(str(folder / "gravel_lit.png"))
-    stage = new_layer(folder / "scene.usda", "World")
-    stage.DefinePrim("/World", "Xform")
-    bind(plane(stage, "/World/Ground", 4.0, 1.0, cells=1).GetPrim(), "/World/Looks/Gravel")
-    preview_material(stage, "/World/Looks/Gravel", {"diffuseColor": ("./gravel_lit.png", "rgb", "sRGB")})
-    stage.Save()
-    return folder / "scene.usda"
+    return ground_scene(folder, (lit + 1) / 2, "gravel_lit.png", "Gravel")
 
 
 def test_process_levels_an_unevenly_lit_photo_records_it_and_check_agrees(tmp_path, capsys, model_cache):

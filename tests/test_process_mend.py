@@ -11,28 +11,17 @@ import OpenImageIO as oiio
 from pxr import Usd, UsdShade
 
 from seamless_usd_cli.main import main
+from scenes import ground_scene
 
-ROOT = Path(__file__).resolve().parents[1]
 SKIMAGE = Path(__import__("skimage").__file__).parent / "data"
 
 
 def _scene(folder: Path) -> Path:
     """A ground plane whose UsdPreviewSurface reads a plain 256 px window of scikit-image's gravel photo (CC0)."""
-    sys.path.insert(0, str(ROOT / "sample_assets"))
-    from usdkit import bind, new_layer, plane, preview_material
-
     buf = oiio.ImageBuf(str(SKIMAGE / "gravel.png"))
     window = buf.get_pixels(oiio.UINT8)[30:286, 40:296]
-    grey = np.repeat(window[..., :1], 3, axis=2)
-    out = oiio.ImageBuf(oiio.ImageSpec(256, 256, 3, oiio.UINT8))
-    out.set_pixels(oiio.ROI(0, 256, 0, 256, 0, 1, 0, 3), grey)
-    assert out.write(str(folder / "gravel.png"))
-    stage = new_layer(folder / "scene.usda", "World")
-    stage.DefinePrim("/World", "Xform")
-    bind(plane(stage, "/World/Ground", 4.0, 1.0, cells=1).GetPrim(), "/World/Looks/Gravel")
-    preview_material(stage, "/World/Looks/Gravel", {"diffuseColor": ("./gravel.png", "rgb", "sRGB")})
-    stage.Save()
-    return folder / "scene.usda"
+    grey = np.repeat(window[..., :1], 3, axis=2).astype(np.float32) / 255.0
+    return ground_scene(folder, grey, "gravel.png", "Gravel")
 
 
 def test_a_gravel_photo_is_mended_and_passed_without_training(tmp_path, capsys):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,7 @@ from pxr import Usd, UsdShade
 from seamless_usd.imaging.orientation import MIN_STRENGTH, dominant_orientation
 from seamless_usd.imaging.straighten import inscribed_size, straighten_maps
 from seamless_usd_cli.main import main
+from scenes import ground_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 TEXTURES = ROOT / "sample_assets" / "textures"
@@ -88,19 +88,8 @@ def test_normal_vectors_turn_with_the_picture():
 
 def _turned_scene(folder: Path, degrees: float) -> Path:
     """A ground plane whose UsdPreviewSurface reads the bundled brick colour map turned by ``degrees``."""
-    sys.path.insert(0, str(ROOT / "sample_assets"))
-    from usdkit import bind, new_layer, plane, preview_material
-
     turned = _turned_tileable(_read(TEXTURES / "brick_albedo.png"), degrees, 256)
-    out = oiio.ImageBuf(np.ascontiguousarray(np.clip(turned, 0.0, 1.0)))
-    out.set_write_format(oiio.UINT8)
-    assert out.write(str(folder / "brick_turned.png"))
-    stage = new_layer(folder / "scene.usda", "World")
-    stage.DefinePrim("/World", "Xform")
-    bind(plane(stage, "/World/Ground", 4.0, 1.0, cells=1).GetPrim(), "/World/Looks/Brick")
-    preview_material(stage, "/World/Looks/Brick", {"diffuseColor": ("./brick_turned.png", "rgb", "sRGB")})
-    stage.Save()
-    return folder / "scene.usda"
+    return ground_scene(folder, turned, "brick_turned.png", "Brick")
 
 
 def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_turn(tmp_path, capsys, model_cache):

@@ -100,8 +100,9 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
        (:func:`.candidates.check_cut`: whole lattice periods, one window, or a quilt): when the verdict passes
        it on the source's grid, it is written and no GAN is trained (the GAN earns its time only where no
        cut passes). When none passes, the same cuts of the maps with their light levelled
-       (:func:`.candidates.check_levelled`): one that passes is written, ``MadeTile.levelled`` saying so. With ``refine_config``, a stack smaller than GAN_MIN_SIDE gets its cut, passed or not (and
-       an error when none can be cut). Otherwise:
+       (:func:`.candidates.check_levelled`): one that passes is written, ``MadeTile.levelled`` saying so.
+       With ``refine_config``, a stack smaller than GAN_MIN_SIDE gets its cut, passed or not (and an error
+       when none can be cut). Otherwise:
     1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there,
        ``config.seeds`` seeds side by side (:mod:`.seeds`).
     2. Sample: the crop search with the discriminator's Q (``tile_size="source"``: crops of half the

@@ -7,7 +7,8 @@ USD provenance and ``seamless-usd check``):
   interior line), is a join the texture would not make, for the maps together and for each map. A
   tile made of the source's own texels (refined, lattice-cut, or a window used as its tile, with or
   without a blended band at its joins) is judged by the continuation error at its joins
-  (:mod:`.copies`); any other tile (the GAN's own, a crossfade) by a
+  (:mod:`.copies`), and by its broad steps of tone against the source's strongest (:mod:`.tone`: copies of a
+  photo lit unevenly); any other tile (the GAN's own, a crossfade) by a
   classifier fitted on the source's own juxtapositions (:mod:`.classifier`): a run of 64
   working-resolution px scoring more than :data:`SEAM_MARGIN` above the strongest run of the source's
   own lines is a seam;

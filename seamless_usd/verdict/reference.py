@@ -54,7 +54,6 @@ class Reference:
             self._units[which] = {axis: step_unit(source, axis) for axis in (0, 1)}
         return self._units[which]
 
-
     def tone(self, factor: float) -> tuple[list[float], dict[str, float]]:
         """At the working resolution ``factor``: each map's weight in the joint image (:func:`.prepare.map_weights`)
         and the source's strongest strip steps (:func:`.tone.tone_reference`) of that image."""
