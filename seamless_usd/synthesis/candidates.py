@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from seamless_usd.metrics.structure import STRUCTURE_TARGET, structure_figures
-from seamless_usd.verdict import Reading, Reference, judge_reading
+from seamless_usd.verdict import Reading, Reference, judge, judge_reading
 
 from .gan.seeds import fidelity_score
 from .grid import on_grid, resized
@@ -26,7 +26,7 @@ from .lattice.window import continues_itself, window_tile_size
 from .types import MapInput
 
 __all__ = ["GAN_MIN_SIDE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
-           "cut_candidates", "joins_hide", "gated", "MEND_TRIES", "check_levelled"]
+           "cut_candidates", "joins_hide", "gated", "MEND_TRIES", "check_levelled", "passes_at_full_resolution"]
 
 #: The smallest side (px) SeamlessGAN is trained on (its minimum crop, ``discover.tokens.MIN_CROP``): a smaller
 #: stack gets the tile cut from its source only, passed or not.
@@ -65,6 +65,14 @@ def judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice,
     verdict = judge_reading(Reading([tiles[m.name] for m in maps], reference.normals, reference.names, reference))
     score = max(score, verdict.strongest / verdict.margin)
     return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
+
+
+def passes_at_full_resolution(tiles: dict[str, np.ndarray], maps: list[MapInput], ratio: float | None) -> bool:
+    """Whether a candidate tile passes as :func:`judged` decides, with the verdict read at full resolution (a
+    tile of copies at odd offsets is no longer copies on a halved grid, see :func:`check_cut`)."""
+    verdict = judge([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
+                    [m.name for m in maps])
+    return bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET))
 
 
 def cut_candidates(maps: list[MapInput], lattice: Lattice, H: int, W: int, notes: dict, seed: int):
@@ -148,7 +156,12 @@ class CutCheck:
 def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
     """Find the stack's lattice and, with ``cut``, make the tiles cut from its source (:func:`cut_candidates`) one
     after another and judge each: the first that passes is the stack's cut, else the one that scores best.
-    ``notes["candidates"]`` records each one tried, with whether it passed and its score."""
+    Each is scored on the source's grid halved to SCORE_SIDE; where that grid is halved, whether it passes is
+    the verdict's at full resolution, as the written tile's will be: a cut whose copies lie at odd offsets is
+    no longer copies once halved, and a 1536 px cobblestone mend that passes at full resolution read twelve
+    seams on its 768 px grid (the cliff's passed there and shows a step of tone at full resolution).
+    ``notes["candidates"]`` records each one tried, with whether it passed (``passes_on_grid``: the halved
+    grid's verdict, where it was read) and its score."""
     H, W = maps[0].pixels.shape[:2]
     lattice = find_lattice([m.pixels for m in maps])
     notes = lattice.as_dict()
@@ -166,12 +179,17 @@ def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
         check.tiles = {m.name: np.ascontiguousarray(m.pixels[field_[..., 0], field_[..., 1]]) for m in maps}
         check.score, check.verdict_passes, check.ratio = judged(
             on_grid(check.tiles, maps, (1 / halve, 1 / halve)), grid, grid_lattice, reference)
-        tried.append({"kind": kind, "passes": check.passes, "score": round(check.score, 3)})
+        on_grid_passes = None
+        if halve > 1:  # the verdict that decides is the full resolution's, as the written tile's will be
+            on_grid_passes = check.verdict_passes
+            check.verdict_passes = passes_at_full_resolution(check.tiles, maps, check.ratio)
+        tried.append({"kind": kind, "passes": check.passes, "score": round(check.score, 3),
+                      **({} if on_grid_passes is None else {"passes_on_grid": on_grid_passes})})
         if best.kind is None or (not check.passes, check.score) < (not best.passes, best.score):
             best = check
         if check.passes:
             break
-    if len(tried) > 1:
+    if len(tried) > 1 or halve > 1:
         notes["candidates"] = tried
     return best
 

@@ -18,13 +18,12 @@ import numpy as np
 import torch
 
 from seamless_usd.metrics import scale_ratio
-from seamless_usd.verdict import judge as verdict_of
 
 from seamless_usd.errors import SeamlessUsdError
 
 from .advice import QUILT_MAX_DIFFERENCE, joins_hide, structure_advice, written_lattice_ratio
 from .candidates import (GAN_MIN_SIDE, QUILT_CELLS, QUILT_TRIES, SCORE_SIDE, CutCheck, check_cut, check_levelled, gated,
-                         judged)
+                         judged, passes_at_full_resolution)
 from .config import SynthesisConfig
 from .gan.data import effective_k
 from .gan.sample import judge, sample
@@ -237,7 +236,7 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, kee
     training) and keep the cut when it wins: the candidate that passes (the verdict: no seam, fidelity inside
     the source's tolerances; for a stack that repeats, the lattice ratio) before one that does not, then the
     lower score (see :func:`.candidates.judged`). The figures are taken on the source's grid, halved down to
-    SCORE_SIDE."""
+    SCORE_SIDE; whether a candidate passes, at full resolution."""
     H, W = made.grid_size
     made.lattice = dict(cut.notes)
     if not cut.lattice.found and cut.kind is None:
@@ -245,6 +244,8 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, kee
     halve = cut.halve
     current, current_passes, current_ratio = judged(on_grid(made.maps, maps, (1 / halve, 1 / halve)), cut.grid,
                                                     cut.grid_lattice, cut.reference)
+    if halve > 1:  # scored on the halved grid, passed or not at full resolution (as the cut: check_cut)
+        current_passes = passes_at_full_resolution(made.maps, maps, current_ratio)
     kind = made.layout_kind
     made.lattice.update({f"q_passed_{kind}": made.q_passed, f"passes_{kind}": current_passes,
                          f"score_{kind}": round(current, 3)})
@@ -257,13 +258,9 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, kee
     q = judge(model, on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
     wins = (not passes, score) < (not current_passes, current)
     if wins and gated(cut_kind, figures) and not joins_hide(figures):
-        # written, it would be judged at full resolution: a quilt whose joins do not hide is written only
-        # where that verdict sees them, never as a tile that passes (on a grid not halved, it was so judged)
-        verdict_passes = cut.verdict_passes
-        if halve > 1:
-            verdict_passes = verdict_of([tiles[m.name] for m in maps], [m.pixels for m in maps],
-                                        [m.is_normal for m in maps], [m.name for m in maps]).passed
-        if verdict_passes:
+        # a quilt whose joins do not hide is written only where the verdict sees them, never as a tile that
+        # passes (the cut's verdict is the full resolution's, as the written tile's: .candidates.check_cut)
+        if cut.verdict_passes:
             wins = False
             made.lattice[f"{cut_kind}_refused"] = {"difference_worst": figures["difference_worst"],
                                                    "most": QUILT_MAX_DIFFERENCE}
