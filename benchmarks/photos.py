@@ -86,7 +86,7 @@ def to_uint8(a: np.ndarray) -> np.ndarray:
 def product_tile(pixels: np.ndarray, gan: bool, preset: str, seed: int) -> tuple[np.ndarray, dict]:
     """The product's tile of a one-map stack and how it was made."""
     from seamless_usd.synthesis import MapInput, get_preset, make_tile
-    from seamless_usd.synthesis.candidates import check_cut, check_levelled
+    from seamless_usd.synthesis.candidates import best_cut
 
     maps = [MapInput("color", pixels)]
     if gan:
@@ -95,12 +95,7 @@ def product_tile(pixels: np.ndarray, gan: bool, preset: str, seed: int) -> tuple
                                     "candidates": made.lattice.get("candidates"),
                                     "difference_worst": made.lattice.get("difference_worst"),
                                     **({"levelled": made.levelled} if made.levelled else {})}
-    cut = check_cut(maps, True, seed)
-    levelled = None
-    if not cut.passes:  # as the product does: the same cuts of the photo with its light levelled
-        even = check_levelled(maps, seed)
-        if even is not None:
-            cut, levelled = even
+    cut, levelled = best_cut(maps, True, seed)  # as the product does: levelled where no cut of the photo passes
     if cut.kind is None:
         raise ValueError("no tile can be cut from this photo")
     return cut.tiles["color"], {"kind": cut.kind, "gan": False, "candidates": cut.notes.get("candidates"),

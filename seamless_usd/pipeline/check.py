@@ -156,7 +156,7 @@ def _sources(stage, stack) -> tuple[list, tuple[float, float], float, float] | N
 
 def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     from seamless_usd.imaging import WorkingResolution, load_stack_pixels
-    from seamless_usd.pipeline.madefrom import on_tile_grid
+    from seamless_usd.pipeline.madefrom import made_values, on_tile_grid
     from seamless_usd.verdict import judge
     from seamless_usd.verdict.alone import FileMap
 
@@ -178,16 +178,10 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
             # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
             policy = WorkingResolution(max_size=max(grid))
             sources = list(load_stack_pixels(src_maps, policy).values)
-            if turn:  # made from the source straightened: judged against it straightened the same way
-                from seamless_usd.imaging.straighten import straighten_maps
-
-                h, w = sources[0].shape[:2]
-                sources = straighten_maps(sources, normals, turn)
-                uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
-            if levelled:  # cut from the source with its light levelled: judged against it levelled the same way
-                from seamless_usd.imaging.level import level_maps
-
-                sources = level_maps(sources, normals)[0]
+            # made from the source straightened and levelled as recorded: judged against it made the same way
+            h, w = sources[0].shape[:2]
+            sources = made_values(sources, normals, turn, bool(levelled))
+            uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
             sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
             item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps]).as_dict()
             item.thumbnail = thumbnail(tiles[0])

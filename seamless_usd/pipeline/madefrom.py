@@ -9,10 +9,10 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["straightened", "turned", "levelled", "as_made", "source_uv_scale", "on_tile_grid"]
+__all__ = ["straighten", "made_values", "as_made", "source_uv_scale", "on_tile_grid"]
 
 
-def straightened(pixels, normals: list[bool]):
+def straighten(pixels, normals: list[bool]):
     """(pixels, facts): the stack's maps turned until their lines run along the axes, when they are turned
     (:func:`.imaging.orientation.dominant_orientation`), and what was found and done."""
     from seamless_usd.imaging.orientation import dominant_orientation
@@ -21,34 +21,40 @@ def straightened(pixels, normals: list[bool]):
     facts = {"orientation": found.as_dict(), "degrees": 0.0, "source_size": list(pixels.working_size)}
     if not found.straightens:
         return pixels, facts
-    done = turned(pixels, normals, found.degrees)
+    done = _with_values(pixels, made_values(pixels.values, normals, found.degrees))
     facts.update(degrees=found.degrees, size=list(done.working_size))
     return done, facts
 
 
-def turned(pixels, normals: list[bool], degrees: float):
-    """``pixels`` with every map turned clockwise by ``degrees`` and cut to source texels (:mod:`.imaging.straighten`)."""
-    from seamless_usd.imaging.straighten import straighten_maps
+def made_values(values, normals: list[bool], degrees: float = 0.0, levelled: bool = False) -> list[np.ndarray]:
+    """``values`` (the source's maps) made as the tile's source was: turned clockwise by ``degrees`` and cut to
+    source texels (:mod:`.imaging.straighten`), then, with ``levelled``, their light levelled
+    (:func:`.imaging.level.level_maps`). ``process`` and ``check`` both make the source so."""
+    out = list(values)
+    if degrees:
+        from seamless_usd.imaging.straighten import straighten_maps
 
-    values = straighten_maps(pixels.values, normals, degrees)
-    h, w = values[0].shape[:2]
-    return dataclasses.replace(pixels, values=tuple(values), working_size=(w, h))
+        out = straighten_maps(out, normals, degrees)
+    if levelled:
+        from seamless_usd.imaging.level import level_maps
 
-
-def levelled(pixels, normals: list[bool]):
-    """``pixels`` with every map's light levelled as the tile's cut levelled it (:func:`.imaging.level.level_maps`)."""
-    from seamless_usd.imaging.level import level_maps
-
-    return dataclasses.replace(pixels, values=tuple(level_maps(pixels.values, normals)[0]))
+        out = level_maps(out, normals)[0]
+    return out
 
 
 def as_made(pixels, normals: list[bool], straightened_facts: dict | None, levelled_facts: dict | None):
-    """``pixels`` made as the tile's source was: turned by the recorded turn, then levelled, as recorded."""
-    if straightened_facts and straightened_facts.get("size"):
-        pixels = turned(pixels, normals, straightened_facts["degrees"])
-    if levelled_facts:
-        pixels = levelled(pixels, normals)
-    return pixels
+    """``pixels`` made as the tile's source was (:func:`made_values`), from the facts recorded: the turn when one
+    was made, the levelling when it was."""
+    turn = straightened_facts["degrees"] if straightened_facts and straightened_facts.get("size") else 0.0
+    if not turn and not levelled_facts:
+        return pixels
+    return _with_values(pixels, made_values(pixels.values, normals, turn, bool(levelled_facts)))
+
+
+def _with_values(pixels, values: list[np.ndarray]):
+    """``pixels`` holding ``values``, its working size theirs."""
+    h, w = values[0].shape[:2]
+    return dataclasses.replace(pixels, values=tuple(values), working_size=(w, h))
 
 
 def source_uv_scale(uv_scale, straightened_facts: dict | None) -> tuple[float, float]:

@@ -20,7 +20,7 @@ from seamless_usd.fileio import confine
 from seamless_usd.findings import Finding
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
-from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straightened as straighten_source
+from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straighten
 from seamless_usd.naming import tile_filename
 from seamless_usd.pipeline.rerun import load_judged, save_judged
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
@@ -204,7 +204,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             straightened = None
             if settings.straighten:  # from here on the straightened maps are the stack's source
                 t1 = time.perf_counter()
-                pixels, straightened = straighten_source(pixels, [m.is_normal for m in stack.maps])
+                pixels, straightened = straighten(pixels, [m.is_normal for m in stack.maps])
                 inputs = [dataclasses.replace(i, pixels=p) for i, p in zip(inputs, pixels.values)]
                 timings["straighten"] = time.perf_counter() - t1
             _drop_unusable_checkpoint(entry.checkpoint_dir, config.seeds)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,7 +27,8 @@ from .lattice.window import continues_itself, window_tile_size
 from .types import MapInput
 
 __all__ = ["GAN_MIN_SIDE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
-           "cut_candidates", "joins_hide", "gated", "MEND_TRIES", "check_levelled", "passes_at_full_resolution"]
+           "cut_candidates", "joins_hide", "gated", "MEND_TRIES", "check_levelled", "passes_at_full_resolution",
+           "best_cut"]
 
 #: The smallest side (px) SeamlessGAN is trained on (its minimum crop, ``discover.tokens.MIN_CROP``): a smaller
 #: stack gets the tile cut from its source only, passed or not.
@@ -209,3 +211,22 @@ def check_levelled(maps: list[MapInput], seed: int = 0) -> tuple[CutCheck, dict]
     even = [dataclasses.replace(m, pixels=v) for m, v in zip(maps, values)]
     cut = check_cut(even, True, seed)
     return (cut, facts) if cut.passes else None
+
+
+def best_cut(maps: list[MapInput], cut: bool, seed: int = 0, timings: dict[str, float] | None = None
+             ) -> tuple[CutCheck, dict | None]:
+    """(cut, levelled): :func:`check_cut`, and where its cut does not pass (``cut``: cuts are made), the cut of the
+    maps with their light levelled when that one passes (:func:`check_levelled`), with the levelling's facts;
+    ``levelled`` None: the cut is of the maps as they are. ``timings`` gets the seconds of each
+    (``"lattice"``, ``"level"``)."""
+    timings = {} if timings is None else timings
+    t0 = time.perf_counter()
+    check = check_cut(maps, cut, seed)
+    timings["lattice"] = time.perf_counter() - t0
+    if cut and not check.passes:
+        t1 = time.perf_counter()
+        even = check_levelled(maps, seed)
+        timings["level"] = time.perf_counter() - t1
+        if even is not None:
+            return even
+    return check, None

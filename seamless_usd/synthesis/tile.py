@@ -22,8 +22,8 @@ from seamless_usd.metrics import scale_ratio
 from seamless_usd.errors import SeamlessUsdError
 
 from .advice import QUILT_MAX_DIFFERENCE, joins_hide, structure_advice, written_lattice_ratio
-from .candidates import (GAN_MIN_SIDE, QUILT_CELLS, QUILT_TRIES, SCORE_SIDE, CutCheck, check_cut, check_levelled, gated,
-                         judged, passes_at_full_resolution)
+from .candidates import (GAN_MIN_SIDE, QUILT_CELLS, QUILT_TRIES, SCORE_SIDE, CutCheck, best_cut, gated, judged,
+                         passes_at_full_resolution)
 from .config import SynthesisConfig
 from .gan.data import effective_k
 from .gan.sample import judge, sample
@@ -99,7 +99,7 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
        (:func:`.candidates.check_cut`: whole lattice periods, one window, or a quilt): when the verdict passes
        it on the source's grid, it is written and no GAN is trained (the GAN earns its time only where no
        cut passes). When none passes, the same cuts of the maps with their light levelled
-       (:func:`.candidates.check_levelled`): one that passes is written, ``MadeTile.levelled`` saying so.
+       (:func:`.candidates.best_cut`): one that passes is written, ``MadeTile.levelled`` saying so.
        With ``refine_config``, a stack smaller than GAN_MIN_SIDE gets its cut, passed or not (and an error
        when none can be cut). Otherwise:
     1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there,
@@ -133,18 +133,12 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     if refine_config is not None:
         small = min(H, W) < GAN_MIN_SIDE  # too small to train on: the cut is the tile, passed or not
         cutting = small or (refine_config.lattice and tile_size == "source")
-        t4 = time.perf_counter()
-        cut = check_cut(maps, cutting, seed)
-        timings["lattice"] = time.perf_counter() - t4
-        if cutting and not cut.passes:  # the same cuts of the maps with their light levelled
-            t5 = time.perf_counter()
-            even = check_levelled(maps, seed)
-            timings["level"] = time.perf_counter() - t5
-            if even is not None:
-                made = _made_from_cut(even[0], (H, W), structure, f, work_hw, timings,
-                                      "not trained: the tile cut from the source, its light levelled, passes")
-                made.levelled = even[1]
-                return made
+        cut, levelled = best_cut(maps, cutting, seed, timings)
+        if levelled is not None:  # the cut of the maps with their light levelled passes
+            made = _made_from_cut(cut, (H, W), structure, f, work_hw, timings,
+                                  "not trained: the tile cut from the source, its light levelled, passes")
+            made.levelled = levelled
+            return made
         if small and cut.kind is None:
             raise SeamlessUsdError(f"the stack is {W}x{H} px: too small for SeamlessGAN ({GAN_MIN_SIDE} px) and no tile "
                                    "can be cut from it; use a larger source")

@@ -126,7 +126,7 @@ def _tone_seams(reading: Reading) -> list[Seam]:
     factor = min(1.0, WORK_SIDE / max(reading.size))
     weights, reference = reading.reference.tone(factor)
     tile = joint(to_working(reading.maps, factor, periodic=True), weights)
-    return tone_steps(tile, reference, factor, reading.size)[0]
+    return tone_steps(tile, reference, factor, reading.size)
 
 
 def _scores(clf, img: np.ndarray, periodic: bool) -> dict[str, np.ndarray]:

@@ -57,18 +57,16 @@ def tone_reference(source: np.ndarray) -> dict[str, float]:
 
 
 def tone_steps(tile: np.ndarray, reference: dict[str, float], factor: float, size: tuple[int, int],
-               name: str = "stack", limit: int = 4) -> tuple[list[Seam], float]:
+               name: str = "stack", limit: int = 4) -> list[Seam]:
     """Seams of broad tone steps in ``tile`` (working resolution, periodic) against the source's strongest strip
     steps (:func:`tone_reference`), in texels of the tile at full resolution (``factor`` = working / full,
-    ``size`` its (h, w)), and the tile's strongest strip step over the source's, less one."""
+    ``size`` its (h, w)), strongest first."""
     h, w = size
     found: list[Seam] = []
-    strongest = -np.inf
     for axis in ("x", "y"):
         t = tile if axis == "x" else tile.transpose(1, 0, 2)
         ratio = strip_steps(t, periodic=True) / reference[axis]  # (runs, lines)
         peak = ratio.max(axis=0)
-        strongest = max(strongest, float(peak.max()) - 1.0)
         taken: list[int] = []
         for line in np.argsort(-peak):
             if peak[line] - 1.0 <= TONE_MARGIN or len(taken) >= limit:
@@ -84,4 +82,4 @@ def tone_steps(tile: np.ndarray, reference: dict[str, float], factor: float, siz
             found.append(Seam(axis, int(round(line / factor)) % across, lo, hi,
                               float(peak[line] - 1.0 - TONE_MARGIN), name, "tone"))
     found.sort(key=lambda x: -x.figure)
-    return found, strongest
+    return found
