@@ -23,7 +23,6 @@ tile's centre and its wrap corner, zoomed 3x), to look at.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -94,13 +93,14 @@ def product_tile(pixels: np.ndarray, gan: bool, preset: str, seed: int) -> tuple
         return made.maps["color"], {"kind": made.layout_kind, "gan": made.gan is not None,
                                     "candidates": made.lattice.get("candidates"),
                                     "difference_worst": made.lattice.get("difference_worst"),
-                                    **({"levelled": made.levelled} if made.levelled else {})}
-    cut, levelled = best_cut(maps, True, seed)  # as the product does: levelled where no cut of the photo passes
+                                    **({"levelled": made.levelled} if made.levelled else {}),
+                                    **({"evened": made.evened} if made.evened else {})}
+    cut, made_so = best_cut(maps, True, seed)  # as the product does: levelled or evened where no cut of it passes
     if cut.kind is None:
         raise ValueError("no tile can be cut from this photo")
     return cut.tiles["color"], {"kind": cut.kind, "gan": False, "candidates": cut.notes.get("candidates"),
                                 "difference_worst": cut.figures.get("difference_worst"), "cut_passes": cut.passes,
-                                **({"levelled": levelled} if levelled else {})}
+                                **made_so}
 
 
 def pictures(name: str, method: str, tile: np.ndarray, source: np.ndarray, folder: Path) -> None:
@@ -153,13 +153,12 @@ def run_photo(path: Path, a: argparse.Namespace, window: bool) -> dict:
             continue
         seconds = time.perf_counter() - t0
         # a tile of another size (img2texture crops) is judged against the source as it is: the verdict
-        # compares texel scales, not sizes; a tile cut from the photo with its light levelled, against the
-        # levelled photo (as the product judges it)
-        against = source
-        if info.get("levelled"):
-            from seamless_usd.imaging.level import level_maps
+        # compares texel scales, not sizes; a tile cut from the photo with its light levelled or its lattice evened,
+        # against the photo made so (as the product judges it)
+        from seamless_usd.pipeline.madefrom import made_values
 
-            against = level_maps([source], [False])[0][0]
+        against = made_values([source], [False], levelled=bool(info.get("levelled")),
+                              evened=bool(info.get("evened")))[0]
         verdict = judge([tile], [against], [False], ["color"])
         row[method] = {"passed": verdict.passed, "seamless": verdict.seamless, "faithful": verdict.faithful,
                        "strongest": round(verdict.strongest, 3), "margin": verdict.margin,
@@ -194,6 +193,8 @@ def markdown(rows: list[dict], a: argparse.Namespace, load: tuple[float, float])
                 extra += f" d={d['difference_worst']:.3f}"
             if d.get("levelled"):
                 extra += f" levelled {100 * d['levelled']['moved']:.0f} %"
+            if d.get("evened"):
+                extra += f" evened {d['evened']['moved']:.1f} px"
             cells.append(f"{'passed' if d['passed'] else 'not passed'} {d['strongest']:.2f}{extra}, {d['seconds']:.1f} s")
         name = r["photo"] + (" (window)" if r.get("window") else "")
         lines.append(f"| {name} | {r['size'][1]}x{r['size'][0]} | " + " | ".join(cells) + " |")

@@ -6,8 +6,10 @@ one material in a scene file of its own: a ground plane whose UsdPreviewSurface 
 map, brought to at most ``--size`` px (a texture its publisher made to tile is read through a plain window
 of it, as in ``photos.py``, so that it does not tile). The whole folder is then processed by one
 ``seamless-usd process FOLDER --json`` in this process, with ``--preset`` (default ``default``) and a fresh
-cache, as a TD would run a library. Printed and written to ``--out`` (``throughput.md`` / ``.json``): wall
-time, stacks passed, how each was made (a cut, or trained), and passed stacks an hour (target: 60).
+cache, as a TD would run a library; ``--jobs N`` runs N stacks at once in worker processes (``process --jobs``),
+each with the cores shared out among them. Printed and written to ``--out`` (``throughput.md`` / ``.json``): wall
+time, stacks passed, how each was made (a cut, or trained), and passed stacks an hour (target: 60); with
+``--jobs N`` (N > 1) the files are ``throughput-jobsN.md`` / ``.json``.
 
     .venv/bin/python benchmarks/throughput.py --every 3
 """
@@ -50,13 +52,14 @@ def build_library(photos: list[Path], folder: Path, size: int) -> list[Path]:
     return scenes
 
 
-def run(folder: Path, preset: str, cache: Path) -> tuple[int, dict, float]:
+def run(folder: Path, preset: str, cache: Path, jobs: int = 1) -> tuple[int, dict, float]:
     from seamless_usd_cli.main import main as cli
 
     out = io.StringIO()
     t0 = time.perf_counter()
     with contextlib.redirect_stdout(out):
-        code = cli(["process", str(folder), "--preset", preset, "--cache-dir", str(cache), "--json"])
+        code = cli(["process", str(folder), "--preset", preset, "--cache-dir", str(cache), "--json",
+                    *(["--jobs", str(jobs)] if jobs > 1 else [])])
     return code, json.loads(out.getvalue()), time.perf_counter() - t0
 
 
@@ -75,7 +78,8 @@ def summary(payload: dict, seconds: float) -> dict:
 
 def markdown(s: dict, a: argparse.Namespace, load: tuple[float, float]) -> str:
     lines = ["# Passed stacks an hour", "",
-             f"`benchmarks/throughput.py --every {a.every} --start {a.start} --size {a.size} --preset {a.preset}`: "
+             f"`benchmarks/throughput.py --every {a.every} --start {a.start} --size {a.size} --preset {a.preset}"
+             f"{f' --jobs {a.jobs}' if a.jobs > 1 else ''}`: "
              f"{s['stacks']} real photos as one library, one `process` command, cold cache; load {load[0]:.2f} "
              f"before, {load[1]:.2f} after.", "",
              f"**{s['passed']} of {s['stacks']} passed in {s['seconds'] / 60:.1f} min: {s['passed_per_hour']:g} passed "
@@ -94,18 +98,21 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--start", type=int, default=0)
     p.add_argument("--size", type=int, default=512)
     p.add_argument("--preset", default="default")
+    p.add_argument("--jobs", type=int, default=1, help="stacks run at once (process --jobs)")
     p.add_argument("--out", type=Path, default=HERE / "results")
     a = p.parse_args(argv)
+    stem = "throughput" if a.jobs <= 1 else f"throughput-jobs{a.jobs}"
     photos = sorted(a.photos.glob("*.jpg"))[a.start::a.every]
     with tempfile.TemporaryDirectory() as tmp:
         build_library(photos, Path(tmp) / "library", a.size)
         load0 = os.getloadavg()[0]
-        code, payload, seconds = run(Path(tmp) / "library", a.preset, Path(tmp) / "cache")
+        code, payload, seconds = run(Path(tmp) / "library", a.preset, Path(tmp) / "cache", a.jobs)
         load = (load0, os.getloadavg()[0])
-    s = {**summary(payload, seconds), "exit_code": code, "load": load, "preset": a.preset, "size": a.size}
+    s = {**summary(payload, seconds), "exit_code": code, "load": load, "preset": a.preset, "size": a.size,
+         "jobs": a.jobs}
     a.out.mkdir(parents=True, exist_ok=True)
-    (a.out / "throughput.json").write_text(json.dumps(s, indent=1))
-    (a.out / "throughput.md").write_text(markdown(s, a, load))
+    (a.out / f"{stem}.json").write_text(json.dumps(s, indent=1))
+    (a.out / f"{stem}.md").write_text(markdown(s, a, load))
     print(markdown(s, a, load))
     return 0
 

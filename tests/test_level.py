@@ -57,6 +57,11 @@ def test_levelling_evens_the_light_and_leaves_texels_in_place():
     (same,), same_facts = level_maps([even_light], [False])
     assert same_facts["moved"] == 0.0 and np.array_equal(same, even_light)
     assert level_maps([gravel], [False])[1]["moved"] >= LEVEL_MIN
+    # a grey map with alpha: the grey is levelled as the colour map's tone is, the alpha is left as it is
+    alpha = np.random.default_rng(1).choice([-1.0, 1.0], (192, 192, 1)).astype(np.float32)
+    (grey_alpha,), _ = level_maps([np.dstack([lit[..., :1], alpha])], [False])
+    assert np.array_equal(grey_alpha[..., 1:], alpha)
+    assert ends(grey_alpha[..., :1]) < 0.06 and np.allclose(grey_alpha[..., :1], even[..., :1], atol=0.02)
 
 
 def test_a_mend_of_an_unevenly_lit_photo_shows_a_step_of_tone_and_the_levelled_one_passes():

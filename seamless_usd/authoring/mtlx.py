@@ -59,6 +59,7 @@ class MtlxNames:
     TOOL_VERSION = "seamless_toolversion"
     STRAIGHTENED = "seamless_straightened"
     LEVELLED = "seamless_levelled"
+    EVENED = "seamless_evened"
 
 
 def default_output_document(document_path: Path) -> Path:
@@ -144,6 +145,7 @@ def read_mtlx_provenance(node: mx.Node) -> Provenance | None:
         verdict=node.getAttribute(MtlxNames.VERDICT),
         straightened=floats(MtlxNames.STRAIGHTENED, 1)[0],
         levelled=floats(MtlxNames.LEVELLED, 1)[0],
+        evened=floats(MtlxNames.EVENED, 1)[0],
     )
 
 
@@ -357,6 +359,7 @@ class _MtlxAuthor:
             (MtlxNames.TOOL_VERSION, p.tool_version),
             (MtlxNames.STRAIGHTENED, _fmt([float(p.straightened)]) if p.straightened else None),
             (MtlxNames.LEVELLED, _fmt([float(p.levelled)]) if p.levelled else None),
+            (MtlxNames.EVENED, _fmt([float(p.evened)]) if p.evened else None),
         ):
             self._set(node, name, value, name)
         if len(self.result.plan) > before and prim_ref(node_path) not in self.result.edited_prims:

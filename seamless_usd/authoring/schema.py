@@ -43,6 +43,7 @@ class Schema:
     TOOL_VERSION = "seamless:toolVersion"
     STRAIGHTENED = "seamless:straightened"
     LEVELLED = "seamless:levelled"
+    EVENED = "seamless:evened"
 
 
 # Property name -> (Sdf type, how a Provenance value becomes a USD value).
@@ -59,6 +60,7 @@ PROPERTIES = {
     Schema.TOOL_VERSION: (Sdf.ValueTypeNames.String, lambda p: str(p.tool_version)),
     Schema.STRAIGHTENED: (Sdf.ValueTypeNames.Double, lambda p: float(p.straightened)),
     Schema.LEVELLED: (Sdf.ValueTypeNames.Double, lambda p: float(p.levelled)),
+    Schema.EVENED: (Sdf.ValueTypeNames.Double, lambda p: float(p.evened)),
 }
 
 
@@ -141,6 +143,7 @@ def read_provenance(prim: Usd.Prim) -> Provenance | None:
         verdict=str(get(Schema.VERDICT, "")),
         straightened=float(get(Schema.STRAIGHTENED, 0.0)),
         levelled=float(get(Schema.LEVELLED, 0.0)),
+        evened=float(get(Schema.EVENED, 0.0)),
     )
 
 

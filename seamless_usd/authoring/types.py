@@ -69,6 +69,7 @@ class Provenance:
     verdict: str = ""  # the verdict in words: "seamless and faithful", or why not
     straightened: float = 0.0  # degrees the source was turned clockwise before tiling (0: not straightened)
     levelled: float = 0.0  # the most a texel value was scaled by (share) to level the source's light (0: not levelled)
+    evened: float = 0.0  # the most a texel moved (texels) to even the source's drifting lattice (0: not evened)
 
 
 @dataclass(frozen=True)

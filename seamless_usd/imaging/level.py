@@ -54,6 +54,12 @@ def _grown(a: np.ndarray, hw: tuple[int, int]) -> np.ndarray:
     return np.stack([np.interp(xs, np.arange(w), rows[i]) for i in range(hw[0])], 0).astype(np.float32)
 
 
+def _lit_channels(channels: int) -> int:
+    """How many of a map's first channels carry light: grey (1), grey and alpha (2: the grey), colour (3) and
+    colour with alpha (4: the colour)."""
+    return 1 if channels <= 2 else 3
+
+
 def light_gain(tone: np.ndarray) -> np.ndarray:
     """(H, W) float32: what each texel of ``tone`` (H, W, in [0, 1]) is scaled by for its light to be even: the
     mean tone over its light: the plane that fits the tone best, plus a Gaussian blur (sigma LEVEL_SIGMA of the
@@ -85,7 +91,7 @@ def level_maps(values: Sequence[np.ndarray], normals: Sequence[bool]) -> tuple[l
             out.append(m)
             continue
         unit = (m + 1.0) / 2.0
-        colour = unit[..., : min(3, unit.shape[-1])]  # an alpha channel is not lit
+        colour = unit[..., : _lit_channels(unit.shape[-1])]  # an alpha channel is not lit
         gain = light_gain(colour.mean(-1))
         lo, hi = colour.min(axis=(0, 1)), colour.max(axis=(0, 1))
         levelled = unit.copy()

@@ -133,15 +133,15 @@ def _judge_picture(path: Path) -> CheckItem:
     return item
 
 
-def _sources(stage, stack) -> tuple[list, tuple[float, float], float, float] | None:
-    """The maps' recorded sources, UV scale, straightening turn (degrees) and levelling (the most a texel value was
-    scaled by; 0: not levelled), when every map is a tile this tool wrote into the USD ``stage`` (None for a
-    MaterialX document)."""
+def _sources(stage, stack) -> tuple[list, object] | None:
+    """The maps' recorded sources and the provenance recorded with them (its UV scale, straightening turn, and
+    how far the source was levelled or evened before it was cut), when every map is a tile this tool wrote into
+    the USD ``stage`` (None for a MaterialX document)."""
     if stage is None:
         return None
     from seamless_usd.authoring.schema import Schema, read_provenance
 
-    sources, scale, turn, levelled = [], (1.0, 1.0), 0.0, 0.0
+    sources, prov = [], None
     for m in stack.maps:
         prim = stage.GetPrimAtPath(m.node.strip("<>"))
         prov = read_provenance(prim) if prim else None
@@ -150,8 +150,7 @@ def _sources(stage, stack) -> tuple[list, tuple[float, float], float, float] | N
         if not resolved:
             return None
         sources.append(dataclasses.replace(m, resolved=resolved, asset=prov.source_asset))
-        scale, turn, levelled = prov.uv_scale, prov.straightened, prov.levelled
-    return sources, scale, turn, levelled
+    return sources, prov
 
 
 def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
@@ -173,14 +172,15 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
         else:
             normals = [m.is_normal for m in stack.maps]
             tiles = list(load_stack_pixels(list(stack.maps)).values)
-            src_maps, uv, turn, levelled = recorded
+            src_maps, prov = recorded
+            uv = prov.uv_scale
             grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
             # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
             policy = WorkingResolution(max_size=max(grid))
             sources = list(load_stack_pixels(src_maps, policy).values)
-            # made from the source straightened and levelled as recorded: judged against it made the same way
+            # made from the source straightened, levelled or evened as recorded: judged against it made so
             h, w = sources[0].shape[:2]
-            sources = made_values(sources, normals, turn, bool(levelled))
+            sources = made_values(sources, normals, prov.straightened, bool(prov.levelled), bool(prov.evened))
             uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
             sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
             item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps]).as_dict()

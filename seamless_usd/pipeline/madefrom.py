@@ -1,6 +1,7 @@
 """The source as a stack's tile was made from it: turned until its lines run along the axes (``--straighten``,
-:mod:`.imaging.straighten`), and with its light levelled (:mod:`.imaging.level`) when the cut made of the
-levelled maps is the one that passed. The tile is judged against the source made so, in ``process`` as in
+:mod:`.imaging.straighten`), with its light levelled (:mod:`.imaging.level`) when the cut made of the levelled
+maps is the one that passed, or with its drifting lattice evened (:mod:`.synthesis.lattice.drift`) when the
+cut of the evened maps is. The tile is judged against the source made so, in ``process`` as in
 ``check``, and its UV scale is brought back to the source's texel density.
 """
 from __future__ import annotations
@@ -26,10 +27,12 @@ def straighten(pixels, normals: list[bool]):
     return done, facts
 
 
-def made_values(values, normals: list[bool], degrees: float = 0.0, levelled: bool = False) -> list[np.ndarray]:
+def made_values(values, normals: list[bool], degrees: float = 0.0, levelled: bool = False,
+                evened: bool = False) -> list[np.ndarray]:
     """``values`` (the source's maps) made as the tile's source was: turned clockwise by ``degrees`` and cut to
     source texels (:mod:`.imaging.straighten`), then, with ``levelled``, their light levelled
-    (:func:`.imaging.level.level_maps`). ``process`` and ``check`` both make the source so."""
+    (:func:`.imaging.level.level_maps`), with ``evened``, their lattice evened
+    (:func:`.synthesis.lattice.drift.even_lattice`). ``process`` and ``check`` both make the source so."""
     out = list(values)
     if degrees:
         from seamless_usd.imaging.straighten import straighten_maps
@@ -39,16 +42,21 @@ def made_values(values, normals: list[bool], degrees: float = 0.0, levelled: boo
         from seamless_usd.imaging.level import level_maps
 
         out = level_maps(out, normals)[0]
+    if evened:
+        from seamless_usd.synthesis.lattice.drift import even_lattice
+
+        out = even_lattice(out, normals)[0]
     return out
 
 
-def as_made(pixels, normals: list[bool], straightened_facts: dict | None, levelled_facts: dict | None):
+def as_made(pixels, normals: list[bool], straightened_facts: dict | None, levelled_facts: dict | None,
+            evened_facts: dict | None = None):
     """``pixels`` made as the tile's source was (:func:`made_values`), from the facts recorded: the turn when one
-    was made, the levelling when it was."""
+    was made, the levelling or the evening when it was."""
     turn = straightened_facts["degrees"] if straightened_facts and straightened_facts.get("size") else 0.0
-    if not turn and not levelled_facts:
+    if not turn and not levelled_facts and not evened_facts:
         return pixels
-    return _with_values(pixels, made_values(pixels.values, normals, turn, bool(levelled_facts)))
+    return _with_values(pixels, made_values(pixels.values, normals, turn, bool(levelled_facts), bool(evened_facts)))
 
 
 def _with_values(pixels, values: list[np.ndarray]):

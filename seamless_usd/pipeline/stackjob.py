@@ -159,6 +159,7 @@ class StackOutcome:
             verdict="seamless and faithful" if self.passed else "; ".join(self.reasons()),
             straightened=float((self.resampled.get("straightened") or {}).get("degrees", 0.0)),
             levelled=float((self.resampled.get("levelled") or {}).get("moved", 0.0)),
+            evened=float((self.resampled.get("evened") or {}).get("moved", 0.0)),
         )
         maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
         return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
@@ -219,6 +220,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                 "uv_scale": list(made.uv_scale),
                 "straightened": straightened,  # the turn found (and made) before the tile, found once
                 "levelled": made.levelled or None,  # the light levelled: the cut of the levelled maps passed
+                "evened": made.evened or None,  # the lattice evened: the cut of the evened maps passed
                 "scale": {
                     "structure_px": round(made.structure_px, 1),
                     "working_factor": made.working_factor,
@@ -242,7 +244,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             entry.store(tiles, meta)
         else:
             tiles, meta = cached
-    straightened, levelled = meta.get("straightened"), meta.get("levelled")
+    straightened, levelled, evened = meta.get("straightened"), meta.get("levelled"), meta.get("evened")
     out_dir = Path(job.output_dir)
     normals = [m.is_normal for m in stack.maps]
     if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
@@ -251,7 +253,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             return _outcome(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir)
         # the tile was cut from the maps turned by the turn found (made above when the tile was made)
         pixels = as_made(pixels, normals, straightened, None)
-    pixels = as_made(pixels, normals, None, levelled)  # the tile's cut was made of the levelled maps
+    shown = pixels.values  # the report shows the source as the user has it, its light as it was
+    pixels = as_made(pixels, normals, None, levelled, evened)  # the cut was made of the levelled or evened maps
     discriminator = tiles.pop("__discriminator__", None)
     captions = meta["scale"].get("level_pictures", [])
     levels = [(c, tiles.pop(f"__level{i}__")) for i, c in enumerate(captions) if f"__level{i}__" in tiles]
@@ -297,7 +300,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     timings["inside"] = time.perf_counter() - t5  # bad joins, coherence and structure of every map
     for m, figures in zip(stack.maps, inside):
         outcomes[map_identity(m)].metrics.update(figures)
-    previews = stack_previews(stack.maps, pixels.values, [tiles[n] for n in names], uv_scale, discriminator,
+    previews = stack_previews(stack.maps, shown, [tiles[n] for n in names], uv_scale, discriminator,
                               levels=levels)
     record = {"outputs": {json.dumps(list(k)): {"path": str(o.output), "metrics": o.metrics,
                                                 "source_metrics": o.source_metrics} for k, o in outcomes.items()},
@@ -311,8 +314,8 @@ def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Pr
     """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`).
 
     ``meta["straightened"]``: the tile was made from the straightened maps, and its UV scale, read against them,
-    is brought back to the source's texel density; ``meta["levelled"]``: from the maps with their light levelled
-    (:mod:`.madefrom`)."""
+    is brought back to the source's texel density; ``meta["levelled"]`` / ``meta["evened"]``: from the maps with
+    their light levelled or their lattice evened (:mod:`.madefrom`)."""
     straightened = meta.get("straightened")
     maps = {tuple(json.loads(k)): MapOutcome(Path(o["path"]), dict(o["metrics"]), dict(o["source_metrics"]))
             for k, o in record["outputs"].items()}
@@ -325,7 +328,7 @@ def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Pr
         working_size=tuple(int(v) for v in meta["scale"]["gan_working_size"]),
         resampled={**pixels.policy_record, "gan": dict(meta["scale"]),
                    **({"straightened": straightened} if straightened else {}),
-                   **({"levelled": meta["levelled"]} if meta.get("levelled") else {})},
+                   **{k: meta[k] for k in ("levelled", "evened") if meta.get(k)}},
         failing=list(verdict.get("failing", [])),
         verdict=verdict,
         uv_scale=source_uv_scale(meta["uv_scale"], straightened),

@@ -321,6 +321,15 @@ def _levelled_text(facts: dict | None) -> str | None:
             "is judged against the levelled source")
 
 
+def _evened_text(facts: dict | None) -> str | None:
+    """How far evening the source's drifting lattice moved texels (None when it was not evened)."""
+    if not facts:
+        return None
+    return (f"the source's drifting lattice was evened before the cut (texels moved by up to "
+            f"{facts.get('moved', 0):.1f} texels, {facts.get('moved_mean', 0):.2f} on average, every map alike); the "
+            "tile is judged against the evened source")
+
+
 def _facts(stack: StackReport) -> tuple[str, str]:
     uv = stack.uv_scale
     cover = f" (one tile covers {fmt(tuple(1.0 / v for v in uv))} of the source's UV square)" if uv else ""
@@ -333,6 +342,7 @@ def _facts(stack: StackReport) -> tuple[str, str]:
         "Q (the discriminator's view)": _q_text(stack.q),
         "straightened": _straightened_text(stack.resampled.get("straightened")),
         "levelled": _levelled_text(stack.resampled.get("levelled")),
+        "evened": _evened_text(stack.resampled.get("evened")),
         "same as": stack.duplicate_of,
         "result from": stack.origin or None,
     }

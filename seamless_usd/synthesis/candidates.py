@@ -27,8 +27,8 @@ from .lattice.window import continues_itself, window_tile_size
 from .types import MapInput
 
 __all__ = ["GAN_MIN_SIDE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
-           "cut_candidates", "joins_hide", "gated", "MEND_TRIES", "check_levelled", "passes_at_full_resolution",
-           "best_cut"]
+           "cut_candidates", "joins_hide", "gated", "MEND_TRIES", "check_levelled", "check_evened",
+           "passes_at_full_resolution", "best_cut"]
 
 #: The smallest side (px) SeamlessGAN is trained on (its minimum crop, ``discover.tokens.MIN_CROP``): a smaller
 #: stack gets the tile cut from its source only, passed or not.
@@ -196,6 +196,16 @@ def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
     return best
 
 
+def _check_made(maps: list[MapInput], values: list[np.ndarray], facts: dict, seed: int) -> tuple[CutCheck, dict] | None:
+    """(cut, facts) of the cuts made of ``maps`` holding ``values`` (the maps made anew, texels moved or scaled) when
+    one passes, judged against those values; None when none does, or nothing was moved (``facts["moved"]``)."""
+    if not facts["moved"]:
+        return None
+    made = [dataclasses.replace(m, pixels=v) for m, v in zip(maps, values)]
+    cut = check_cut(made, True, seed)
+    return (cut, facts) if cut.passes else None
+
+
 def check_levelled(maps: list[MapInput], seed: int = 0) -> tuple[CutCheck, dict] | None:
     """(cut, facts) of the cuts made of ``maps`` with their light levelled (:func:`.imaging.level.level_maps`) when
     one passes, judged against the levelled maps; None when none does, or the light is already even.
@@ -205,28 +215,42 @@ def check_levelled(maps: list[MapInput], seed: int = 0) -> tuple[CutCheck, dict]
     its place and the cut is still made of copies, so the verdict judges its joins as any other cut's."""
     from seamless_usd.imaging.level import level_maps
 
-    values, facts = level_maps([m.pixels for m in maps], [m.is_normal for m in maps])
-    if not facts["moved"]:
+    return _check_made(maps, *level_maps([m.pixels for m in maps], [m.is_normal for m in maps]), seed)
+
+
+def check_evened(maps: list[MapInput], lattice: Lattice, seed: int = 0) -> tuple[CutCheck, dict] | None:
+    """(cut, facts) of the cuts made of ``maps`` resampled so that their ``lattice`` repeats evenly
+    (:func:`.lattice.drift.even_lattice`) when one passes, judged against the evened maps; None when none does,
+    nothing repeats, or the lattice does not drift (or drifts more than that reading is trusted with).
+
+    Where a photo's lattice drifts a texel or two, a cut of whole periods jogs every joint that crosses its wrap
+    (a tiled floor: ``docs/decisions.md``, "Evening a drifting lattice"); evened, the cut is made of copies of
+    the evened maps, and the verdict judges its joins as any other cut's."""
+    if not lattice.found:
         return None
-    even = [dataclasses.replace(m, pixels=v) for m, v in zip(maps, values)]
-    cut = check_cut(even, True, seed)
-    return (cut, facts) if cut.passes else None
+    from .lattice.drift import even_lattice
+
+    return _check_made(maps, *even_lattice([m.pixels for m in maps], [m.is_normal for m in maps], lattice), seed)
 
 
 def best_cut(maps: list[MapInput], cut: bool, seed: int = 0, timings: dict[str, float] | None = None
-             ) -> tuple[CutCheck, dict | None]:
-    """(cut, levelled): :func:`check_cut`, and where its cut does not pass (``cut``: cuts are made), the cut of the
-    maps with their light levelled when that one passes (:func:`check_levelled`), with the levelling's facts;
-    ``levelled`` None: the cut is of the maps as they are. ``timings`` gets the seconds of each
-    (``"lattice"``, ``"level"``)."""
+             ) -> tuple[CutCheck, dict]:
+    """(cut, made): :func:`check_cut`, and where its cut does not pass (``cut``: cuts are made), the cut of the
+    maps with their light levelled when that one passes (:func:`check_levelled`), else the cut of the maps with
+    their lattice evened (:func:`check_evened`). ``made``: ``{"levelled": facts}`` or ``{"evened": facts}`` for
+    the cut that passed so, empty when the cut is of the maps as they are. ``timings`` gets the seconds of each
+    (``"lattice"``, ``"level"``, ``"even"``)."""
     timings = {} if timings is None else timings
     t0 = time.perf_counter()
     check = check_cut(maps, cut, seed)
     timings["lattice"] = time.perf_counter() - t0
-    if cut and not check.passes:
+    if not cut or check.passes:
+        return check, {}
+    for key, name, attempt in (("level", "levelled", lambda: check_levelled(maps, seed)),
+                               ("even", "evened", lambda: check_evened(maps, check.lattice, seed))):
         t1 = time.perf_counter()
-        even = check_levelled(maps, seed)
-        timings["level"] = time.perf_counter() - t1
-        if even is not None:
-            return even
-    return check, None
+        made = attempt()
+        timings[key] = time.perf_counter() - t1
+        if made is not None:
+            return made[0], {name: made[1]}
+    return check, {}

@@ -72,6 +72,8 @@ class MadeTile:
     #                 layout, then every refinement level seen through its field (see refine's ``pictures``)
     levelled: dict = field(default_factory=dict)  # the cut was made of the maps with their light levelled
     #                 (:func:`.imaging.level.level_maps`' facts: how far texel values were scaled); empty: not
+    evened: dict = field(default_factory=dict)  # the cut was made of the maps with their lattice evened
+    #                 (:func:`.lattice.drift.even_lattice`'s facts: how far texels moved); empty: not
 
     def __post_init__(self) -> None:
         if self.q is None and self.gan is not None:
@@ -99,7 +101,8 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
        (:func:`.candidates.check_cut`: whole lattice periods, one window, or a quilt): when the verdict passes
        it on the source's grid, it is written and no GAN is trained (the GAN earns its time only where no
        cut passes). When none passes, the same cuts of the maps with their light levelled
-       (:func:`.candidates.best_cut`): one that passes is written, ``MadeTile.levelled`` saying so.
+       (:func:`.candidates.best_cut`), then with their drifting lattice evened: one that passes is written,
+       ``MadeTile.levelled`` or ``MadeTile.evened`` saying so.
        With ``refine_config``, a stack smaller than GAN_MIN_SIDE gets its cut, passed or not (and an error
        when none can be cut). Otherwise:
     1. Estimate the structure size and the working resolution (:mod:`.scale`); train SeamlessGAN there,
@@ -133,11 +136,12 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     if refine_config is not None:
         small = min(H, W) < GAN_MIN_SIDE  # too small to train on: the cut is the tile, passed or not
         cutting = small or (refine_config.lattice and tile_size == "source")
-        cut, levelled = best_cut(maps, cutting, seed, timings)
-        if levelled is not None:  # the cut of the maps with their light levelled passes
+        cut, made_so = best_cut(maps, cutting, seed, timings)
+        if made_so:  # the cut of the maps with their light levelled, or their lattice evened, passes
+            how = "its light levelled" if "levelled" in made_so else "its lattice evened"
             made = _made_from_cut(cut, (H, W), structure, f, work_hw, timings,
-                                  "not trained: the tile cut from the source, its light levelled, passes")
-            made.levelled = levelled
+                                  f"not trained: the tile cut from the source, {how}, passes")
+            made.levelled, made.evened = made_so.get("levelled", {}), made_so.get("evened", {})
             return made
         if small and cut.kind is None:
             raise SeamlessUsdError(f"the stack is {W}x{H} px: too small for SeamlessGAN ({GAN_MIN_SIDE} px) and no tile "
