@@ -25,6 +25,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .resample import grown_linear
+
 __all__ = ["LEVEL_SIGMA", "LEVEL_MIN", "GAIN_RANGE", "light_gain", "level_maps"]
 
 #: The light's blur, as a share of the map's shorter side (the scale of what a lit photo's tone varies over).
@@ -40,18 +42,6 @@ def _shrunk(a: np.ndarray, step: int) -> np.ndarray:
     """``a`` (H, W) averaged over ``step`` x ``step`` boxes (the last partial ones dropped)."""
     H, W = (a.shape[0] // step) * step, (a.shape[1] // step) * step
     return a[:H, :W].reshape(H // step, step, W // step, step).mean(axis=(1, 3))
-
-
-def _grown(a: np.ndarray, hw: tuple[int, int]) -> np.ndarray:
-    """``a`` (h, w) brought to (H, W) by linear interpolation between texel centres."""
-    h, w = a.shape
-
-    def axis(n: int, size: int) -> np.ndarray:
-        return np.clip((np.arange(size) + 0.5) * n / size - 0.5, 0, n - 1)
-
-    ys, xs = axis(h, hw[0]), axis(w, hw[1])
-    rows = np.stack([np.interp(ys, np.arange(h), a[:, j]) for j in range(w)], 1)
-    return np.stack([np.interp(xs, np.arange(w), rows[i]) for i in range(hw[0])], 0).astype(np.float32)
 
 
 def _lit_channels(channels: int) -> int:
@@ -77,7 +67,7 @@ def light_gain(tone: np.ndarray) -> np.ndarray:
     light = plane + ndimage.gaussian_filter(small - plane, LEVEL_SIGMA * min(small.shape), mode="reflect")
     gain = float(small.mean()) / np.maximum(light, 1e-4)
     gain = np.clip(gain, *GAIN_RANGE)
-    return _grown(gain, (H, W)) if step > 1 else gain.astype(np.float32)
+    return grown_linear(gain, (H, W)) if step > 1 else gain.astype(np.float32)
 
 
 def level_maps(values: Sequence[np.ndarray], normals: Sequence[bool]) -> tuple[list[np.ndarray], dict]:

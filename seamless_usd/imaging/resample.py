@@ -22,7 +22,7 @@ import OpenImageIO as oiio
 
 from seamless_usd.errors import UsageError
 
-__all__ = ["FILTERS", "WorkingResolution", "resample"]
+__all__ = ["FILTERS", "WorkingResolution", "grown_linear", "resample"]
 
 # OpenImageIO 2D filter names accepted by ImageBufAlgo.resize, plus "auto".
 FILTERS = (
@@ -120,3 +120,16 @@ def resample(values: np.ndarray, size: tuple[int, int], filter: str = "auto") ->
         raise RuntimeError(f"resampling to {new_w}x{new_h} failed: {dst.geterror()}")
     out = np.asarray(dst.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(new_h, new_w, c)
     return out[..., 0] if flat else out
+
+
+def grown_linear(a: np.ndarray, hw: tuple[int, int]) -> np.ndarray:
+    """``a`` (h, w) brought to (H, W) by linear interpolation between texel centres (held at the border): a
+    smooth field read on a small grid (a photo's light, a lattice's drift) brought to full resolution."""
+    h, w = a.shape
+
+    def axis(n: int, size: int) -> np.ndarray:
+        return np.clip((np.arange(size) + 0.5) * n / size - 0.5, 0, n - 1)
+
+    ys, xs = axis(h, hw[0]), axis(w, hw[1])
+    rows = np.stack([np.interp(ys, np.arange(h), a[:, j]) for j in range(w)], 1)
+    return np.stack([np.interp(xs, np.arange(w), rows[i]) for i in range(hw[0])], 0).astype(np.float32)

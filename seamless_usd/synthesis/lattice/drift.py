@@ -33,6 +33,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from seamless_usd.imaging.resample import grown_linear
+
 from ..scale import box_downsample
 from .lines import principal_tone
 
@@ -83,20 +85,9 @@ def lattice_drift(values: Sequence[np.ndarray], period: tuple[float | None, floa
         z = _blur(z.real, DRIFT_SIGMA * p_small) + 1j * _blur(z.imag, DRIFT_SIGMA * p_small)
         mean = z.mean()
         phase = np.angle(z * np.conj(mean) / max(abs(mean), 1e-12))
-        fields.append(_grown((phase * p / (2 * np.pi)).astype(np.float32), (H, W)))
+        field = (phase * p / (2 * np.pi)).astype(np.float32)
+        fields.append(field if field.shape == (H, W) else grown_linear(field, (H, W)))
     return fields[0], fields[1]
-
-
-def _grown(a: np.ndarray, hw: tuple[int, int]) -> np.ndarray:
-    """``a`` brought to ``hw`` by linear interpolation between texel centres (a no-op at its own size)."""
-    if a.shape == hw:
-        return a
-    from scipy import ndimage
-
-    ys = np.clip((np.arange(hw[0]) + 0.5) * a.shape[0] / hw[0] - 0.5, 0, a.shape[0] - 1)
-    xs = np.clip((np.arange(hw[1]) + 0.5) * a.shape[1] / hw[1] - 0.5, 0, a.shape[1] - 1)
-    yy, xx = np.meshgrid(ys, xs, indexing="ij")
-    return ndimage.map_coordinates(a, [yy, xx], order=1, mode="nearest").astype(np.float32)
 
 
 def _resampled(channel: np.ndarray, dy: np.ndarray, dx: np.ndarray) -> np.ndarray:
