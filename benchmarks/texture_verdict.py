@@ -15,6 +15,8 @@ Rules:
                             breaks.py``: every line's straddling differences at every lag against all parallel
                             lines);
     ``line-breaks``         the line breaks alone;
+    ``continuation-ratio``  the continuation ratio alone (``seamless_usd/verdict/across.py``: the line across
+                            which the rows predict each other least, against the next such line);
     ``periodic-plus-smooth``, ``seam-ratios``  the wrap gates the scan's triage used before it judged with the
                             verdict (above 0.075, above 2).
 
@@ -48,6 +50,7 @@ def rules(item) -> dict[str, tuple]:
     """Each rule's call (True: seamed) and its figure on one item."""
     from seamless_usd.metrics import ps_score, seam_ratios
     from seamless_usd.verdict import judge
+    from seamless_usd.verdict.across import unrelated_lines
     from seamless_usd.verdict.breaks import line_breaks
     from seamless_usd.verdict.prepare import prepare_maps
 
@@ -58,6 +61,8 @@ def rules(item) -> dict[str, tuple]:
     out["verdict"] = (not v.seamless, round(v.strongest - v.margin, 3), round(time.perf_counter() - t0, 3))
     found, strongest = line_breaks(prepare_maps([pic], normal), [item.name])
     out["line-breaks"] = (bool(found), round(strongest - 1.0, 3))
+    found, strongest = unrelated_lines(prepare_maps([pic], normal))
+    out["continuation-ratio"] = (bool(found), round(strongest - 1.0, 3))
     ps = float(ps_score(pic.astype(np.float64)))
     ratios = seam_ratios(pic.astype(np.float64))
     seam = float(max(ratios["seam_ratio_x"], ratios["seam_ratio_y"]))

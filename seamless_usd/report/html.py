@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from seamless_usd.fileio import atomic_write_text
+from seamless_usd.report.facts import stack_facts
 from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page, seams_svg
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
@@ -37,93 +38,6 @@ def _metric_order() -> tuple[str, ...]:
         METRIC_KEYS = ()
     first = ("scale_ratio", "patch_distance", "seam_ratio_x", "seam_ratio_y", "centre_seam_x", "centre_seam_y")
     return first + tuple(k for k in METRIC_KEYS if k not in first)
-
-
-def _policy_text(record: dict) -> str | None:
-    """``{"policy": {...}, "working_size": [W, H], "maps": [...]}`` as one readable line."""
-    if not record:
-        return None
-    policy = record.get("policy", {})
-    cap = policy.get("max_size")
-    text = f"cap {cap} px" if cap else "native size (no cap)"
-    text += f", common size: {policy.get('common', 'largest')}, filter {policy.get('filter', 'auto')}"
-    changed = [m for m in record.get("maps", []) if m.get("resampled")]
-    if changed:
-        text += "; resampled: " + ", ".join(
-            f"@{m['asset']}@ {m['original_size'][0]}x{m['original_size'][1]}" for m in changed
-        )
-    else:
-        text += "; no map resampled"
-    return text
-
-
-def _seeds_text(seeds: list[dict] | None) -> str | None:
-    """The seeds trained side by side, each with its worst figure in units of its target, and the one kept."""
-    if not seeds:
-        return None
-    return ", ".join(f"seed {s['seed']}: {s['score']:.2f}" + (" (Q passed)" if s.get("q_passed") else "")
-                     + (" — kept" if s.get("chosen") else "") for s in seeds) + " (worst figure / its target)"
-
-
-_LAYOUTS = {"gan": "the SeamlessGAN tile, refined",
-            "random": "a random start, refined (the GAN tile's feature scale was implausible)",
-            "lattice": "a cut of whole lattice periods from the source",
-            "window": "one window of the source, joined across its wraps along minimum-error cuts",
-            "quilt": "large source blocks quilted on a torus, joined along minimum-error cuts",
-            "mend": "the source kept whole and rolled by half, a band over its seams re-laid from itself along "
-                    "minimum-error cuts"}
-
-
-def _layout_text(gan: dict) -> str | None:
-    """What the tile was made from, the lattice the stack repeats on, and both candidates' figures."""
-    kind = gan.get("layout")
-    if kind is None:
-        return None
-    text = _LAYOUTS.get(kind, kind)
-    lattice = gan.get("lattice") or {}
-    periods = lattice.get("period_px") or [None, None]
-    if any(p is not None for p in periods):
-        axes = " x ".join("none" if p is None else f"{p:g}" for p in periods)
-        text += f"; repeats every {axes} px (y x x)"
-    refused = lattice.get("window_refused")
-    if refused:
-        lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
-        text += (f"; no window cut: the texture does not continue itself at any window's lags (difference {lags};"
-                 f" a cut is offered at {refused['most']:.2f} or less)")
-    for kind in ("quilt", "mend"):
-        refused = lattice.get(f"{kind}_refused")
-        if refused:
-            text += (f"; {kind} not written: the verdict passes it, but its blocks differ along a cut by "
-                     f"{refused['difference_worst']:.2f} (its joins hide at {refused['most']:.2f} or less)")
-    tried = lattice.get("candidates")
-    if tried:
-        text += "; cut from the source, tried in turn: " + ", ".join(
-            f"{c['kind']} {c['score']:.2f}" + (" (passes)" if c["passes"] else "") for c in tried)
-    if "score" in lattice:
-        def verdict(suffix: str) -> str:
-            q = lattice.get("q_passed" + suffix)
-            ratio = lattice.get("lattice_ratio" + suffix)
-            parts = ["" if "gan" in lattice else "Q passed" if q else "Q not passed",  # "gan": no GAN, no Q
-                     "" if ratio is None else f"lattice ratio {ratio:.2f}",
-                     "passes" if lattice.get("passes" + suffix) else ""]
-            return ", ".join(p for p in parts if p) or "does not pass"
-        rival = next((k[len("score_"):] for k in lattice if k.startswith("score_")), None)
-        name = {"window": "window cut", "quilt": "quilt", "mend": "mend"}.get(lattice.get("cut"), "lattice cut")
-        blocks = ""
-        if lattice.get("cut") == "quilt" and "cells" in lattice:
-            blocks = (f" of {lattice['cells'][0]}x{lattice['cells'][1]} blocks (worst difference along a cut "
-                      f"{lattice['difference_worst']:.3f})")
-        elif lattice.get("cut") == "mend" and "band" in lattice:
-            blocks = (f", band {2 * sum(lattice['band'])} px wide (worst difference along a cut "
-                      f"{lattice['difference_worst']:.3f})")
-        text += (f"; {name} {lattice['tile'][0]}x{lattice['tile'][1]} px{blocks} scored {lattice['score']:.2f}"
-                 f" ({verdict('')})")
-        if rival is not None:
-            text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)});"
-                     " worst figure / its target")
-    if lattice.get("gan"):
-        text += f"; SeamlessGAN {lattice['gan']}"
-    return text
 
 
 def _map_name(m: MapReport) -> str:
@@ -288,82 +202,6 @@ def _why(stack: StackReport) -> str:
     return f'<div class="why info">{esc(q_text)}</div>' if q_text else ""
 
 
-def _q_text(q: dict) -> str | None:
-    """``{"passed": True, "tau": 0.41, ...}`` as ``"passed (tau 0.41, ...)"``."""
-    if not q:
-        return None
-    rest = ", ".join(f"{k} {fmt(v)}" for k, v in q.items() if k != "passed")
-    state = {True: "passed", False: "not passed"}.get(q.get("passed"), "")
-    return f"{state} ({rest})" if state and rest else (state or rest)
-
-
-def _straightened_text(facts: dict | None) -> str | None:
-    """What ``--straighten`` found and did (None when it was not asked for)."""
-    from seamless_usd.imaging.orientation import MIN_DEGREES, MIN_STRENGTH
-
-    if not facts:
-        return None
-    found = facts.get("orientation", {})
-    if not facts.get("degrees"):
-        return (f"not turned: lines at {found.get('degrees', 0):g} degrees, strength {found.get('strength', 0):g} "
-                f"(turned from {MIN_DEGREES:g} degrees at a strength of {MIN_STRENGTH:g})")
-    w, h = facts.get("size", (0, 0))
-    return (f"turned {facts['degrees']:g} degrees clockwise (strength {found.get('strength', 0):g}) and cut to "
-            f"{w} x {h}; the tile is written straight, so the pattern on the asset turns by that angle")
-
-
-def _levelled_text(facts: dict | None) -> str | None:
-    """How far levelling the source's light moved texel values (None when it was not levelled)."""
-    if not facts:
-        return None
-    return (f"the source's light was levelled before the cut (its texel values scaled by up to "
-            f"{100 * facts.get('moved', 0):.0f} %, {100 * facts.get('moved_mean', 0):.1f} % on average); the tile "
-            "is judged against the levelled source")
-
-
-def _evened_text(facts: dict | None) -> str | None:
-    """How far evening the source's drifting lattice moved texels (None when it was not evened)."""
-    if not facts:
-        return None
-    return (f"the source's drifting lattice was evened before the cut (texels moved by up to "
-            f"{facts.get('moved', 0):.1f} texels, {facts.get('moved_mean', 0):.2f} on average, every map alike); the "
-            "tile is judged against the evened source")
-
-
-def _facts(stack: StackReport) -> tuple[str, str]:
-    uv = stack.uv_scale
-    cover = f" (one tile covers {fmt(tuple(1.0 / v for v in uv))} of the source's UV square)" if uv else ""
-    main = {
-        "source": stack.source,
-        "variant selection": stack.variant or None,
-        "tile size (h x w)": fmt(stack.tile_size) if stack.tile_size else None,
-        "UV scale": f"{fmt(tuple(uv))}{cover}" if uv else None,
-        "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size and stack.model_hash else None,  # GAN crop
-        "Q (the discriminator's view)": _q_text(stack.q),
-        "straightened": _straightened_text(stack.resampled.get("straightened")),
-        "levelled": _levelled_text(stack.resampled.get("levelled")),
-        "evened": _evened_text(stack.resampled.get("evened")),
-        "same as": stack.duplicate_of,
-        "result from": stack.origin or None,
-    }
-    more = {
-        "working size (w x h)": fmt(stack.working_size) if stack.working_size else None,
-        "working resolution": _policy_text(stack.resampled),
-        "candidates tried": stack.candidates or None,
-        "GAN seeds": _seeds_text(stack.resampled.get("gan", {}).get("seeds")),
-        "tile made from": _layout_text(stack.resampled.get("gan", {})),
-        "timings (s)": ", ".join(f"{k} {v:.1f}" for k, v in stack.timings.items()) or None,
-        "device / precision": f"{stack.device} / {stack.precision}" if stack.device else None,
-        "model hash": stack.model_hash or None,
-        "peak memory (MB)": f"{stack.peak_rss_mb:.0f}" if stack.peak_rss_mb else None,
-    }
-
-    def rows(d: dict) -> str:
-        return "".join(f"<tr><td class=muted>{esc(k)}</td><td>{esc(v)}</td></tr>" for k, v in d.items() if v)
-
-    return rows(main), rows(more)
-
-
 def stack_html(stack: StackReport) -> str:
     """One stack's section of the page."""
     intent = ""
@@ -373,7 +211,7 @@ def stack_html(stack: StackReport) -> str:
     shown_below = stack.status is StackStatus.NOT_PASSED and stack.verdict  # the "Not passed" box lists it
     message = (f"<p>{esc(stack.message)}</p>" if stack.message and stack.status is not StackStatus.LEFT_ALONE
                and not shown_below else "")
-    main, more = _facts(stack)
+    main, more = stack_facts(stack)
     p = stack.previews
     stages = ""
     if p.levels:

@@ -18,9 +18,10 @@ USD provenance and ``seamless-usd check``):
 
 A texture with no separate source (``seamless-usd check`` on a picture or a stack, and the scan deciding
 whether a stack is already tileable, both reading its files through :mod:`seamless_usd.discover.alone`) is
-judged against itself, by two rules whose seams are added: the classifier fitted on its own interior lines,
+judged against itself, by three rules whose seams are added: the classifier fitted on its own interior lines,
 with its own 4th-strongest line (:data:`SELF_RANK`) as the reference; and each line's breaks at every lag
-against all the texture's parallel lines (:mod:`.breaks`), reported on the same scale (a seam above
+against all the texture's parallel lines (:mod:`.breaks`), and the line across which the rows predict each other
+least against the next such line (:mod:`.across`), reported on the same scale (a seam above
 :data:`SELF_MARGIN`). There is no fidelity to judge.
 """
 from __future__ import annotations
@@ -30,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..memo import ContentMemo
+from .across import unrelated_lines
 from .breaks import line_breaks
 from .classifier import SeamClassifier, fit
 from .ghosts import ghost_bands
@@ -230,7 +232,9 @@ def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> 
             strongest = max(strongest, top)
     if ref is None:
         found, top = line_breaks(reading.maps, reading.names, SELF_MARGIN)
-        strongest = max(strongest, top)
+        unrelated, top_across = unrelated_lines(reading.maps, SELF_MARGIN)
+        found += unrelated
+        strongest = max(strongest, top, top_across)
         kept: list[Seam] = []
         for s in sorted(seams + found, key=lambda x: -x.figure):  # one line found by both: its stronger figure
             if not _near(s, kept):
