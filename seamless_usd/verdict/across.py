@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .breaks import peaks, straddle
 from .lines import Seam
 from .prepare import joint, map_weights, to_working
 
@@ -32,25 +33,13 @@ MARGIN = 1.25
 SPACING = 4
 #: Longest side (px) the maps are read at, as the line breaks read them.
 WORK_SIDE = 512
-_LAGS = (1, 2, 3)
 
 
 def continuation_ratios(img: np.ndarray) -> np.ndarray:
     """(H,): for the line before each row of ``img`` (H, W, C; periodic), the mean difference of the straddling row
-    pair one texel apart over the mean of the straddling pairs two and three texels apart."""
-    means = {}
-    for lag in _LAGS:
-        diff = np.linalg.norm(img - np.roll(img, lag, axis=0), axis=-1).mean(axis=1)  # pair (i - lag, i) at i
-        means[lag] = sum(np.roll(diff, -j) for j in range(lag)) / lag  # pairs straddling the line before row i
+    pair one texel apart over the mean of the straddling pairs two and three texels apart (:func:`.breaks.straddle`)."""
     eps = 1e-12
-    return (means[1] + eps) / (0.5 * (means[2] + means[3]) + eps)
-
-
-def _next_line(ratios: np.ndarray, top: int) -> float:
-    """The highest ratio of a line more than SPACING lines (on the torus) from ``top``."""
-    n = len(ratios)
-    far = np.minimum(np.abs(np.arange(n) - top), n - np.abs(np.arange(n) - top)) > SPACING
-    return float(ratios[far].max()) if far.any() else float(ratios[top])
+    return (straddle(img, 1) + eps) / (0.5 * (straddle(img, 2) + straddle(img, 3)) + eps)
 
 
 def unrelated_lines(prepared: list[np.ndarray], units: float = 1.0) -> tuple[list[Seam], float]:
@@ -69,8 +58,9 @@ def unrelated_lines(prepared: list[np.ndarray], units: float = 1.0) -> tuple[lis
         if n < 4 * SPACING:
             continue
         ratios = continuation_ratios(rotated)
-        top = int(np.argmax(ratios))
-        figure = float(ratios[top]) / _next_line(ratios, top) * units / MARGIN
+        found = peaks(ratios, SPACING)  # the strongest line, then the next one more than SPACING from it
+        top = found[0]
+        figure = float(ratios[top]) / float(ratios[found[1] if len(found) > 1 else top]) * units / MARGIN
         strongest = max(strongest, figure)
         if figure > units:
             across, along = (size[0], size[1]) if axis == "y" else (size[1], size[0])

@@ -6,7 +6,7 @@ Measured by ``benchmarks/texture_verdict.py`` on textures judged on their own; i
 :data:`MARGIN`) were chosen on the corpus's tuning part only.
 
 With no separate source, a seam is a line unlike the texture's other lines. Across a line, every pair of rows
-``tau`` apart that straddles it is compared (:func:`_straddle`): inside a texture, such pairs differ as the
+``tau`` apart that straddles it is compared (:func:`straddle`): inside a texture, such pairs differ as the
 texture differs over ``tau`` (its structure function), whichever line they straddle; across a join of
 unrelated places they differ as unrelated texels do, at every lag. So each line gets, for every lag, its
 mean straddling difference in units of the same figure's spread over all the texture's parallel lines
@@ -30,7 +30,7 @@ import numpy as np
 from .lines import Seam
 from .prepare import joint, map_weights, to_working
 
-__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "groove"]
+__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "groove", "straddle", "peaks"]
 
 #: Longest side (px) the maps are read at: fine enough that a join's texel step survives the area filter.
 WORK_SIDE = 512
@@ -68,7 +68,7 @@ def _lags(n: int, own: int | None) -> list[int]:
     return sorted(lags | ({own} if own else set()))
 
 
-def _straddle(img: np.ndarray, lag: int) -> np.ndarray:
+def straddle(img: np.ndarray, lag: int) -> np.ndarray:
     """(n,) for each line ``p`` (before row ``p``, on a torus): the mean difference of the row pairs ``lag``
     apart that straddle it."""
     n = img.shape[0]
@@ -84,14 +84,14 @@ def lag_figures(img: np.ndarray, own: int | None = None) -> dict[int, np.ndarray
     axis, read as one more lag."""
     out = {}
     for lag in _lags(img.shape[0], own):
-        e = _straddle(img, lag)
+        e = straddle(img, lag)
         mid = np.median(e)
         spread = 1.4826 * np.median(np.abs(e - mid)) + 1e-3 * mid + 1e-6  # a flat map: no line stands out
         out[lag] = (e - mid) / spread
     return out
 
 
-def _peaks(f: np.ndarray, spacing: int) -> list[int]:
+def peaks(f: np.ndarray, spacing: int) -> list[int]:
     """Lines strongest first, each more than ``spacing`` from every stronger one (on a torus): a join lifts
     the lines within a lag of it too, less the closer they are."""
     n = len(f)
@@ -111,9 +111,9 @@ def line_figures(img: np.ndarray, own: int | None = None) -> np.ndarray:
     n = img.shape[0]
     out = np.full(n, -np.inf)
     for lag, z in lag_figures(img, own).items():
-        peaks = _peaks(z, max(SPACING, lag))
-        reference = z[peaks[RANK]] if len(peaks) > RANK else 0.0
-        for line in peaks[:RANK]:
+        strongest = peaks(z, max(SPACING, lag))
+        reference = z[strongest[RANK]] if len(strongest) > RANK else 0.0
+        for line in strongest[:RANK]:
             # a texture's own line recurs one period on: a line is read against its recurrences too
             again = max(z[(line + d * own + k) % n] for d in (-1, 1) for k in (-1, 0, 1)) if own else -np.inf
             if again >= RECUR * z[line]:
