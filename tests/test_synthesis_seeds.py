@@ -1,4 +1,6 @@
 """Several seeds trained side by side and the tile their figures choose; D and the style loss every n-th step."""
+import os
+
 import numpy as np
 import pytest
 import torch
@@ -157,3 +159,20 @@ def test_style_every_skips_the_style_loss_and_weights_it_when_computed():
     maps = _maps()
     assert "style_every" not in TINY.training_fields()
     assert train(maps, TINY.replace(style_every=2), seed=0).hash != train(maps, TINY, seed=0).hash
+
+
+def test_a_job_trains_the_presets_seeds_that_run_side_by_side_on_its_threads():
+    from seamless_usd.pipeline.executors import make_executor
+    from seamless_usd.pipeline.options import Options
+    from seamless_usd.pipeline.stackjob import JobSettings
+
+    default = Options(preset="default")
+    assert JobSettings.from_options(default, 2).seeds is None  # the preset's two, side by side
+    assert JobSettings.from_options(default, None).seeds is None  # a remote cluster's threads are not known
+    assert JobSettings.from_options(default, 1).seeds == 1  # on one thread a second seed doubles the time
+    assert JobSettings.from_options(Options(preset="default", seeds=2), 1).seeds == 2  # asked for: trained
+    assert JobSettings.from_options(Options(preset="draft"), 1).seeds is None  # one seed already
+    two = make_executor(None, 2)
+    assert two.threads_per_job == max(1, (os.cpu_count() or 1) // 2)
+    assert make_executor("tcp://127.0.0.1:8786").threads_per_job is None
+    assert make_executor(None, 1).threads_per_job == (os.cpu_count() or 1)

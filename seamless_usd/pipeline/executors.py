@@ -26,6 +26,8 @@ Result = StackOutcome | Exception
 
 
 class Executor(Protocol):
+    threads_per_job: int | None  # CPU threads each job trains on (None: not known, as on a remote cluster)
+
     def run(self, jobs: Sequence[StackJob], progress: Progress) -> Iterator[tuple[StackJob, Result]]:
         """Run ``jobs``; yield each with its outcome (or the exception that stopped it) as it ends."""
 
@@ -34,6 +36,7 @@ class InProcessExecutor:
     """Jobs one after another in this process; one failing job does not stop the others."""
 
     name = "inprocess"
+    threads_per_job: int | None = os.cpu_count() or 1  # torch's threads for each job (None: not known here)
 
     def run(self, jobs, progress):
         for job in jobs:
@@ -67,6 +70,7 @@ class ProcessPoolExecutor:
 
     def __init__(self, workers: int):
         self.workers = workers
+        self.threads_per_job = _threads_per_worker(workers)
 
     def run(self, jobs, progress):
         import multiprocessing
@@ -99,6 +103,8 @@ class DaskExecutor:
         self.address = address
         self.workers = workers
         self.threads_per_worker = threads_per_worker or _threads_per_worker(workers or 1)
+        # a cluster of its own on this machine: its workers' threads; a remote one's are not known here
+        self.threads_per_job = self.threads_per_worker if address == "local" else None
 
     def run(self, jobs, progress):
         if not jobs:  # nothing to do: no cluster started, no scheduler contacted

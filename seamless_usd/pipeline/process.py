@@ -75,7 +75,7 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
     """Train and sample every unique stack once (identical stacks share the result)."""
     jobs: list[StackJob] = []
     seen: set[str] = set()
-    settings = JobSettings.from_options(run.options)
+    settings = JobSettings.from_options(run.options, run.executor.threads_per_job)
     for label, stacks, out_dir in sources:
         for stack in stacks:
             if ((label, stack.id) in run.blocked or (label, stack.id) in run.left_alone
@@ -201,7 +201,8 @@ def _place(run: Run, stack: TextureStack, out_dir: Path) -> StackOutcome | Excep
     """
     key = (stack.content_key, out_dir)
     if key not in run.placed:
-        job = StackJob(stack=stack, settings=JobSettings.from_options(run.options), output_dir=out_dir)
+        job = StackJob(stack=stack, settings=JobSettings.from_options(run.options, run.executor.threads_per_job),
+                       output_dir=out_dir)
         try:
             run.placed[key] = run_stack(job, None)
         except Exception as exc:  # noqa: BLE001 - reported per stack

@@ -47,9 +47,17 @@ class JobSettings:
     straighten: bool = False  # turn the stack's lines onto the axes before tiling (imaging.straighten)
 
     @classmethod
-    def from_options(cls, options) -> "JobSettings":
+    def from_options(cls, options, threads: int | None = None) -> "JobSettings":
+        """The settings of ``options`` for a job with ``threads`` CPU threads (None: unknown): seeds not asked for
+        are the preset's that run side by side there (:func:`.synthesis.config.side_by_side_seeds`), so the
+        cache keys the seeds a job trains."""
+        from seamless_usd.synthesis.config import PRESETS, side_by_side_seeds
+
+        seeds, preset = options.seeds, PRESETS.get(options.preset)
+        if seeds is None and preset is not None and side_by_side_seeds(preset, threads) != preset.seeds:
+            seeds = side_by_side_seeds(preset, threads)  # else None, the preset's: the same job as before
         return cls(
-            preset=options.preset, iterations=options.iterations, seeds=options.seeds, seed=options.seed,
+            preset=options.preset, iterations=options.iterations, seeds=seeds, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
             max_pixels=options.max_pixels, refine=options.refine, tile_size=options.tile_size,
             straighten=options.straighten,

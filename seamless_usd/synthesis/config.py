@@ -5,7 +5,7 @@ import dataclasses
 import json
 from dataclasses import dataclass
 
-__all__ = ["SynthesisConfig", "PRESETS", "get_preset"]
+__all__ = ["SynthesisConfig", "PRESETS", "get_preset", "side_by_side_seeds"]
 
 
 @dataclass(frozen=True)
@@ -128,6 +128,23 @@ PRESETS: dict[str, SynthesisConfig] = {
     "tiny": SynthesisConfig(k=16, ngf=8, ndf=8, n_res_blocks=1, iterations=4, style_scales=2, style_channels=8,
                             c_min=16, crop_step=8, max_candidates=6, checkpoint_every=2, progress_every=1),
 }
+
+
+def side_by_side_seeds(config: SynthesisConfig, threads: int | None) -> int:
+    """The seeds of ``config`` a job with ``threads`` CPU threads trains: as many as run side by side, one per
+    thread, and at least one (``threads`` None: unknown, as on a remote cluster: all of them).
+
+    A second seed is worth its place where it trains on an idle core (1.09x the wall time of one, the best of
+    the two: docs/decisions.md, "Two seeds side by side"). Where the cores are taken already (``--jobs 2`` on
+    two cores, each job on one thread) it would train after the first and double the stack's training time.
+    Asked for with ``seeds``, every seed is trained.
+
+    >>> side_by_side_seeds(get_preset("default"), 2), side_by_side_seeds(get_preset("default"), 1)
+    (2, 1)
+    >>> side_by_side_seeds(get_preset("default"), None)
+    2
+    """
+    return config.seeds if threads is None else max(1, min(config.seeds, threads))
 
 
 def get_preset(name: str) -> SynthesisConfig:
