@@ -46,8 +46,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-size", type=int, help="working-resolution cap in pixels (longest side); default native")
     p.add_argument("--iterations", type=_positive, help="override the preset's training iterations")
     p.add_argument("--seeds", type=_positive,
-                   help="override the preset's seeds trained side by side on the CPU's cores; the tile whose "
-                        "fidelity figures are best is kept (1 halves the work where the cores are busy already)")
+                   help="seeds trained, the tile whose fidelity figures are best kept (default: the preset's "
+                        "that run side by side on a job's cores: one a job with --jobs 2 on two cores)")
     p.add_argument("--max-pixels", type=int, default=1 << 28,
                    help="refuse images whose header claims more pixels, before decoding (default: %(default)s)")
     p.add_argument("--cache-dir", type=Path, help="trained models and checkpoints (default: user cache dir)")

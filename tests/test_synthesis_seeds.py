@@ -175,4 +175,11 @@ def test_a_job_trains_the_presets_seeds_that_run_side_by_side_on_its_threads():
     two = make_executor(None, 2)
     assert two.threads_per_job == max(1, (os.cpu_count() or 1) // 2)
     assert make_executor("tcp://127.0.0.1:8786").threads_per_job is None
-    assert make_executor(None, 1).threads_per_job == (os.cpu_count() or 1)
+    inprocess = make_executor(None, 1)
+    before = torch.get_num_threads()
+    try:  # in this process: the threads torch trains on, as a host application set them
+        torch.set_num_threads(1)
+        assert inprocess.threads_per_job == 1 and JobSettings.from_options(default, 1).seeds == 1
+    finally:
+        torch.set_num_threads(before)
+    assert inprocess.threads_per_job == before

@@ -13,6 +13,7 @@ Workers only train, sample and write maps; stage and document edits happen in th
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from typing import Protocol
 
@@ -36,7 +37,18 @@ class InProcessExecutor:
     """Jobs one after another in this process; one failing job does not stop the others."""
 
     name = "inprocess"
-    threads_per_job: int | None = os.cpu_count() or 1  # torch's threads for each job (None: not known here)
+
+    @property
+    def threads_per_job(self) -> int:
+        """The threads this process trains on: torch's where torch is loaded already (a host application may have
+        set them), else what torch will take (``OMP_NUM_THREADS``, else every core), without loading torch."""
+        torch = sys.modules.get("torch")
+        if torch is not None:
+            return torch.get_num_threads()
+        try:
+            return max(1, int(os.environ.get("OMP_NUM_THREADS", "")))
+        except ValueError:
+            return os.cpu_count() or 1
 
     def run(self, jobs, progress):
         for job in jobs:
