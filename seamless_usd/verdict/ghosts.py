@@ -22,9 +22,11 @@ with, and a tile of copies (:mod:`.copies`) has its blended texels judged by the
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import gaussian_filter, uniform_filter1d
 
 from .lines import Seam
+
+# scipy.ndimage is imported where a tile is read against a source, not with the verdict: it takes a quarter of a
+# second, a quarter of ``check`` on a 1K picture, which judges a texture on its own and never reads ghosts.
 
 __all__ = ["GHOST_DIP", "PATCH", "SIGMA", "ghost_bands", "detail_ratios"]
 
@@ -46,6 +48,8 @@ CHUNK = 1024
 
 def _detail(img: np.ndarray, periodic: bool) -> np.ndarray:
     """One channel of fine detail: the sum over channels of each less its blur."""
+    from scipy.ndimage import gaussian_filter
+
     g = np.asarray(img, dtype=np.float32)
     g = g.sum(-1) if g.ndim == 3 else g
     return g - gaussian_filter(g, SIGMA, mode="wrap" if periodic else "reflect")
@@ -102,6 +106,8 @@ def ghost_bands(tile: np.ndarray, source: np.ndarray, factor: float, size: tuple
     >>> ghost_bands(np.roll(src, 5, 0), src, 1.0, (192, 192), 0.5)[0]
     []
     """
+    from scipy.ndimage import uniform_filter1d
+
     ratios = detail_ratios(tile, source)
     if ratios is None:
         return [], 0.0
