@@ -18,7 +18,8 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Protocol
 
 from seamless_usd.errors import UsageError
-from seamless_usd.pipeline.stackjob import StackJob, StackOutcome, run_stack
+from seamless_usd.pipeline.outcome import StackOutcome
+from seamless_usd.pipeline.stackjob import StackJob, run_stack
 
 __all__ = ["Executor", "InProcessExecutor", "ProcessPoolExecutor", "DaskExecutor", "make_executor", "EXECUTORS"]
 

@@ -26,7 +26,8 @@ from seamless_usd.pipeline.executors import Executor, InProcessExecutor, make_ex
 from seamless_usd.pipeline.options import Options, ProgressEvent, check_device
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.pipeline.planned import planned_result, wrap_only_result
-from seamless_usd.pipeline.stackjob import JobSettings, StackJob, StackOutcome, run_stack
+from seamless_usd.pipeline.outcome import StackOutcome
+from seamless_usd.pipeline.stackjob import JobSettings, StackJob, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 
 __all__ = ["process_paths", "process_stage", "select_stacks", "blocked_stacks", "BLOCKING_SKIPS"]

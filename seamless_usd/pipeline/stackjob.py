@@ -9,26 +9,25 @@ import dataclasses
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from seamless_usd.textures import TextureMap, TextureStack
+from seamless_usd.textures import TextureStack
 from seamless_usd.fileio import confine
-from seamless_usd.findings import Finding
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
-from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straighten
+from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, straighten
+from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
 from seamless_usd.naming import tile_filename
 from seamless_usd.pipeline.rerun import load_judged, save_judged
-from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import Reading, Reference, judge_reading
 from seamless_usd.verdict.joins import inside_figures, join_stats
 
-__all__ = ["JobSettings", "StackJob", "StackOutcome", "MapOutcome", "run_stack", "map_identity", "on_tile_grid"]
+__all__ = ["JobSettings", "StackJob", "run_stack", "on_tile_grid"]
 
 @dataclass(frozen=True)
 class JobSettings:
@@ -69,108 +68,6 @@ class StackJob:
     stack: TextureStack
     settings: JobSettings
     output_dir: Path
-
-
-def map_identity(m: TextureMap) -> tuple[str, str]:
-    """Maps of identical stacks are matched by file and channels used."""
-    return (m.resolved, m.channels_used)
-
-
-@dataclass
-class MapOutcome:
-    output: Path
-    metrics: dict[str, float]
-    source_metrics: dict[str, float]
-
-
-@dataclass
-class StackOutcome:
-    """What a job returns: per-map outputs and measurements, and the sampling facts."""
-
-    stack_id: str
-    maps: dict[tuple[str, str], MapOutcome]  # map_identity -> outcome
-    crop_size: tuple[int, int]
-    tile_size: tuple[int, int]
-    working_size: tuple[int, int]
-    resampled: dict[str, Any]
-    uv_scale: tuple[float, float]
-    q: dict[str, Any]
-    candidates: int
-    timings: dict[str, float]
-    model_hash: str
-    device: str
-    precision: str
-    cached: bool = False
-    output_dir: Path | None = None  # where the tiles were written
-    peak_rss_mb: float = 0.0  # peak resident memory of the process that ran the job
-    previews: Previews = field(default_factory=Previews, repr=False)
-    findings: list[Finding] = field(default_factory=list)  # warnings while loading (e.g. non-finite pixels)
-    failing: list[str] = field(default_factory=list)  # "asset: figure value (tolerance)" outside the tolerances
-    verdict: dict = field(default_factory=dict)  # seamless_usd.verdict.Verdict.as_dict() of the written tiles
-
-    @property
-    def passed(self) -> bool:
-        """The verdict on the written tiles: no seam in any map, every fidelity figure inside its tolerance."""
-        return bool(self.verdict.get("passed"))
-
-    def reasons(self) -> list[str]:
-        """Why the stack did not pass (empty when it passed), and for a stack whose joins cannot hide, what to do."""
-        from seamless_usd.synthesis import structure_advice
-        from seamless_usd.verdict import Verdict
-
-        if not self.verdict:
-            return ["not judged"]
-        out = Verdict.from_dict(self.verdict).reasons()
-        gan = self.resampled.get("gan") or {}
-        advice = None if self.passed else structure_advice(gan.get("lattice") or {}, gan.get("layout"))
-        return out + ([advice] if advice else [])
-
-    def fill_report(self, report: StackReport, stack: TextureStack, reused: bool) -> None:
-        report.status = (
-            StackStatus.REUSED if reused else StackStatus.PASSED if self.passed else StackStatus.NOT_PASSED
-        )
-        report.origin = "duplicate" if reused else "cache" if self.cached else "trained"
-        report.peak_rss_mb = round(self.peak_rss_mb, 1)
-        if reused:
-            report.duplicate_of = self.stack_id
-            report.message = f"identical to stack {self.stack_id}: its result is reused"
-        elif not self.passed:
-            report.message = "; ".join(self.reasons())
-        elif self.cached:
-            report.message = "result taken from the cache"
-        report.failing = list(self.failing)
-        report.verdict = dict(self.verdict)
-        for name in ("crop_size", "tile_size", "working_size", "resampled", "uv_scale", "q", "candidates",
-                     "timings", "model_hash", "device", "precision"):
-            setattr(report, name, getattr(self, name))
-        report.previews = self.previews
-        report.maps = [
-            MapReport.for_map(m, out.output, out.metrics, out.source_metrics)
-            for m, out in ((m, self.maps[map_identity(m)]) for m in stack.maps)
-        ]
-
-    def stack_result(self, stack: TextureStack):
-        """The authoring input for ``stack`` (possibly an identical stack of another material)."""
-        from seamless_usd.version import __version__
-        from seamless_usd.authoring import MapResult, Provenance, StackResult
-
-        prov = Provenance(
-            source_asset=", ".join(m.asset for m in stack.maps),
-            crop_size=(self.crop_size[1], self.crop_size[0]),  # authoring records (c_w, c_h)
-            uv_scale=self.uv_scale,
-            q_passed=None if not self.q else bool(self.q.get("passed")),
-            q_tau=float(self.q.get("tau", 0.0)),
-            q_band_min=tuple(self.q.get("band_min", (0.0, 0.0))),
-            model_hash=self.model_hash,
-            tool_version=__version__,
-            passed=self.passed,
-            verdict="seamless and faithful" if self.passed else "; ".join(self.reasons()),
-            straightened=float((self.resampled.get("straightened") or {}).get("degrees", 0.0)),
-            levelled=float((self.resampled.get("levelled") or {}).get("moved", 0.0)),
-            evened=float((self.resampled.get("evened") or {}).get("moved", 0.0)),
-        )
-        maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
-        return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
 
 
 def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None) -> StackOutcome:
@@ -258,7 +155,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
         again = load_judged(entry.root, out_dir, stack.id)
         if again is not None:
-            return _outcome(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir)
+            return outcome_from_record(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir)
         # the tile was cut from the maps turned by the turn found (made above when the tile was made)
         pixels = as_made(pixels, normals, straightened, None)
     shown = pixels.values  # the report shows the source as the user has it, its light as it was
@@ -314,44 +211,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                                                 "source_metrics": o.source_metrics} for k, o in outcomes.items()},
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
     save_judged(entry.root, out_dir, stack.id, record, previews)
-    return _outcome(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
-
-
-def _outcome(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
-             out_dir: Path) -> StackOutcome:
-    """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`).
-
-    ``meta["straightened"]``: the tile was made from the straightened maps, and its UV scale, read against them,
-    is brought back to the source's texel density; ``meta["levelled"]`` / ``meta["evened"]``: from the maps with
-    their light levelled or their lattice evened (:mod:`.madefrom`)."""
-    straightened = meta.get("straightened")
-    maps = {tuple(json.loads(k)): MapOutcome(Path(o["path"]), dict(o["metrics"]), dict(o["source_metrics"]))
-            for k, o in record["outputs"].items()}
-    verdict = dict(record["verdict"])
-    return StackOutcome(
-        stack_id=stack.id,
-        maps=maps,
-        crop_size=tuple(int(v) for v in meta["crop_size"]),
-        tile_size=tuple(int(v) for v in record["tile_size"]),
-        working_size=tuple(int(v) for v in meta["scale"]["gan_working_size"]),
-        resampled={**pixels.policy_record, "gan": dict(meta["scale"]),
-                   **({"straightened": straightened} if straightened else {}),
-                   **{k: meta[k] for k in ("levelled", "evened") if meta.get(k)}},
-        failing=list(verdict.get("failing", [])),
-        verdict=verdict,
-        uv_scale=source_uv_scale(meta["uv_scale"], straightened),
-        q=dict(meta["q"]),
-        candidates=int(meta["candidates"]),
-        timings=dict(record["timings"]),
-        model_hash=str(meta["model_hash"]),
-        device=str(meta["device"]),
-        precision=str(meta["precision"]),
-        cached=cached,
-        output_dir=out_dir,
-        peak_rss_mb=_peak_rss_mb(),
-        previews=previews,
-        findings=list(pixels.findings),
-    )
+    return outcome_from_record(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
 
 
 def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:
@@ -371,14 +231,6 @@ def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:
             load_checkpoint(path)
         except (ValueError, KeyError):
             path.unlink(missing_ok=True)
-
-
-def _peak_rss_mb() -> float:
-    try:
-        import resource
-    except ImportError:  # pragma: no cover - Windows
-        return 0.0
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
 
 
 def _gan_facts(made) -> dict[str, Any]:

@@ -1,0 +1,163 @@
+"""What a stack job returns (:func:`.stackjob.run_stack`): per-map outputs and measurements, the sampling facts
+and the verdict on the written tiles, and how the client turns them into the stack's report and authoring input.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from seamless_usd.findings import Finding
+from seamless_usd.pipeline.madefrom import source_uv_scale
+from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
+from seamless_usd.textures import TextureMap, TextureStack
+
+__all__ = ["MapOutcome", "StackOutcome", "map_identity", "outcome_from_record"]
+
+
+def map_identity(m: TextureMap) -> tuple[str, str]:
+    """Maps of identical stacks are matched by file and channels used."""
+    return (m.resolved, m.channels_used)
+
+
+@dataclass
+class MapOutcome:
+    output: Path
+    metrics: dict[str, float]
+    source_metrics: dict[str, float]
+
+
+@dataclass
+class StackOutcome:
+    """What a job returns: per-map outputs and measurements, and the sampling facts."""
+
+    stack_id: str
+    maps: dict[tuple[str, str], MapOutcome]  # map_identity -> outcome
+    crop_size: tuple[int, int]
+    tile_size: tuple[int, int]
+    working_size: tuple[int, int]
+    resampled: dict[str, Any]
+    uv_scale: tuple[float, float]
+    q: dict[str, Any]
+    candidates: int
+    timings: dict[str, float]
+    model_hash: str
+    device: str
+    precision: str
+    cached: bool = False
+    output_dir: Path | None = None  # where the tiles were written
+    peak_rss_mb: float = 0.0  # peak resident memory of the process that ran the job
+    previews: Previews = field(default_factory=Previews, repr=False)
+    findings: list[Finding] = field(default_factory=list)  # warnings while loading (e.g. non-finite pixels)
+    failing: list[str] = field(default_factory=list)  # "asset: figure value (tolerance)" outside the tolerances
+    verdict: dict = field(default_factory=dict)  # seamless_usd.verdict.Verdict.as_dict() of the written tiles
+
+    @property
+    def passed(self) -> bool:
+        """The verdict on the written tiles: no seam in any map, every fidelity figure inside its tolerance."""
+        return bool(self.verdict.get("passed"))
+
+    def reasons(self) -> list[str]:
+        """Why the stack did not pass (empty when it passed), and for a stack whose joins cannot hide, what to do."""
+        from seamless_usd.synthesis import structure_advice
+        from seamless_usd.verdict import Verdict
+
+        if not self.verdict:
+            return ["not judged"]
+        out = Verdict.from_dict(self.verdict).reasons()
+        gan = self.resampled.get("gan") or {}
+        advice = None if self.passed else structure_advice(gan.get("lattice") or {}, gan.get("layout"))
+        return out + ([advice] if advice else [])
+
+    def fill_report(self, report: StackReport, stack: TextureStack, reused: bool) -> None:
+        report.status = (
+            StackStatus.REUSED if reused else StackStatus.PASSED if self.passed else StackStatus.NOT_PASSED
+        )
+        report.origin = "duplicate" if reused else "cache" if self.cached else "trained"
+        report.peak_rss_mb = round(self.peak_rss_mb, 1)
+        if reused:
+            report.duplicate_of = self.stack_id
+            report.message = f"identical to stack {self.stack_id}: its result is reused"
+        elif not self.passed:
+            report.message = "; ".join(self.reasons())
+        elif self.cached:
+            report.message = "result taken from the cache"
+        report.failing = list(self.failing)
+        report.verdict = dict(self.verdict)
+        for name in ("crop_size", "tile_size", "working_size", "resampled", "uv_scale", "q", "candidates",
+                     "timings", "model_hash", "device", "precision"):
+            setattr(report, name, getattr(self, name))
+        report.previews = self.previews
+        report.maps = [
+            MapReport.for_map(m, out.output, out.metrics, out.source_metrics)
+            for m, out in ((m, self.maps[map_identity(m)]) for m in stack.maps)
+        ]
+
+    def stack_result(self, stack: TextureStack):
+        """The authoring input for ``stack`` (possibly an identical stack of another material)."""
+        from seamless_usd.version import __version__
+        from seamless_usd.authoring import MapResult, Provenance, StackResult
+
+        prov = Provenance(
+            source_asset=", ".join(m.asset for m in stack.maps),
+            crop_size=(self.crop_size[1], self.crop_size[0]),  # authoring records (c_w, c_h)
+            uv_scale=self.uv_scale,
+            q_passed=None if not self.q else bool(self.q.get("passed")),
+            q_tau=float(self.q.get("tau", 0.0)),
+            q_band_min=tuple(self.q.get("band_min", (0.0, 0.0))),
+            model_hash=self.model_hash,
+            tool_version=__version__,
+            passed=self.passed,
+            verdict="seamless and faithful" if self.passed else "; ".join(self.reasons()),
+            straightened=float((self.resampled.get("straightened") or {}).get("degrees", 0.0)),
+            levelled=float((self.resampled.get("levelled") or {}).get("moved", 0.0)),
+            evened=float((self.resampled.get("evened") or {}).get("moved", 0.0)),
+        )
+        maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
+        return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
+
+
+def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
+             out_dir: Path) -> StackOutcome:
+    """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`).
+
+    ``meta["straightened"]``: the tile was made from the straightened maps, and its UV scale, read against them,
+    is brought back to the source's texel density; ``meta["levelled"]`` / ``meta["evened"]``: from the maps with
+    their light levelled or their lattice evened (:mod:`.madefrom`)."""
+    straightened = meta.get("straightened")
+    maps = {tuple(json.loads(k)): MapOutcome(Path(o["path"]), dict(o["metrics"]), dict(o["source_metrics"]))
+            for k, o in record["outputs"].items()}
+    verdict = dict(record["verdict"])
+    return StackOutcome(
+        stack_id=stack.id,
+        maps=maps,
+        crop_size=tuple(int(v) for v in meta["crop_size"]),
+        tile_size=tuple(int(v) for v in record["tile_size"]),
+        working_size=tuple(int(v) for v in meta["scale"]["gan_working_size"]),
+        resampled={**pixels.policy_record, "gan": dict(meta["scale"]),
+                   **({"straightened": straightened} if straightened else {}),
+                   **{k: meta[k] for k in ("levelled", "evened") if meta.get(k)}},
+        failing=list(verdict.get("failing", [])),
+        verdict=verdict,
+        uv_scale=source_uv_scale(meta["uv_scale"], straightened),
+        q=dict(meta["q"]),
+        candidates=int(meta["candidates"]),
+        timings=dict(record["timings"]),
+        model_hash=str(meta["model_hash"]),
+        device=str(meta["device"]),
+        precision=str(meta["precision"]),
+        cached=cached,
+        output_dir=out_dir,
+        peak_rss_mb=_peak_rss_mb(),
+        previews=previews,
+        findings=list(pixels.findings),
+    )
+
+
+def _peak_rss_mb() -> float:
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - Windows
+        return 0.0
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
