@@ -142,9 +142,11 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
     t0 = time.perf_counter()
     made = syn.make_tile(maps, config, seed=seed, progress=progress, keep_alternatives=True)
     total = time.perf_counter() - t0
-    gan = made.gan
+    gan = made.gan  # None: a tile cut from the source passed before any training
     info = {
-        "preset": preset, "iterations": config.iterations, "crop_size": list(gan.crop_size), "q_passed": bool(gan.q_passed),
+        "preset": preset, "iterations": config.iterations if gan is not None else 0,
+        "crop_size": list(gan.crop_size) if gan is not None else None,
+        "q_passed": bool(gan.q_passed) if gan is not None else None,
         "working_size": list(made.working_size), "structure_px": round(made.structure_px, 1),
         "train_seconds": round(made.timings.get("train", 0.0), 2),
         "sample_seconds": round(made.timings.get("sample", 0.0), 2),
@@ -153,7 +155,7 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
         info["seeds"] = made.seeds
     lattice_s = made.timings.get("lattice", 0.0)
     gan_seconds = total - made.timings.get("refine", 0.0) - lattice_s
-    if "seamlessgan" in methods:
+    if "seamlessgan" in methods and gan is not None:
         working = {w.name: w.pixels for w in syn.downsample_maps(maps, made.working_size)}
         out["seamlessgan"] = MethodResult(dict(gan.maps), gan_seconds, dict(info), references=working)
     refined = {"seamless-usd": made.maps, made.layout_kind: made.maps, **made.alternatives}
@@ -163,7 +165,7 @@ def run_synthesis(stack: dict[str, tuple[np.ndarray, bool]], methods: list[str],
                "lattice-cut": gan_seconds + lattice_s}
     details = {**info, "layout_used": made.layout_used, "refine_seconds": round(made.timings.get("refine", 0.0), 2),
                "layout": made.layout_kind, "lattice": made.lattice}
-    q_passed = {"seamless-usd": made.q_passed, "seamlessgan+refine": bool(gan.q_passed),
+    q_passed = {"seamless-usd": made.q_passed, "seamlessgan+refine": gan is not None and bool(gan.q_passed),
                 "lattice-cut": bool(made.lattice.get("q_passed"))}  # Q of each row's own tile
     for method in _REFINED:
         if method in methods and refined[method] is not None:

@@ -57,3 +57,14 @@ def test_gram_distance_with_the_engine_extractor():
     assert M.gram_distance(rough, rough, features) == pytest.approx(0.0, abs=1e-9)  # one channel
     assert M.gram_distance(np.zeros_like(color), color, features) > 0.5
 
+
+
+def test_the_product_row_of_a_stack_whose_cut_passes_before_any_training(tmp_path, capsys):
+    q = load_benchmark("quality")
+    code = q.main(["--methods", "seamless-usd", "--stacks", "cloth", "--max-size", "128", "--no-gram",
+                   "--out", str(tmp_path)])
+    assert code == 0
+    (row,) = json.loads((tmp_path / "quality.json").read_text())["results"]
+    # a weave repeats: its lattice cut passes, so no GAN is trained and the row says so
+    assert row["method"] == "seamless-usd" and row["layout"] == "lattice" and row["passed"]
+    assert row["iterations"] == 0 and row["crop_size"] is None and row["train_seconds"] == 0
