@@ -119,7 +119,7 @@ class StackOutcome:
 
 
 def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
-             out_dir: Path) -> StackOutcome:
+                        out_dir: Path) -> StackOutcome:
     """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`).
 
     ``meta["straightened"]``: the tile was made from the straightened maps, and its UV scale, read against them,

@@ -58,6 +58,15 @@ class Run:
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
     total: int = 0
     index: int = 0
+    _settings: JobSettings | None = field(default=None, init=False, repr=False)
+
+    @property
+    def settings(self) -> JobSettings:
+        """The jobs' settings, fixed once for the run (the seeds a job trains follow its executor's threads, and a
+        stack placed later for another output folder must find the same cache entry)."""
+        if self._settings is None:
+            self._settings = JobSettings.from_options(self.options, self.executor.threads_per_job)
+        return self._settings
 
     def emit(self, kind: str, stack_id: str, detail=None) -> None:
         if self.options.progress is not None:
@@ -76,7 +85,7 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
     """Train and sample every unique stack once (identical stacks share the result)."""
     jobs: list[StackJob] = []
     seen: set[str] = set()
-    settings = JobSettings.from_options(run.options, run.executor.threads_per_job)
+    settings = run.settings
     for label, stacks, out_dir in sources:
         for stack in stacks:
             if ((label, stack.id) in run.blocked or (label, stack.id) in run.left_alone
@@ -202,8 +211,7 @@ def _place(run: Run, stack: TextureStack, out_dir: Path) -> StackOutcome | Excep
     """
     key = (stack.content_key, out_dir)
     if key not in run.placed:
-        job = StackJob(stack=stack, settings=JobSettings.from_options(run.options, run.executor.threads_per_job),
-                       output_dir=out_dir)
+        job = StackJob(stack=stack, settings=run.settings, output_dir=out_dir)
         try:
             run.placed[key] = run_stack(job, None)
         except Exception as exc:  # noqa: BLE001 - reported per stack
