@@ -99,6 +99,8 @@ def to_markdown(result: dict) -> str:
                 extra += " (Q failed)"
             if r["method"] == "seamless-usd" and r.get("layout") == "lattice":
                 extra += " (lattice cut)"
+            elif r["method"] == "seamless-usd" and r.get("iterations") == 0:  # the cut passed: nothing trained
+                extra += f" ({r.get('layout')} cut, no GAN trained)"
             elif r.get("layout_used") is False and r["method"] != "lattice-cut":
                 extra += " (GAN layout rejected: random start)"
             lines.append(
