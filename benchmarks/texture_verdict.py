@@ -51,7 +51,7 @@ def rules(item) -> dict[str, tuple]:
     from seamless_usd.metrics import ps_score, seam_ratios
     from seamless_usd.verdict import judge
     from seamless_usd.verdict.across import unrelated_lines
-    from seamless_usd.verdict.breaks import line_breaks
+    from seamless_usd.verdict.breaks import line_breaks, working
     from seamless_usd.verdict.prepare import prepare_maps
 
     pic, normal = item.picture, [item.is_normal]
@@ -60,9 +60,10 @@ def rules(item) -> dict[str, tuple]:
     v = judge([pic], None, normal, [item.name], fidelity=False)
     out["verdict"] = (not v.seamless, round(v.strongest - v.margin, 3), round(time.perf_counter() - t0, 3))
     prepared = prepare_maps([pic], normal)
-    found, strongest = line_breaks(prepared, [item.name])
+    work = working(prepared)
+    found, strongest = line_breaks(prepared, [item.name], work=work)
     out["line-breaks"] = (bool(found), round(strongest - 1.0, 3))
-    found, strongest = unrelated_lines(prepared)
+    found, strongest = unrelated_lines(prepared, work=work)
     out["continuation-ratio"] = (bool(found), round(strongest - 1.0, 3))
     ps = float(ps_score(pic.astype(np.float64)))
     ratios = seam_ratios(pic.astype(np.float64))

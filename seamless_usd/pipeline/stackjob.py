@@ -53,8 +53,9 @@ class JobSettings:
         from seamless_usd.synthesis.config import PRESETS, side_by_side_seeds
 
         seeds, preset = options.seeds, PRESETS.get(options.preset)
-        if seeds is None and preset is not None and side_by_side_seeds(preset, threads) != preset.seeds:
-            seeds = side_by_side_seeds(preset, threads)  # else None, the preset's: the same job as before
+        if seeds is None and preset is not None:
+            fit = side_by_side_seeds(preset.seeds, threads)
+            seeds = fit if fit != preset.seeds else None  # None: the preset's, the same job as before
         return cls(
             preset=options.preset, iterations=options.iterations, seeds=seeds, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,

@@ -120,22 +120,13 @@ def _straightened_text(facts: dict | None) -> str | None:
             f"{w} x {h}; the tile is written straight, so the pattern on the asset turns by that angle")
 
 
-def _levelled_text(facts: dict | None) -> str | None:
-    """How far levelling the source's light moved texel values (None when it was not levelled)."""
+def _remade_text(facts: dict | None, what: str, done: str, moved) -> str | None:
+    """How far the source was remade before the cut (its ``what`` was ``done``; ``moved(most, mean)`` says how far
+    from the facts' ``moved`` and ``moved_mean``); None when it was not."""
     if not facts:
         return None
-    return (f"the source's light was levelled before the cut (its texel values scaled by up to "
-            f"{100 * facts.get('moved', 0):.0f} %, {100 * facts.get('moved_mean', 0):.1f} % on average); the tile "
-            "is judged against the levelled source")
-
-
-def _evened_text(facts: dict | None) -> str | None:
-    """How far evening the source's drifting lattice moved texels (None when it was not evened)."""
-    if not facts:
-        return None
-    return (f"the source's drifting lattice was evened before the cut (texels moved by up to "
-            f"{facts.get('moved', 0):.1f} texels, {facts.get('moved_mean', 0):.2f} on average, every map alike); the "
-            "tile is judged against the evened source")
+    how = moved(facts.get("moved", 0), facts.get("moved_mean", 0))
+    return f"the source's {what} was {done} before the cut ({how}); the tile is judged against the {done} source"
 
 
 def stack_facts(stack: StackReport) -> tuple[str, str]:
@@ -150,8 +141,12 @@ def stack_facts(stack: StackReport) -> tuple[str, str]:
         "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size and stack.model_hash else None,  # GAN crop
         "Q (the discriminator's view)": _q_text(stack.q),
         "straightened": _straightened_text(stack.resampled.get("straightened")),
-        "levelled": _levelled_text(stack.resampled.get("levelled")),
-        "evened": _evened_text(stack.resampled.get("evened")),
+        "levelled": _remade_text(stack.resampled.get("levelled"), "light", "levelled",
+                                 lambda most, mean: f"its texel values scaled by up to {100 * most:.0f} %, "
+                                                    f"{100 * mean:.1f} % on average"),
+        "evened": _remade_text(stack.resampled.get("evened"), "drifting lattice", "evened",
+                               lambda most, mean: f"texels moved by up to {most:.1f} texels, {mean:.2f} on average, "
+                                                  "every map alike"),
         "same as": stack.duplicate_of,
         "result from": stack.origin or None,
     }

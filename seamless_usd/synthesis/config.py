@@ -130,21 +130,19 @@ PRESETS: dict[str, SynthesisConfig] = {
 }
 
 
-def side_by_side_seeds(config: SynthesisConfig, threads: int | None) -> int:
-    """The seeds of ``config`` a job with ``threads`` CPU threads trains: as many as run side by side, one per
-    thread, and at least one (``threads`` None: unknown, as on a remote cluster: all of them).
+def side_by_side_seeds(seeds: int, threads: int | None) -> int:
+    """Of ``seeds`` seeds, how many train side by side on ``threads`` CPU threads: one per thread, at least one
+    (``threads`` None: not known, as on a remote cluster: all of them).
 
-    A second seed is worth its place where it trains on an idle core (1.09x the wall time of one, the best of
-    the two: docs/decisions.md, "Two seeds side by side"). Where the cores are taken already (``--jobs 2`` on
-    two cores, each job on one thread) it would train after the first and double the stack's training time.
-    Asked for with ``seeds``, every seed is trained.
+    A job trains the preset's seeds that fit so: a second seed is worth its place where it trains on an idle
+    core (1.09x the wall time of one, the best of the two: docs/decisions.md, "Two seeds side by side"). Where
+    the cores are taken already (``--jobs 2`` on two cores, each job on one thread) it would train after the
+    first and double the stack's training time. Asked for with ``seeds``, every seed is trained.
 
-    >>> side_by_side_seeds(get_preset("default"), 2), side_by_side_seeds(get_preset("default"), 1)
-    (2, 1)
-    >>> side_by_side_seeds(get_preset("default"), None)
-    2
+    >>> side_by_side_seeds(2, 2), side_by_side_seeds(2, 1), side_by_side_seeds(2, None)
+    (2, 1, 2)
     """
-    return config.seeds if threads is None else max(1, min(config.seeds, threads))
+    return seeds if threads is None else max(1, min(seeds, threads))
 
 
 def get_preset(name: str) -> SynthesisConfig:

@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .breaks import peaks, straddle
+from .breaks import peaks, straddle, working
 from .lines import Seam
-from .prepare import joint, map_weights, to_working
+from .prepare import joint
 
 __all__ = ["MARGIN", "SPACING", "continuation_ratios", "unrelated_lines"]
 
@@ -31,8 +31,6 @@ __all__ = ["MARGIN", "SPACING", "continuation_ratios", "unrelated_lines"]
 MARGIN = 1.25
 #: Lines closer than this (px at the working size) to a stronger line are the same line.
 SPACING = 4
-#: Longest side (px) the maps are read at, as the line breaks read them.
-WORK_SIDE = 512
 
 
 def continuation_ratios(img: np.ndarray) -> np.ndarray:
@@ -42,15 +40,15 @@ def continuation_ratios(img: np.ndarray) -> np.ndarray:
     return (straddle(img, 1) + eps) / (0.5 * (straddle(img, 2) + straddle(img, 3)) + eps)
 
 
-def unrelated_lines(prepared: list[np.ndarray], units: float = 1.0) -> tuple[list[Seam], float]:
-    """Seams of a texture judged on its own (``prepared``: its maps in the verdict's form; read together), at most
-    one per axis, strongest first, and the strongest line's figure. Figures are the strongest line's ratio over
-    the next line's, scaled so that ``units`` is :data:`MARGIN` (the verdict reports them on its own margin's
-    scale); a seam runs the whole line."""
+def unrelated_lines(prepared: list[np.ndarray], units: float = 1.0,
+                    work: tuple[list[np.ndarray], list[float]] | None = None) -> tuple[list[Seam], float]:
+    """Seams of a texture judged on its own (``prepared``: its maps in the verdict's form; read together, at the
+    line breaks' working size), at most one per axis, strongest first, and the strongest line's figure. Figures
+    are the strongest line's ratio over the next line's, scaled so that ``units`` is :data:`MARGIN` (the verdict
+    reports them on its own margin's scale); a seam runs the whole line. ``work``: :func:`.breaks.working` of
+    ``prepared`` when it is made already."""
     size = prepared[0].shape[:2]
-    factor = min(1.0, WORK_SIDE / max(size))
-    work = to_working(prepared, factor, periodic=True)
-    img = joint(work, map_weights(work))
+    img = joint(*(work or working(prepared)))
     seams: list[Seam] = []
     strongest = -np.inf
     for axis, rotated in (("y", img), ("x", img.transpose(1, 0, 2))):

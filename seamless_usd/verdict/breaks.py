@@ -30,7 +30,7 @@ import numpy as np
 from .lines import Seam
 from .prepare import joint, map_weights, to_working
 
-__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "groove", "straddle", "peaks"]
+__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "groove", "straddle", "peaks", "working"]
 
 #: Longest side (px) the maps are read at: fine enough that a join's texel step survives the area filter.
 WORK_SIDE = 512
@@ -153,15 +153,23 @@ def groove(img: np.ndarray, line: int) -> bool:
     return share >= GROOVE_SHARE and float((weight * rise).sum()) >= GROOVE_RATIO * float((weight * step).sum())
 
 
-def line_breaks(prepared: list[np.ndarray], names: list[str], units: float = 1.0) -> tuple[list[Seam], float]:
+def working(prepared: list[np.ndarray]) -> tuple[list[np.ndarray], list[float]]:
+    """``prepared`` (the maps in the verdict's form) at the working size (longest side at most :data:`WORK_SIDE`,
+    read as the torus they tile), and each map's weight in the joint image (:func:`.prepare.map_weights`)."""
+    factor = min(1.0, WORK_SIDE / max(prepared[0].shape[:2]))
+    work = to_working(prepared, factor, periodic=True)
+    return work, map_weights(work)
+
+
+def line_breaks(prepared: list[np.ndarray], names: list[str], units: float = 1.0,
+                work: tuple[list[np.ndarray], list[float]] | None = None) -> tuple[list[Seam], float]:
     """Seams of a texture judged on its own (``prepared``: its maps in the verdict's form, see
     :func:`.prepare.prepare_maps`; the maps together, then each map), strongest first, and the strongest line's
     break over the reference. Figures are scaled so that ``units`` is the margin: a line above ``units`` is a
-    seam (the verdict reports them on its own margin's scale)."""
+    seam (the verdict reports them on its own margin's scale). ``work``: :func:`working` of ``prepared`` when it
+    is made already."""
     size = prepared[0].shape[:2]
-    factor = min(1.0, WORK_SIDE / max(size))
-    work = to_working(prepared, factor, periodic=True)
-    weights = map_weights(work)
+    work, weights = work or working(prepared)
     parts = [("stack", joint(work, weights))] + ([(n, m * w) for n, m, w in zip(names, work, weights)]
                                                  if len(work) > 1 else [])
     seams: list[Seam] = []

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..memo import ContentMemo
 from .across import unrelated_lines
-from .breaks import line_breaks
+from .breaks import line_breaks, working
 from .classifier import SeamClassifier, fit
 from .ghosts import ghost_bands
 from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, MAP_THRESHOLD, copy_seams
@@ -231,8 +231,9 @@ def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> 
             seams += found
             strongest = max(strongest, top)
     if ref is None:
-        found, top = line_breaks(reading.maps, reading.names, SELF_MARGIN)
-        unrelated, top_across = unrelated_lines(reading.maps, SELF_MARGIN)
+        work = working(reading.maps)  # both rules read the maps at the line breaks' working size
+        found, top = line_breaks(reading.maps, reading.names, SELF_MARGIN, work)
+        unrelated, top_across = unrelated_lines(reading.maps, SELF_MARGIN, work)
         found += unrelated
         strongest = max(strongest, top, top_across)
         kept: list[Seam] = []

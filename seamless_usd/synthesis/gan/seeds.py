@@ -25,7 +25,7 @@ import torch
 
 from seamless_usd.metrics import TARGETS, centre_seam_ratios, patch_distance, scale_ratio, seam_ratios
 
-from ..config import SynthesisConfig
+from ..config import SynthesisConfig, side_by_side_seeds
 from ..precision import pick_device
 from .train import TrainedModel, train
 from ..types import MapInput, TileResult, TrainingProgress
@@ -74,7 +74,7 @@ def seed_workers(n: int, device_type: str, threads: int) -> int:
     """
     if device_type != "cpu":
         return 1
-    return max(1, min(n, threads))
+    return side_by_side_seeds(n, threads)
 
 
 def train_seeds(maps: list[MapInput], config: SynthesisConfig, seed: int, *, device=None,
