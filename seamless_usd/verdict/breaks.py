@@ -72,7 +72,10 @@ def straddle(img: np.ndarray, lag: int) -> np.ndarray:
     """(n,) for each line ``p`` (before row ``p``, on a torus): the mean difference of the row pairs ``lag``
     apart that straddle it."""
     n = img.shape[0]
-    pair = np.linalg.norm(np.roll(img, -lag, axis=0) - img, axis=-1).mean(axis=1)  # rows y and y + lag
+    d = np.empty_like(img)  # rows y + lag less rows y, on the torus (no rolled copy)
+    np.subtract(img[lag:], img[: n - lag], out=d[: n - lag])
+    np.subtract(img[:lag], img[n - lag:], out=d[n - lag:])
+    pair = np.sqrt(np.einsum("ywc,ywc->yw", d, d)).mean(axis=1)  # rows y and y + lag
     total = np.concatenate([[0.0], np.cumsum(np.concatenate([pair, pair]))])
     p = np.arange(n) + n
     return (total[p] - total[p - lag]) / lag  # pairs starting at rows p - lag .. p - 1
