@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..memo import ContentMemo
+
 __all__ = ["WORK_SIDE", "SIGMAS", "DARK_SHARE", "STRUCTURE_TARGET", "line_network", "structure_figures"]
 
 #: Longest side (px) the network is read at: structure (planks, stones, joints) lives at coarse scale.
@@ -106,6 +108,23 @@ def _split(s: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     return [(s[: h // 2], s[h // 2:]), (s[:, : w // 2], s[:, w // 2:])]
 
 
+#: A source's principal axis and, per scale, its line threshold, network and half-vs-half spread: every
+#: candidate tile of a stack (and every seed's) is read against the same source.
+_SOURCES: ContentMemo[tuple[np.ndarray, dict]] = ContentMemo(keep=16)
+
+
+def _source_network(source: np.ndarray) -> tuple[np.ndarray, dict]:
+    s, basis = _channel(source, None)
+    s = _working(s)
+    own = {}
+    for sigma in SIGMAS:
+        threshold = float(np.quantile(_highpass(s, False, sigma), DARK_SHARE))
+        spread = max([1.0] + [_ratio_figure(_network(a, threshold, False, sigma), _network(b, threshold, False, sigma))[2]
+                              for a, b in _split(s)])
+        own[sigma] = (threshold, _network(s, threshold, False, sigma), spread)
+    return basis, own
+
+
 def structure_figures(tile: np.ndarray, source: np.ndarray) -> dict:
     """The structure of a periodic tile against its source (both at one texel scale; see the module notes).
 
@@ -114,16 +133,12 @@ def structure_figures(tile: np.ndarray, source: np.ndarray) -> dict:
     ``structure`` is the largest ``figure / spread``: 1.0 when the tile's line network differs from the
     source's as much as the source's halves differ from each other; :data:`STRUCTURE_TARGET` is the pass mark.
     """
-    s, basis = _channel(source, None)
-    t, _ = _channel(tile, basis)
-    s, t = _working(s), _working(t)
+    basis, own = _SOURCES.get((np.asarray(source),), None, lambda: _source_network(source))
+    t = _working(_channel(tile, basis)[0])
     scales = {}
     for sigma in SIGMAS:
-        threshold = float(np.quantile(_highpass(s, False, sigma), DARK_SHARE))
-        src = _network(s, threshold, False, sigma)
+        threshold, src, spread = own[sigma]
         ends, length, figure = _ratio_figure(_network(t, threshold, True, sigma), src)
-        spread = max([1.0] + [_ratio_figure(_network(a, threshold, False, sigma), _network(b, threshold, False, sigma))[2]
-                              for a, b in _split(s)])
         scales[sigma] = {"figure": round(figure, 3), "spread": round(spread, 3), "ends": round(ends, 3),
                          "length": round(length, 3)}
     worst = max(v["figure"] / v["spread"] for v in scales.values())
