@@ -240,12 +240,15 @@ def _closed_path(cost: np.ndarray) -> np.ndarray:
 def _sample(maps: list[np.ndarray], spreads: list[float], y: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Joint features (each map over its spread) of the source texels at (y, x)."""
     y, x = np.broadcast_arrays(y, x)
+    width = maps[0].shape[1]  # a stack's maps share one grid: one flat index serves them all
+    flat = None
+    if y.size and min(y.min(), x.min()) >= 0 and x.max() < width:
+        flat = (y * width + x).ravel()
     out = []
     for m, s in zip(maps, spreads):
         m = np.asarray(m, dtype=np.float32)
-        inside = y.size == 0 or (min(y.min(), x.min()) >= 0 and x.max() < m.shape[1])
-        if m.ndim == 3 and m.flags.c_contiguous and inside:  # one flat take: 4x faster than indexing (y, x)
-            got = m.reshape(-1, m.shape[2]).take((y * m.shape[1] + x).ravel(), axis=0).reshape(y.shape + m.shape[2:])
+        if flat is not None and m.ndim == 3 and m.shape[1] == width and m.flags.c_contiguous:
+            got = m.reshape(-1, m.shape[2]).take(flat, axis=0).reshape(y.shape + m.shape[2:])  # 4x faster
         else:
             got = m[y, x]
         out.append(got / s)
