@@ -60,11 +60,13 @@ def _layout_text(gan: dict) -> str | None:
         lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
         text += (f"; no window cut: the texture does not continue itself at any window's lags (difference {lags};"
                  f" a cut is offered at {refused['most']:.2f} or less)")
-    for kind in ("quilt", "mend"):
+    for kind in ("quilt", "mend", "lattice"):
         refused = lattice.get(f"{kind}_refused")
         if refused:
-            text += (f"; {kind} not written: the verdict passes it, but its blocks differ along a cut by "
-                     f"{refused['difference_worst']:.2f} (its joins hide at {refused['most']:.2f} or less)")
+            what = ("its wrap across the axis that does not repeat joins places that differ" if kind == "lattice"
+                    else "its blocks differ along a cut")
+            text += (f"; {kind}{' cut' if kind == 'lattice' else ''} not written: the verdict passes it, but {what} "
+                     f"by {refused['difference_worst']:.2f} (its joins hide at {refused['most']:.2f} or less)")
     tried = lattice.get("candidates")
     if tried:
         text += "; cut from the source, tried in turn: " + ", ".join(

@@ -256,7 +256,8 @@ def _try_lattice(made: MadeTile, maps: list[MapInput], model, cut: CutCheck, kee
     q = judge(model, on_grid(tiles, maps, (made.working_size[0] / H, made.working_size[1] / W)))
     wins = (not passes, score) < (not current_passes, current)
     if wins and gated(cut_kind, figures) and not joins_hide(figures):
-        # a quilt whose joins do not hide is written only where the verdict sees them, never as a tile that
+        # a cut whose joins do not hide (a quilt, a mend of lines, a lattice across an axis that does not repeat)
+        # is written only where the verdict sees them, never as a tile that
         # passes (the cut's verdict is the full resolution's, as the written tile's: .candidates.check_cut)
         if cut.verdict_passes:
             wins = False

@@ -255,8 +255,18 @@ def _sample(maps: list[np.ndarray], spreads: list[float], y: np.ndarray, x: np.n
     return np.concatenate(out, axis=-1)
 
 
-def lattice_cut(maps: list[np.ndarray], tile: tuple[int, int], band: tuple[int, int], margin: int = CUT_MARGIN
-                ) -> tuple[np.ndarray, tuple[int, int]]:
+def _unrelated(maps: list[np.ndarray], spreads: list[float], step: int = 4) -> float:
+    """The mean squared difference of two unrelated texels of the joint features (each map over its spread, as
+    :func:`_sample` reads them): twice their variance, summed over channels, read on every ``step``-th texel."""
+    total = 0.0
+    for m, s in zip(maps, spreads):
+        v = np.asarray(m, dtype=np.float64)[::step, ::step] / s
+        total += float(v.reshape(-1, v.shape[-1] if v.ndim == 3 else 1).var(axis=0).sum())
+    return 2.0 * total + 1e-12
+
+
+def lattice_cut(maps: list[np.ndarray], tile: tuple[int, int], band: tuple[int, int], margin: int = CUT_MARGIN,
+                differences: dict | None = None) -> tuple[np.ndarray, tuple[int, int]]:
     """The (h, w, 2) int64 source (y, x) of every texel of a tile cut to whole lattice periods, with the
     crop's (y, x) offset.
 
@@ -267,6 +277,11 @@ def lattice_cut(maps: list[np.ndarray], tile: tuple[int, int], band: tuple[int, 
     tile on, which continue the opposite border: both sit at the same lattice phase, so the cut runs
     where they agree (mortar beside mortar) and the tile wraps without a seam. Every texel is a source
     texel, the same for every map.
+
+    ``differences``, when given, receives each wrap's join: the mean of the two sides' difference along its cut
+    over that of two unrelated texels (``"x"``: the x wrap's, ``"y"``: the y wrap's), as a quilt's joins are
+    measured (:func:`.quilt._cut`). Across an axis that repeats it is near 0; across one that does not, it says
+    whether the cut hides the join of two unrelated rows or columns.
     """
     (th, tw), (bh, bw) = tile, band
     spreads = [spread(m) for m in maps]
@@ -275,13 +290,20 @@ def lattice_cut(maps: list[np.ndarray], tile: tuple[int, int], band: tuple[int, 
     # across the x wrap: columns j < cut(y) copy from one tile on, the others are the crop's own
     ys, js = np.meshgrid(rows, np.arange(bw), indexing="ij")
     diff = _sample(maps, spreads, ys, x0 + tw + js) - _sample(maps, spreads, ys, x0 + js)
-    cut, _ = _min_path((diff ** 2).sum(-1))  # (th + bh,)
+    cost = (diff ** 2).sum(-1)
+    cut, _ = _min_path(cost)  # (th + bh,)
+    if differences is not None:
+        unrelated = _unrelated(maps, spreads)
+        differences["x"] = round(float(cost[np.arange(len(cut)), cut].mean()) / unrelated, 4)
     cols = np.arange(tw)
     fx = x0 + cols[None, :] + tw * (cols[None, :] < cut[:, None])  # (th + bh, tw)
     fy = np.repeat(rows[:, None], tw, axis=1)
     # across the y wrap, on the columns just chosen: rows i < cut(x) copy from one tile down
     diff = _sample(maps, spreads, fy[th:], fx[th:]) - _sample(maps, spreads, fy[:bh], fx[:bh])
-    cut = _closed_path((diff ** 2).sum(-1).T)  # (tw,): column tw - 1 meets column 0 across the x wrap
+    cost = (diff ** 2).sum(-1).T
+    cut = _closed_path(cost)  # (tw,): column tw - 1 meets column 0 across the x wrap
+    if differences is not None:
+        differences["y"] = round(float(cost[np.arange(tw), cut].mean()) / unrelated, 4)
     down = np.arange(th)[:, None] < cut[None, :]  # (th, tw)
     index = np.arange(th)[:, None] + th * down
     field = np.stack([np.take_along_axis(fy, index, 0), np.take_along_axis(fx, index, 0)], axis=-1)
