@@ -189,6 +189,16 @@ def test_run_details_say_what_seeded_the_refinement():
     page = render_html(Report(sources=["s.usda"], stacks=[made]))
     assert ("quilt not written: the verdict passes it, but its blocks differ along a cut by 0.10 (its joins hide at "
             "0.05 or less)") in page
+    one_axis = {"period_px": [None, 17.06], "strength": [None, 0.44], "cut": "lattice", "tile": [448, 506],
+                "q_passed": False, "passes": False, "score": 0.95, "chosen": False, "score_random": 0.81,
+                "passes_random": False, "band": [64, 4], "difference": {"x": 0.09, "y": 0.2076}, "open_axes": ["y"],
+                "difference_worst": 0.2076, "lattice_refused": {"difference_worst": 0.2076, "most": 0.05}}
+    made = StackReport(id="M-8", material="</M8>", source="s.usda", status=StackStatus.NOT_PASSED,
+                       resampled={"gan": {"layout": "random", "lattice": one_axis}})
+    page = render_html(Report(sources=["s.usda"], stacks=[made]))
+    assert ("lattice cut not written: the verdict passes it, but its wrap across the axis that does not repeat joins "
+            "places that differ by 0.21 (its joins hide at 0.05 or less)") in page
+    assert "lattice cut 448x506 px (no repeat along y: difference along that wrap&#x27;s cut 0.208) scored 0.95" in page
     # not passed with a seam: the box says what to do where the joins cannot hide (refined, or the quilt's
     # blocks differ along a cut), and not where the quilt's joins hide
     seam = {"axis": "x", "position": 68, "start": 66, "end": 112, "figure": 0.28, "map": "stack"}

@@ -85,6 +85,9 @@ def _layout_text(gan: dict) -> str | None:
         if lattice.get("cut") == "quilt" and "cells" in lattice:
             blocks = (f" of {lattice['cells'][0]}x{lattice['cells'][1]} blocks (worst difference along a cut "
                       f"{lattice['difference_worst']:.3f})")
+        elif lattice.get("cut") == "lattice" and lattice.get("open_axes"):
+            blocks = (f" (no repeat along {' or '.join(lattice['open_axes'])}: difference along that wrap's cut "
+                      f"{lattice['difference_worst']:.3f})")
         elif lattice.get("cut") == "mend" and "band" in lattice:
             blocks = (f", band {2 * sum(lattice['band'])} px wide (worst difference along a cut "
                       f"{lattice['difference_worst']:.3f})")
