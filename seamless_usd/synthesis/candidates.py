@@ -134,7 +134,7 @@ def gated(kind: str | None, figures: dict) -> bool:
     A lattice cut of a stack that repeats along one axis only is gated too (``figures["open_axes"]``): its wrap
     along the other axis joins two unrelated rows (or columns), as a window's does, and a window is offered only
     where such joins hide. The verdict passed a brick pavement's lattice cut whose courses break at that wrap
-    (strongest 0.86 against 0.90; docs/verdict.md, "Known false passes"), and its cut's difference reads 0.27;
+    (strongest 0.86 against 0.90; docs/verdict.md, "Known false passes"), and its cut's difference reads 0.21;
     a concrete-tile facade's, seamless by eye, reads 0.04."""
     return (kind == "quilt" or (kind == "mend" and bool(figures.get("lines")))
             or (kind == "lattice" and bool(figures.get("open_axes"))))
