@@ -16,6 +16,7 @@ from typing import Sequence
 
 import MaterialX as mx
 
+from seamless_usd.authoring.mtlxinputs import UnauthoredInput, fmt, gltf_identity, set_vector2, vector2
 from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, WriteMode
 from seamless_usd.textures import Origin
@@ -158,60 +159,6 @@ def _same_path(a: str | None, b: Path) -> bool:
         return Path(a).resolve() == b
 
 
-class _UnauthoredInput:
-    """An input a node does not have yet: reads as unset, added on the first write."""
-
-    def __init__(self, node: mx.Node, name: str, type_name: str):
-        self.node, self.name, self.type_name = node, name, type_name
-
-    def getValueString(self) -> str:
-        return ""
-
-    def getNamePath(self) -> str:
-        return f"{self.node.getNamePath()}/{self.name}"
-
-    def _real(self) -> mx.Input:
-        return self.node.getInput(self.name) or self.node.addInput(self.name, self.type_name)
-
-    def setValueString(self, value: str) -> None:
-        self._real().setValueString(value)
-
-    def getActiveFilePrefix(self) -> str:
-        return self.node.getActiveFilePrefix()
-
-    def hasFilePrefix(self) -> bool:
-        return False
-
-    def setFilePrefix(self, prefix: str) -> None:
-        self._real().setFilePrefix(prefix)
-
-
-def _set_vector2(inp: mx.Input, value) -> None:
-    """Set a vector2 with full float precision (MaterialX's own formatting keeps 6 digits)."""
-    inp.setValueString(_fmt((float(value[0]), float(value[1]))))
-
-
-def _gltf_identity(node: mx.Node) -> bool:
-    """Whether a gltf image node's own UV transform (scale, rotate, offset) is the identity."""
-    for name, identity in (("scale", "1, 1"), ("rotate", "0"), ("offset", "0, 0")):
-        inp = node.getInput(name)
-        text = inp.getValueString() if inp is not None else ""
-        if text and [float(v) for v in text.split(",")] != [float(v) for v in identity.split(",")]:
-            return False
-        if inp is not None and (inp.getNodeName() or inp.getInterfaceName()):
-            return False
-    return True
-
-
-def _vector2(text: str) -> tuple[float, float]:
-    x, y = (float(v) for v in text.split(","))
-    return (x, y)
-
-
-def _fmt(values) -> str:
-    return ", ".join(repr(float(v)) if isinstance(v, float) else str(v) for v in values)
-
-
 class _MtlxAuthor:
     def __init__(self, doc: mx.Document, src: Path, out: Path, result: AuthoringResult):
         self.doc, self.src, self.out, self.result = doc, src, out, result
@@ -263,7 +210,7 @@ class _MtlxAuthor:
             iface = inp.getInterfaceInput()
             if iface is not None:
                 return iface
-        return inp if inp is not None else _UnauthoredInput(node, name, type_name)
+        return inp if inp is not None else UnauthoredInput(node, name, type_name)
 
     def _periodic(self, node: mx.Node) -> None:
         """Address modes to periodic (``tiledimage`` always repeats)."""
@@ -325,13 +272,13 @@ class _MtlxAuthor:
             undo = prior or (1.0, 1.0)
             for name in (MtlxNames.UV_TILING, MtlxNames.UV_OFFSET):
                 inp = self._authored(node, name, MtlxNames.VECTOR2)
-                value = _vector2(inp.getValueString()) if inp.getValueString() else (
+                value = vector2(inp.getValueString()) if inp.getValueString() else (
                     (1.0, 1.0) if name == MtlxNames.UV_TILING else (0.0, 0.0))
                 new = (value[0] / undo[0] * total[0], value[1] / undo[1] * total[1])
                 if any(abs(new[i] - value[i]) > 1e-9 for i in range(2)):
-                    _set_vector2(inp, new)
-                    self._plan(f"set {prim_ref(inp.getNamePath())} = {_fmt(new)}")
-        elif category.startswith(MtlxNames.GLTF_PREFIX) and not _gltf_identity(node):
+                    set_vector2(inp, new)
+                    self._plan(f"set {prim_ref(inp.getNamePath())} = {fmt(new)}")
+        elif category.startswith(MtlxNames.GLTF_PREFIX) and not gltf_identity(node):
             self.result.findings.append(Finding(
                 Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(node_path),
                 "gltf image node with its own UV transform: file replaced, scale its UVs by hand"))
@@ -348,18 +295,18 @@ class _MtlxAuthor:
         p = provenance
         for name, value in (
             (MtlxNames.SOURCE_ASSET, source),
-            (MtlxNames.CROP_SIZE, _fmt(p.crop_size)),
-            (MtlxNames.UV_SCALE, _fmt(total)),
+            (MtlxNames.CROP_SIZE, fmt(p.crop_size)),
+            (MtlxNames.UV_SCALE, fmt(total)),
             (MtlxNames.PASSED, "true" if p.passed else "false"),
             (MtlxNames.VERDICT, p.verdict),
             (MtlxNames.Q_PASSED, None if p.q_passed is None else "true" if p.q_passed else "false"),
-            (MtlxNames.Q_TAU, None if p.q_passed is None else _fmt([float(p.q_tau)])),
-            (MtlxNames.Q_BAND_MIN, None if p.q_passed is None else _fmt(p.q_band_min)),
+            (MtlxNames.Q_TAU, None if p.q_passed is None else fmt([float(p.q_tau)])),
+            (MtlxNames.Q_BAND_MIN, None if p.q_passed is None else fmt(p.q_band_min)),
             (MtlxNames.MODEL_HASH, p.model_hash),
             (MtlxNames.TOOL_VERSION, p.tool_version),
-            (MtlxNames.STRAIGHTENED, _fmt([float(p.straightened)]) if p.straightened else None),
-            (MtlxNames.LEVELLED, _fmt([float(p.levelled)]) if p.levelled else None),
-            (MtlxNames.EVENED, _fmt([float(p.evened)]) if p.evened else None),
+            (MtlxNames.STRAIGHTENED, fmt([float(p.straightened)]) if p.straightened else None),
+            (MtlxNames.LEVELLED, fmt([float(p.levelled)]) if p.levelled else None),
+            (MtlxNames.EVENED, fmt([float(p.evened)]) if p.evened else None),
         ):
             self._set(node, name, value, name)
         if len(self.result.plan) > before and prim_ref(node_path) not in self.result.edited_prims:
@@ -370,15 +317,15 @@ class _MtlxAuthor:
         upstream = tex_in.getConnectedNode() if tex_in is not None else None
         if upstream is not None and upstream.getAttribute(MtlxNames.MARK_UV) == "true":
             s_in = upstream.getInput(MtlxNames.SCALE)
-            current = _vector2(s_in.getValueString()) if s_in is not None and s_in.getValueString() \
+            current = vector2(s_in.getValueString()) if s_in is not None and s_in.getValueString() \
                 else (1.0, 1.0)
             prior = (1.0 / current[0], 1.0 / current[1])
             total = scale if from_source else (prior[0] * scale[0], prior[1] * scale[1])
             new = (1.0 / total[0], 1.0 / total[1])
             if any(abs(new[i] - current[i]) > 1e-9 for i in range(2)):
-                _set_vector2(upstream.getInput(MtlxNames.SCALE) or upstream.addInput(
+                set_vector2(upstream.getInput(MtlxNames.SCALE) or upstream.addInput(
                     MtlxNames.SCALE, MtlxNames.VECTOR2), new)
-                self._plan(f"set {prim_ref(upstream.getNamePath())}.scale = {_fmt(new)}")
+                self._plan(f"set {prim_ref(upstream.getNamePath())}.scale = {fmt(new)}")
             return total
         parent = node.getParent()
         connection = tuple(
@@ -394,7 +341,7 @@ class _MtlxAuthor:
                 coords = place.addInput(MtlxNames.TEXCOORD, MtlxNames.VECTOR2)
                 for attr, value in connection:
                     coords.setAttribute(attr, value)
-            _set_vector2(place.addInput(MtlxNames.SCALE, MtlxNames.VECTOR2),
+            set_vector2(place.addInput(MtlxNames.SCALE, MtlxNames.VECTOR2),
                          (1.0 / scale[0], 1.0 / scale[1]))
             self._uv_nodes[key] = name
             self._plan(f"add place2d {prim_ref(place.getNamePath())} scale = "
