@@ -65,8 +65,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "paper: the paper's 2c x 2c tile (default: %(default)s)")
     p.add_argument("--straighten", action="store_true",
                    help="a stack whose lines (planks, courses, tiles) run at an angle is turned until they run "
-                        "along the axes, and that is tiled: the tile is written straight, so the pattern on the "
-                        "asset turns by the angle the report and seamless:straightened record")
+                        "along the axes, and that is tiled; the tile is written straight and the asset's UVs turn "
+                        "it back (a UV transform before the UV scale), so the asset looks as before")
+    p.add_argument("--write-straight", action="store_true",
+                   help="with --straighten: no UV turn; the pattern on the asset turns by the angle the report "
+                        "and seamless:straightened record (normal maps' vectors turn with it)")
     p.add_argument("--force", action="store_true",
                    help="process every stack, also those classed uv-atlas, already-tileable or other")
     p.add_argument("--force-materials", action="append", default=[], metavar="GLOB",
@@ -108,6 +111,7 @@ def _options(args: argparse.Namespace, progress) -> Options:
         refine=args.refine,
         tile_size=args.tile_size,
         straighten=args.straighten,
+        write_straight=args.write_straight,
         force=args.force,
         force_materials=tuple(args.force_materials),
         progress=progress,

@@ -11,6 +11,8 @@ import OpenImageIO as oiio
 import pytest
 from pxr import Usd, UsdShade
 
+from seamless_usd.authoring import uv_affine
+
 from seamless_usd.imaging.orientation import MIN_STRENGTH, dominant_orientation
 from seamless_usd.imaging.straighten import inscribed_size, straighten_maps
 from seamless_usd_cli.main import main
@@ -84,6 +86,14 @@ def test_normal_vectors_turn_with_the_picture():
     inner = (slice(4, -4), slice(4, -4))
     assert np.abs(normals[inner] - expected[inner]).max() < 0.05
     assert np.allclose(np.linalg.norm(normals, axis=-1), 1.0, atol=1e-4)
+    # turned back by the asset's UVs, the tile is seen in the asset's tangent frame: the vectors keep the source's
+    # direction (the ridges' slope still points 20 degrees off the picture's x axis)
+    _, kept = straighten_maps([height[..., None].astype(np.float32), _normals_of(height)], [False, True],
+                              found.degrees, turn_vectors=False)
+    slope = np.degrees(np.arctan2(kept[inner][..., 1], kept[inner][..., 0]))
+    steep = np.hypot(kept[inner][..., 0], kept[inner][..., 1]) > 0.3
+    assert np.abs(((slope[steep] - 20.0) + 90.0) % 180.0 - 90.0).max() < 3.0
+    assert np.allclose(np.linalg.norm(kept, axis=-1), 1.0, atol=1e-4)
 
 
 def _turned_scene(folder: Path, degrees: float) -> Path:
@@ -92,10 +102,28 @@ def _turned_scene(folder: Path, degrees: float) -> Path:
     return ground_scene(folder, turned, "brick_turned.png", "Brick")
 
 
-def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_turn(tmp_path, capsys, model_cache):
+def _seen_on_asset(stage: Usd.Stage, texture: str, tile: np.ndarray, size: int) -> np.ndarray:
+    """What the asset shows over its UV square (``size`` px a side): the tile sampled (bilinear, repeating) where
+    the texture's authored UV chain sends each point."""
+    a = uv_affine(stage, texture)
+    v, u = (1.0 - (np.arange(size) + 0.5) / size), (np.arange(size) + 0.5) / size
+    u, v = np.meshgrid(u, v)
+    tu, tv = a.a * u + a.b * v + a.tx, a.c * u + a.d * v + a.ty
+    th, tw = tile.shape[:2]
+    x, y = tu * tw - 0.5, (1.0 - tv) * th - 0.5
+    x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
+    at = lambda yy, xx: tile[yy % th, xx % tw]  # noqa: E731
+    return ((at(y0, x0) * (1 - fx) + at(y0, x0 + 1) * fx) * (1 - fy)
+            + (at(y0 + 1, x0) * (1 - fx) + at(y0 + 1, x0 + 1) * fx) * fy).astype(np.float32)
+
+
+@pytest.mark.parametrize("straight", [False, True], ids=["uv-turn", "write-straight"])
+def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_turn(tmp_path, capsys, model_cache,
+                                                                                  straight):
     scene = _turned_scene(tmp_path, 17.0)
     code = main(["process", str(scene), "--straighten", "--preset", "tiny", "--cache-dir", str(model_cache),
-                 "--json", "--report", str(tmp_path / "report.html")])
+                 "--json", "--report", str(tmp_path / "report.html")] + (["--write-straight"] if straight else []))
     payload = json.loads(capsys.readouterr().out)
     [stack] = payload["stacks"]
     facts = stack["resampled"]["straightened"]
@@ -113,8 +141,14 @@ def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_tur
     assert stack["uv_scale"] == pytest.approx([256 / tw, 256 / th], rel=1e-6)
     assert (code == 0) == (stack["status"] == "passed")
     assert f"turned {facts['degrees']:g} degrees clockwise" in (tmp_path / "report.html").read_text()
+    assert ("so the asset looks as before" in (tmp_path / "report.html").read_text()) != straight
     # check judges the written tile against its source straightened the same way: one answer
     main(["check", str(tmp_path / "scene.seamless.usda"), "--json"])
     [item] = json.loads(capsys.readouterr().out)["items"]
     assert item["verdict"]["passed"] == (stack["status"] == "passed")
     assert item["verdict"]["strongest"] == pytest.approx(stack["verdict"]["strongest"], abs=0.05)
+    # on the asset: turned back by the UVs, the courses run as the source's did (at its texel size); written
+    # straight, they run along the axes
+    seen = dominant_orientation([_seen_on_asset(layer, "/World/Looks/Brick/diffuseColorTex", tile, 256)])
+    assert prim.GetAttribute("seamless:uvTurn").Get() == pytest.approx(0.0 if straight else facts["degrees"])
+    assert abs(seen.degrees - (0.0 if straight else facts["degrees"])) < 0.5, seen

@@ -22,6 +22,7 @@ from seamless_usd.authoring.types import (
     MapResult,
     Provenance,
     StackResult,
+    UVTurn,
     WriteMode,
     uv_scale_for,
 )
@@ -41,6 +42,7 @@ __all__ = [
     "WriteMode",
     "MapResult",
     "StackResult",
+    "UVTurn",
     "Provenance",
     "AuthoringResult",
     "uv_scale_for",

@@ -16,51 +16,15 @@ from typing import Sequence
 
 import MaterialX as mx
 
-from seamless_usd.authoring.mtlxinputs import UnauthoredInput, fmt, gltf_identity, set_vector2, vector2
+from seamless_usd.authoring.mtlxinputs import MtlxNames, UnauthoredInput, fmt, gltf_identity, set_vector2, vector2
+from seamless_usd.authoring.mtlxuv import _PlaceUV
 from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset_path, write_atomically
-from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, WriteMode
+from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, UVTurn, WriteMode
 from seamless_usd.textures import Origin
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["MtlxNames", "author_mtlx", "default_output_document", "read_mtlx_provenance"]
-
-
-class MtlxNames:
-    """Categories, input names, values and provenance attributes, named once."""
-
-    OUTPUT_SUFFIX = ".seamless"
-    IMAGE = "image"
-    TILED_IMAGE = "tiledimage"
-    GLTF_PREFIX = "gltf_"  # gltf_image, gltf_colorimage, ...: their own place2d inside
-    PLACE_2D = "place2d"
-    UV_NODE = "seamless_uv"
-    VECTOR2 = "vector2"
-    STRING = "string"
-    FILENAME = "filename"
-    FILE = "file"
-    TEXCOORD = "texcoord"
-    SCALE = "scale"
-    U_ADDRESS = "uaddressmode"
-    V_ADDRESS = "vaddressmode"
-    PERIODIC = "periodic"
-    UV_TILING = "uvtiling"
-    UV_OFFSET = "uvoffset"
-    CONNECTION_ATTRS = ("nodename", "nodegraph", "output", "interfacename", "value")
-    MARK_UV = "seamless_uvtransform"  # "true" on the place2d seamless-usd inserted
-    SOURCE_ASSET = "seamless_sourceasset"
-    CROP_SIZE = "seamless_cropsize"
-    UV_SCALE = "seamless_uvscale"
-    PASSED = "seamless_passed"
-    VERDICT = "seamless_verdict"
-    Q_PASSED = "seamless_qpassed"
-    Q_TAU = "seamless_qtau"
-    Q_BAND_MIN = "seamless_qbandmin"
-    MODEL_HASH = "seamless_modelhash"
-    TOOL_VERSION = "seamless_toolversion"
-    STRAIGHTENED = "seamless_straightened"
-    LEVELLED = "seamless_levelled"
-    EVENED = "seamless_evened"
 
 
 def default_output_document(document_path: Path) -> Path:
@@ -104,7 +68,8 @@ def author_mtlx(
             tex_map = map_result.map
             if tex_map.origin is not Origin.MTLX or not _same_path(tex_map.document or tex_map.file_at.layer, src):
                 continue
-            author.edit_map(map_result, stack_result.uv_scale, stack_result.provenance, stack_result.wrap_only)
+            author.edit_map(map_result, stack_result.uv_scale, stack_result.provenance, stack_result.wrap_only,
+                            stack_result.uv_turn)
             checked += 1
     if not author.changed:
         if checked and not result.findings:
@@ -147,6 +112,7 @@ def read_mtlx_provenance(node: mx.Node) -> Provenance | None:
         straightened=floats(MtlxNames.STRAIGHTENED, 1)[0],
         levelled=floats(MtlxNames.LEVELLED, 1)[0],
         evened=floats(MtlxNames.EVENED, 1)[0],
+        uv_turn=floats(MtlxNames.UV_TURN, 1)[0],
     )
 
 
@@ -159,7 +125,7 @@ def _same_path(a: str | None, b: Path) -> bool:
         return Path(a).resolve() == b
 
 
-class _MtlxAuthor:
+class _MtlxAuthor(_PlaceUV):
     def __init__(self, doc: mx.Document, src: Path, out: Path, result: AuthoringResult):
         self.doc, self.src, self.out, self.result = doc, src, out, result
         self.changed = False
@@ -222,8 +188,10 @@ class _MtlxAuthor:
                 inp.setValueString(MtlxNames.PERIODIC)
                 self._plan(f"set {prim_ref(inp.getNamePath())} = {MtlxNames.PERIODIC}")
 
-    def edit_map(self, map_result, uv_scale, provenance: Provenance, wrap_only: bool = False) -> None:
-        """Edit one map's node; ``wrap_only`` (an already-tileable source): address modes only."""
+    def edit_map(self, map_result, uv_scale, provenance: Provenance, wrap_only: bool = False,
+                 turn: UVTurn | None = None) -> None:
+        """Edit one map's node; ``wrap_only`` (an already-tileable source): address modes only; ``turn``: a
+        straightened tile turned back in the UVs."""
         tex_map = map_result.map
         node_path = tex_map.node.strip("<>")
         node = self.doc.getDescendant(node_path)
@@ -268,6 +236,7 @@ class _MtlxAuthor:
         # UV scale
         prior = recorded.uv_scale if recorded else None
         total = scale if from_source or prior is None else (prior[0] * scale[0], prior[1] * scale[1])
+        degrees = 0.0
         if category == MtlxNames.TILED_IMAGE:
             undo = prior or (1.0, 1.0)
             for name in (MtlxNames.UV_TILING, MtlxNames.UV_OFFSET):
@@ -284,7 +253,13 @@ class _MtlxAuthor:
                 "gltf image node with its own UV transform: file replaced, scale its UVs by hand"))
             total = (1.0, 1.0)
         else:
-            total = self._place2d(node, scale, from_source)
+            total, degrees = self._place2d(node, scale, from_source, turn)
+        if turn is not None and not degrees:
+            self.result.findings.append(Finding(
+                Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(node_path),
+                f"{category} node: its UVs cannot turn, so the straightened tile is written straight and the pattern "
+                "on the asset turns by the angle recorded as seamless_straightened (use an image node fed by a "
+                "place2d to keep the asset's look)"))
         # provenance
         if recorded and not from_source:
             source = recorded.source_asset  # the tile was made from an earlier tile: keep the origin
@@ -307,48 +282,8 @@ class _MtlxAuthor:
             (MtlxNames.STRAIGHTENED, fmt([float(p.straightened)]) if p.straightened else None),
             (MtlxNames.LEVELLED, fmt([float(p.levelled)]) if p.levelled else None),
             (MtlxNames.EVENED, fmt([float(p.evened)]) if p.evened else None),
+            (MtlxNames.UV_TURN, fmt([float(degrees)]) if degrees else None),
         ):
             self._set(node, name, value, name)
         if len(self.result.plan) > before and prim_ref(node_path) not in self.result.edited_prims:
             self.result.edited_prims.append(prim_ref(node_path))
-
-    def _place2d(self, node: mx.Node, scale, from_source: bool) -> tuple[float, float]:
-        tex_in = node.getInput(MtlxNames.TEXCOORD)
-        upstream = tex_in.getConnectedNode() if tex_in is not None else None
-        if upstream is not None and upstream.getAttribute(MtlxNames.MARK_UV) == "true":
-            s_in = upstream.getInput(MtlxNames.SCALE)
-            current = vector2(s_in.getValueString()) if s_in is not None and s_in.getValueString() \
-                else (1.0, 1.0)
-            prior = (1.0 / current[0], 1.0 / current[1])
-            total = scale if from_source else (prior[0] * scale[0], prior[1] * scale[1])
-            new = (1.0 / total[0], 1.0 / total[1])
-            if any(abs(new[i] - current[i]) > 1e-9 for i in range(2)):
-                set_vector2(upstream.getInput(MtlxNames.SCALE) or upstream.addInput(
-                    MtlxNames.SCALE, MtlxNames.VECTOR2), new)
-                self._plan(f"set {prim_ref(upstream.getNamePath())}.scale = {fmt(new)}")
-            return total
-        parent = node.getParent()
-        connection = tuple(
-            (a, tex_in.getAttribute(a)) for a in MtlxNames.CONNECTION_ATTRS
-            if tex_in is not None and tex_in.hasAttribute(a))
-        key = (parent.getNamePath(), connection, scale)
-        name = self._uv_nodes.get(key)
-        if name is None:
-            name = parent.createValidChildName(MtlxNames.UV_NODE)
-            place = parent.addNode(MtlxNames.PLACE_2D, name, MtlxNames.VECTOR2)
-            place.setAttribute(MtlxNames.MARK_UV, "true")
-            if connection:
-                coords = place.addInput(MtlxNames.TEXCOORD, MtlxNames.VECTOR2)
-                for attr, value in connection:
-                    coords.setAttribute(attr, value)
-            set_vector2(place.addInput(MtlxNames.SCALE, MtlxNames.VECTOR2),
-                         (1.0 / scale[0], 1.0 / scale[1]))
-            self._uv_nodes[key] = name
-            self._plan(f"add place2d {prim_ref(place.getNamePath())} scale = "
-                       f"{place.getInput(MtlxNames.SCALE).getValueString()}")
-        if tex_in is not None:
-            node.removeInput(MtlxNames.TEXCOORD)
-        coords = node.addInput(MtlxNames.TEXCOORD, MtlxNames.VECTOR2)
-        coords.setNodeName(name)
-        self._plan(f"connect {prim_ref(coords.getNamePath())} -> {prim_ref(name)}")
-        return scale

@@ -1,10 +1,52 @@
-"""Small helpers of :mod:`.mtlx` on MaterialX inputs: an input a node does not have yet, vector2 values written
-with full float precision, and whether a gltf image node's own UV transform is the identity."""
+"""Small helpers of :mod:`.mtlx` on MaterialX inputs: the names it uses, an input a node does not have yet, vector2
+values written with full float precision, and whether a gltf image node's own UV transform is the identity."""
 from __future__ import annotations
 
 import MaterialX as mx
 
-__all__ = ["UnauthoredInput", "set_vector2", "gltf_identity", "vector2", "fmt"]
+__all__ = ["MtlxNames", "UnauthoredInput", "set_vector2", "gltf_identity", "vector2", "fmt"]
+
+
+class MtlxNames:
+    """Categories, input names, values and provenance attributes, named once."""
+
+    OUTPUT_SUFFIX = ".seamless"
+    IMAGE = "image"
+    TILED_IMAGE = "tiledimage"
+    GLTF_PREFIX = "gltf_"  # gltf_image, gltf_colorimage, ...: their own place2d inside
+    PLACE_2D = "place2d"
+    UV_NODE = "seamless_uv"
+    VECTOR2 = "vector2"
+    STRING = "string"
+    FILENAME = "filename"
+    FILE = "file"
+    TEXCOORD = "texcoord"
+    SCALE = "scale"
+    U_ADDRESS = "uaddressmode"
+    V_ADDRESS = "vaddressmode"
+    PERIODIC = "periodic"
+    UV_TILING = "uvtiling"
+    UV_OFFSET = "uvoffset"
+    CONNECTION_ATTRS = ("nodename", "nodegraph", "output", "interfacename", "value")
+    MARK_UV = "seamless_uvtransform"  # "true" on the scale place2d seamless-usd inserted, "turn" on its turn
+    MARK_TURN = "turn"
+    UV_TURN_NODE = "seamless_uv_turn"
+    ROTATE = "rotate"
+    FLOAT = "float"
+    SOURCE_ASSET = "seamless_sourceasset"
+    CROP_SIZE = "seamless_cropsize"
+    UV_SCALE = "seamless_uvscale"
+    PASSED = "seamless_passed"
+    VERDICT = "seamless_verdict"
+    Q_PASSED = "seamless_qpassed"
+    Q_TAU = "seamless_qtau"
+    Q_BAND_MIN = "seamless_qbandmin"
+    MODEL_HASH = "seamless_modelhash"
+    TOOL_VERSION = "seamless_toolversion"
+    STRAIGHTENED = "seamless_straightened"
+    LEVELLED = "seamless_levelled"
+    EVENED = "seamless_evened"
+    UV_TURN = "seamless_uvturn"
 
 
 class UnauthoredInput:

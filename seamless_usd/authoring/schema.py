@@ -44,6 +44,7 @@ class Schema:
     STRAIGHTENED = "seamless:straightened"
     LEVELLED = "seamless:levelled"
     EVENED = "seamless:evened"
+    UV_TURN = "seamless:uvTurn"
 
 
 # Property name -> (Sdf type, how a Provenance value becomes a USD value).
@@ -61,6 +62,7 @@ PROPERTIES = {
     Schema.STRAIGHTENED: (Sdf.ValueTypeNames.Double, lambda p: float(p.straightened)),
     Schema.LEVELLED: (Sdf.ValueTypeNames.Double, lambda p: float(p.levelled)),
     Schema.EVENED: (Sdf.ValueTypeNames.Double, lambda p: float(p.evened)),
+    Schema.UV_TURN: (Sdf.ValueTypeNames.Double, lambda p: float(p.uv_turn)),
 }
 
 
@@ -144,6 +146,7 @@ def read_provenance(prim: Usd.Prim) -> Provenance | None:
         straightened=float(get(Schema.STRAIGHTENED, 0.0)),
         levelled=float(get(Schema.LEVELLED, 0.0)),
         evened=float(get(Schema.EVENED, 0.0)),
+        uv_turn=float(get(Schema.UV_TURN, 0.0)),
     )
 
 

@@ -14,6 +14,7 @@ __all__ = [
     "MapResult",
     "Provenance",
     "StackResult",
+    "UVTurn",
     "AuthoringResult",
     "uv_scale_for",
 ]
@@ -70,6 +71,17 @@ class Provenance:
     straightened: float = 0.0  # degrees the source was turned clockwise before tiling (0: not straightened)
     levelled: float = 0.0  # the most a texel value was scaled by (share) to level the source's light (0: not levelled)
     evened: float = 0.0  # the most a texel moved (texels) to even the source's drifting lattice (0: not evened)
+    uv_turn: float = 0.0  # degrees the authored UVs turn the straightened tile back, counter-clockwise (0: none)
+
+
+@dataclass(frozen=True)
+class UVTurn:
+    """The turn a straightened tile is given back in the asset's UVs, so the asset looks as before: the source
+    was turned clockwise by ``degrees`` (as the picture is seen) before it was tiled; ``aspect`` is its height over
+    its width in texels (the turn is made in texel units, not in the UV square's)."""
+
+    degrees: float
+    aspect: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -81,6 +93,7 @@ class StackResult:
     uv_scale: tuple[float, float]
     provenance: Provenance
     wrap_only: bool = False  # an already-tileable stack: only set wrap = repeat (maps are the sources)
+    uv_turn: UVTurn | None = None  # a straightened tile turned back in the UVs (None: the UVs do not turn it)
 
 
 @dataclass

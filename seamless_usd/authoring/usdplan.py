@@ -8,21 +8,17 @@ from typing import Iterable
 from pxr import Gf, Sdf, Usd, UsdShade
 
 from seamless_usd.authoring.files import relative_asset_path
-from seamless_usd.authoring.schema import PROPERTIES, Schema, has_applied, is_seamless_uv_transform, read_provenance, schemas_known
+from seamless_usd.authoring.schema import PROPERTIES, Schema, has_applied, read_provenance, schemas_known
 from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult
 from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target, variant_not_composed
+from seamless_usd.authoring.usduv import _UVPlanner
 from seamless_usd.authoring.usdnodes import (
     Names,
     _close,
-    _connected,
-    _connection_source_attr,
-    _gltf_transform_is_identity,
     _kind,
     _Kind,
     _producing_attr,
     _same_file,
-    _uv_input_name,
-    _value,
 )
 from seamless_usd.textures import Origin
 from seamless_usd.discover.variants import apply_selection
@@ -31,7 +27,7 @@ from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 __all__ = []
 
 
-class _Author:
+class _Author(_UVPlanner):
     """Plans the edits for a list of stack results on one stage, then applies them."""
 
     def __init__(self, stage: Usd.Stage, result: AuthoringResult, anchor_dir: Path | None,
@@ -190,9 +186,14 @@ class _Author:
         if not self._plan_file(prim, shader, tex_map, out):
             return self._refused or "its file input cannot be edited"
         self._plan_wrap(prim, shader, kind)
-        applied = self._plan_uv(prim, shader, kind, scale, recorded, from_source)
+        applied = self._plan_uv(prim, shader, kind, scale, recorded, from_source, stack_result.uv_turn)
         if applied is None:  # the UV edit cannot be made: leave this map untouched
             return self._refused or "its UV input cannot be edited"
+        if stack_result.uv_turn and not applied[1]:
+            self._find(Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(prim.GetPath()),
+                       "the UVs of this texture node cannot turn (a tiledimage, or no UV transform authored): the "
+                       "straightened tile is written straight and the pattern on the asset turns by the angle "
+                       "recorded as seamless:straightened (an image node fed by a UV transform keeps its look)")
         if recorded and not from_source:  # made from an earlier tile: keep the origin
             origin = prim.GetAttribute(Schema.SOURCE_ASSET).Get()
             source = origin.resolvedPath or origin.path
@@ -267,110 +268,14 @@ class _Author:
             for name in (Names.U_ADDRESS, Names.V_ADDRESS):
                 self._plan_input_value(prim, shader, name, Sdf.ValueTypeNames.String, Names.PERIODIC)
 
-    def _plan_uv(self, prim, shader, kind, scale, recorded, from_source) -> tuple[float, float] | None:
-        """Plan the UV scale; return the total scale now applied after the original chain."""
-        prior = recorded.uv_scale if recorded else None
-        if kind == _Kind.MX_TILED:
-            total = scale if from_source or prior is None else (prior[0] * scale[0], prior[1] * scale[1])
-            undo = prior or (1.0, 1.0)
-            tiling = _value(shader.GetInput(Names.UV_TILING), (1.0, 1.0))
-            offset = _value(shader.GetInput(Names.UV_OFFSET), (0.0, 0.0))
-            base_t = (tiling[0] / undo[0], tiling[1] / undo[1])
-            base_o = (offset[0] / undo[0], offset[1] / undo[1])
-            f32 = Sdf.ValueTypeNames.Float2
-            self._plan_input_value(prim, shader, Names.UV_TILING, f32,
-                                   (base_t[0] * total[0], base_t[1] * total[1]))
-            self._plan_input_value(prim, shader, Names.UV_OFFSET, f32,
-                                   (base_o[0] * total[0], base_o[1] * total[1]))
-            return total
-        if kind == _Kind.OTHER:
-            self._find(Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(prim.GetPath()),
-                       f"unknown texture node {shader.GetShaderId()!r}; file replaced, UVs not scaled")
-            return (1.0, 1.0)
-        if kind == _Kind.MX_GLTF and not _gltf_transform_is_identity(shader):
-            self._find(Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(prim.GetPath()),
-                       "gltf image node with its own UV transform: scale it by hand")
-            return (1.0, 1.0)
-        uv_input = shader.GetInput(_uv_input_name(kind))
-        source = _connected(uv_input)
-        if source is None:
-            self._find(Severity.WARNING, Codes.NO_UV, prim_ref(prim.GetPath()),
-                       "texture coordinates are not connected; UVs not scaled")
-            return (1.0, 1.0)
-        use_place2d = kind != _Kind.USD_UV_TEXTURE
-        if is_seamless_uv_transform(source.GetPrim()):
-            node = UsdShade.Shader(source.GetPrim())
-            if (node.GetPath(), self._selection) in self._uv_updates:  # shared by maps of this run: updated once
-                return self._uv_updates[(node.GetPath(), self._selection)]
-            current = _value(node.GetInput(Names.SCALE), (1.0, 1.0))
-            prior_node = (1.0 / current[0], 1.0 / current[1]) if use_place2d else current
-            total = scale if from_source else (prior_node[0] * scale[0], prior_node[1] * scale[1])
-            value = (1.0 / total[0], 1.0 / total[1]) if use_place2d else total
-            self._plan_input_value(node.GetPrim(), node, Names.SCALE, Sdf.ValueTypeNames.Float2, value)
-            self._uv_updates[(node.GetPath(), self._selection)] = total
-            return total
-        source_attr = _connection_source_attr(uv_input)
-        key = (str(prim.GetPath().GetParentPath()), str(source_attr), scale, use_place2d, self._selection)
-        node_path = self._uv_nodes.get(key)
-        target = self._target(prim, uv_input.GetAttr())
-        if target is None:
-            return None
-        if node_path is None:
-            node_path = self._new_uv_node(prim, target, source_attr, scale, use_place2d)
-            self._uv_nodes[key] = node_path
-        out_name = Names.OUT if use_place2d else Names.RESULT
-        self.edits.append(_Edit(target, _EditKind.CONNECT, uv_input.GetAttr().GetPath(),
-                                Sdf.ValueTypeNames.Float2,
-                                node_path.AppendProperty(f"outputs:{out_name}")))
-        return scale
-
-    def _new_uv_node(self, prim, target, source_attr: Sdf.Path, scale, use_place2d: bool) -> Sdf.Path:
-        parent = prim.GetPath().GetParentPath()
-        name, n = Names.UV_NODE, 0
-        while (self.stage.GetPrimAtPath(parent.AppendChild(name))
-               or (parent.AppendChild(name), self._selection) in self._reserved):
-            n += 1
-            name = f"{Names.UV_NODE}_{n}"
-        path = parent.AppendChild(name)
-        self._reserved.add((path, self._selection))
-        target = self._sibling_target(prim, target)
-        f2 = Sdf.ValueTypeNames.Float2
-        if use_place2d:
-            node_id, in_name, out_name = Names.MX_PLACE_2D, Names.TEXCOORD, Names.OUT
-            value = Gf.Vec2f(1.0 / scale[0], 1.0 / scale[1])
-        else:
-            node_id, in_name, out_name = Names.USD_TRANSFORM_2D, Names.IN, Names.RESULT
-            value = Gf.Vec2f(*scale)
-        self.edits += [
-            _Edit(target, _EditKind.DEFINE, path, value=f"{node_id} node"),
-            _Edit(target, _EditKind.VALUE, path.AppendProperty(Names.INFO_ID), Sdf.ValueTypeNames.Token,
-                  node_id, Sdf.VariabilityUniform),
-            _Edit(target, _EditKind.CONNECT, path.AppendProperty(f"inputs:{in_name}"), f2, source_attr),
-            _Edit(target, _EditKind.VALUE, path.AppendProperty(f"inputs:{Names.SCALE}"), f2, value),
-            _Edit(target, _EditKind.VALUE, path.AppendProperty(f"outputs:{out_name}"), f2, None),
-            _Edit(target, _EditKind.SCHEMA, path, value=Schema.UV_TRANSFORM_API),
-        ]
-        return path
-
-    def _sibling_target(self, prim, target: Usd.EditTarget) -> Usd.EditTarget:
-        """Where a new sibling of ``prim`` is defined: ``target``'s layer, mapped through the
-        parent's own prim-index node. A node's mapping may cover only its own prim (a material
-        authored inside a variant: ``/Set/Floor{floorVariant=Tiled}Looks/M``), so a sibling
-        mapped through the texture's node would land outside that variant."""
-        if self._context is not None:
-            return target
-        parent_target = self.target_for(prim.GetParent(), None)
-        if isinstance(parent_target, Usd.EditTarget) and parent_target.GetLayer() == target.GetLayer():
-            return parent_target
-        return target
-
     def _plan_provenance(self, prim, provenance: Provenance, applied, source_file: str) -> None:
-        """Record provenance; the source is this map's own file, relative to the edit layer."""
+        """Record provenance; the source is this map's own file, relative to the edit layer; ``applied``: the
+        (UV scale, UV turn) the UV edits apply."""
         target = self._target(prim, None)
         if target is None:
             return
         source = self._asset_path(source_file, target) if source_file else provenance.source_asset
-        p = replace(provenance, uv_scale=tuple(applied), source_asset=source)
+        p = replace(provenance, uv_scale=tuple(applied[0]), uv_turn=float(applied[1]), source_asset=source)
         if read_provenance(prim) == p:
             return
         if not has_applied(prim, Schema.TILE_API):

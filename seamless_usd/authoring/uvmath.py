@@ -4,13 +4,20 @@ A UV chain is a composition of affine maps ``uv -> M uv + t``. The UV scale that
 pattern's real-world size is applied after the whole chain: ``uv_new = S (M uv + t)`` with
 ``S = diag(W / 2c_w, H / 2c_h)``, so texel offsets in working pixels are unchanged:
 ``(uv_new(p) - uv_new(q)) * 2c = (uv_old(p) - uv_old(q)) * (W, H)``.
+
+A tile made from the source turned clockwise by ``d`` degrees (``process --straighten``) is turned back in texel
+units: ``uv_new = S P^-1 R(-d) P (M uv + t)`` with ``P = diag(1, H / W)`` (v in units of the source's width, so
+the turn keeps texels square) and ``R(-d)`` the UVs turned clockwise by ``d``, which shows the tile turned
+counter-clockwise by ``d``, as the source ran. Two nodes make it: the turn ``R(-d) P`` and the scale
+``S P^-1``.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
-__all__ = ["Affine2", "transform2d", "place2d", "scale2d"]
+__all__ = ["Affine2", "transform2d", "place2d", "scale2d", "turned_scale", "turn_inputs", "turn_of_inputs",
+           "scale_node_value", "total_from_node"]
 
 
 @dataclass(frozen=True)
@@ -91,3 +98,37 @@ def place2d(
     if operation_order == 0:
         return to_pivot.then(inv_scale).then(rot).then(off).then(back)
     return to_pivot.then(off).then(rot).then(inv_scale).then(back)
+
+
+def turned_scale(scale: tuple[float, float], degrees: float, aspect: float) -> Affine2:
+    """The whole UV edit of a tile at UV ``scale`` turned back by ``degrees`` (the source, ``aspect`` = H / W texels,
+    was turned clockwise by them before it was tiled): the turn, then the scale (module docstring)."""
+    return transform2d((1.0, aspect), -degrees).then(scale2d((scale[0], scale[1] / aspect)))
+
+
+def turn_inputs(degrees: float, aspect: float, place: bool) -> tuple[tuple[float, float], float]:
+    """(scale, rotation) of the turn node: a UsdTransform2d's (scale multiplies, ``rotation`` turns counter-clockwise)
+    or, with ``place``, a place2d's (scale divides, ``rotate`` turns clockwise)."""
+    if place:
+        return (1.0, 1.0 / aspect), float(degrees)
+    return (1.0, float(aspect)), -float(degrees)
+
+
+def turn_of_inputs(scale: tuple[float, float], rotation: float, place: bool) -> tuple[float, float]:
+    """(degrees, aspect) of a turn node holding ``scale`` and ``rotation`` (:func:`turn_inputs` undone)."""
+    if place:
+        return float(rotation), 1.0 / float(scale[1])
+    return -float(rotation), float(scale[1])
+
+
+def scale_node_value(total: tuple[float, float], aspect: float, place: bool) -> tuple[float, float]:
+    """The scale input of the UV scale node for a ``total`` UV scale after a turn in units of ``aspect`` (1: no
+    turn); a place2d divides."""
+    u, v = float(total[0]), float(total[1]) / aspect
+    return (1.0 / u, 1.0 / v) if place else (u, v)
+
+
+def total_from_node(value: tuple[float, float], aspect: float, place: bool) -> tuple[float, float]:
+    """The total UV scale a scale node holding ``value`` applies (:func:`scale_node_value` undone)."""
+    u, v = (1.0 / value[0], 1.0 / value[1]) if place else (float(value[0]), float(value[1]))
+    return (u, v * aspect)

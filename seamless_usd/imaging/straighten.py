@@ -59,10 +59,13 @@ def _turned(values: np.ndarray, degrees: float) -> np.ndarray:
     return np.asarray(out.get_pixels(oiio.FLOAT), dtype=np.float32).reshape(values.shape)
 
 
-def straighten_maps(values: Sequence[np.ndarray], normals: Sequence[bool], degrees: float) -> list[np.ndarray]:
+def straighten_maps(values: Sequence[np.ndarray], normals: Sequence[bool], degrees: float,
+                    turn_vectors: bool = True) -> list[np.ndarray]:
     """Every map of ``values`` (decoded, (H, W, C), one texel grid) turned clockwise by ``degrees`` (an
     :class:`.orientation.Orientation`'s angle straightens it) and cut to the largest rectangle of source
-    texels; ``normals``: which maps hold unit vectors (x right, y up), turned with the picture."""
+    texels; ``normals``: which maps hold unit vectors (x right, y up), turned with the picture unless
+    ``turn_vectors`` is false: a tile the asset's UVs turn back (``process --straighten``) is seen in the asset's
+    own tangent frame, so its vectors keep the source's."""
     h, w = values[0].shape[:2]
     iw, ih = inscribed_size(w, h, degrees)
     iw, ih = iw - 2 * MARGIN, ih - 2 * MARGIN
@@ -74,7 +77,9 @@ def straighten_maps(values: Sequence[np.ndarray], normals: Sequence[bool], degre
         v = np.asarray(v, dtype=np.float32)
         flat = v.reshape(h, w, -1)
         turned = _turned(flat, degrees)[y0:y0 + ih, x0:x0 + iw]
-        if is_normal and flat.shape[2] >= 3:
+        if is_normal and flat.shape[2] >= 3 and not turn_vectors:
+            turned = np.concatenate([renormalise(turned[..., :3]), turned[..., 3:]], axis=2)
+        elif is_normal and flat.shape[2] >= 3:
             a = math.radians(degrees)  # the vectors turn clockwise with the picture
             x, y = turned[..., 0].copy(), turned[..., 1].copy()
             turned[..., 0] = x * math.cos(a) + y * math.sin(a)

@@ -13,31 +13,33 @@ import numpy as np
 __all__ = ["straighten", "made_values", "as_made", "source_uv_scale", "on_tile_grid"]
 
 
-def straighten(pixels, normals: list[bool]):
+def straighten(pixels, normals: list[bool], uv_turn: bool = False):
     """(pixels, facts): the stack's maps turned until their lines run along the axes, when they are turned
-    (:func:`.imaging.orientation.dominant_orientation`), and what was found and done."""
+    (:func:`.imaging.orientation.dominant_orientation`), and what was found and done. ``uv_turn``: the turn is
+    to be authored in the asset's UVs (``facts["uv_turn"]``), so normal maps keep the source's vectors."""
     from seamless_usd.imaging.orientation import dominant_orientation
 
     found = dominant_orientation(pixels.values)
     facts = {"orientation": found.as_dict(), "degrees": 0.0, "source_size": list(pixels.working_size)}
     if not found.straightens:
         return pixels, facts
-    done = _with_values(pixels, made_values(pixels.values, normals, found.degrees))
-    facts.update(degrees=found.degrees, size=list(done.working_size))
+    done = _with_values(pixels, made_values(pixels.values, normals, found.degrees, turn_vectors=not uv_turn))
+    facts.update(degrees=found.degrees, size=list(done.working_size), **({"uv_turn": True} if uv_turn else {}))
     return done, facts
 
 
 def made_values(values, normals: list[bool], degrees: float = 0.0, levelled: bool = False,
-                evened: bool = False) -> list[np.ndarray]:
+                evened: bool = False, turn_vectors: bool = True) -> list[np.ndarray]:
     """``values`` (the source's maps) made as the tile's source was: turned clockwise by ``degrees`` and cut to
     source texels (:mod:`.imaging.straighten`), then, with ``levelled``, their light levelled
     (:func:`.imaging.level.level_maps`), with ``evened``, their lattice evened
-    (:func:`.synthesis.lattice.drift.even_lattice`). ``process`` and ``check`` both make the source so."""
+    (:func:`.synthesis.lattice.drift.even_lattice`); ``turn_vectors``: normal maps' vectors turn with the picture
+    (not where the turn is authored in the asset's UVs). ``process`` and ``check`` both make the source so."""
     out = list(values)
     if degrees:
         from seamless_usd.imaging.straighten import straighten_maps
 
-        out = straighten_maps(out, normals, degrees)
+        out = straighten_maps(out, normals, degrees, turn_vectors)
     if levelled:
         from seamless_usd.imaging.level import level_maps
 
@@ -56,7 +58,9 @@ def as_made(pixels, normals: list[bool], straightened_facts: dict | None, levell
     turn = straightened_facts["degrees"] if straightened_facts and straightened_facts.get("size") else 0.0
     if not turn and not levelled_facts and not evened_facts:
         return pixels
-    return _with_values(pixels, made_values(pixels.values, normals, turn, bool(levelled_facts), bool(evened_facts)))
+    vectors = not (straightened_facts or {}).get("uv_turn")
+    return _with_values(pixels, made_values(pixels.values, normals, turn, bool(levelled_facts), bool(evened_facts),
+                                            vectors))
 
 
 def _with_values(pixels, values: list[np.ndarray]):

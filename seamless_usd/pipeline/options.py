@@ -58,7 +58,9 @@ class Options:
     #                     refined GAN tile only; "off": the pure SeamlessGAN tile
     tile_size: str = "source"  # "source": tile has the source's pixel size; "paper": the paper's 2c x 2c tile
     straighten: bool = False  # turn a stack whose lines run at an angle until they run along the axes, and tile
-    #                         that (the tile is written straight; the pattern on the asset turns)
+    #                         that; the turn is authored in the asset's UVs, so the asset looks as before
+    write_straight: bool = False  # with straighten: no UV turn; the tile is written straight and the pattern
+    #                               on the asset turns by the angle
     force: bool = False  # process every stack whatever its tiling intent (uv-atlas, already-tileable, other)
     force_materials: tuple[str, ...] = ()  # fnmatch patterns of materials processed whatever their intent
     progress: Callable[[ProgressEvent], None] | None = field(default=None, compare=False)
@@ -77,7 +79,7 @@ class Options:
         for name in (
             "preset", "materials", "mode", "plan_mode", "output_layer", "output_dir", "device", "seed",
             "cache_dir", "max_size", "max_pixels", "iterations", "seeds", "scheduler", "jobs", "refine", "tile_size",
-            "straighten", "force", "force_materials",
+            "straighten", "write_straight", "force", "force_materials",
         ):
             value = getattr(self, name)
             if isinstance(value, Path):

@@ -115,7 +115,18 @@ class StackOutcome:
             evened=float((self.resampled.get("evened") or {}).get("moved", 0.0)),
         )
         maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
-        return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov)
+        return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov, uv_turn=self.uv_turn())
+
+    def uv_turn(self):
+        """The turn the asset's UVs give the tile back (``process --straighten``): the source's, in texel units;
+        None when the tile was not straightened or is written straight (``--write-straight``)."""
+        from seamless_usd.authoring import UVTurn
+
+        facts = self.resampled.get("straightened") or {}
+        if not facts.get("uv_turn") or not facts.get("size") or not facts.get("degrees"):
+            return None
+        width, height = facts["source_size"]
+        return UVTurn(float(facts["degrees"]), float(height) / float(width))
 
 
 def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,

@@ -44,6 +44,7 @@ class JobSettings:
     refine: str = "on"  # refinement or lattice cut ("gan": no lattice cut; "off": the pure GAN tile)
     tile_size: str = "source"  # "source" (same pixel size as the source) or "paper" (2c x 2c)
     straighten: bool = False  # turn the stack's lines onto the axes before tiling (imaging.straighten)
+    uv_turn: bool = False  # with straighten: the turn is authored in the asset's UVs (normal vectors keep theirs)
 
     @classmethod
     def from_options(cls, options, threads: int | None = None) -> "JobSettings":
@@ -60,7 +61,7 @@ class JobSettings:
             preset=options.preset, iterations=options.iterations, seeds=seeds, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
             max_pixels=options.max_pixels, refine=options.refine, tile_size=options.tile_size,
-            straighten=options.straighten,
+            straighten=options.straighten, uv_turn=options.straighten and not options.write_straight,
         )
 
 
@@ -101,7 +102,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         ),
         {**dataclasses.asdict(config), "tile_size": settings.tile_size,
          "refine": None if refine_config is None else dataclasses.asdict(refine_config),
-         **({"straighten": True} if settings.straighten else {})},
+         **({"straighten": True} if settings.straighten else {}),
+         **({"uv_turn": True} if settings.straighten and settings.uv_turn else {})},
         settings.seed,
     )
     entry = StackCache(settings.cache_dir).entry(key)
@@ -111,7 +113,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             straightened = None
             if settings.straighten:  # from here on the straightened maps are the stack's source
                 t1 = time.perf_counter()
-                pixels, straightened = straighten(pixels, [m.is_normal for m in stack.maps])
+                pixels, straightened = straighten(pixels, [m.is_normal for m in stack.maps], settings.uv_turn)
                 inputs = [dataclasses.replace(i, pixels=p) for i, p in zip(inputs, pixels.values)]
                 timings["straighten"] = time.perf_counter() - t1
             _drop_unusable_checkpoint(entry.checkpoint_dir, config.seeds)

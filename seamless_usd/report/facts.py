@@ -121,8 +121,11 @@ def _straightened_text(facts: dict | None) -> str | None:
         return (f"not turned: lines at {found.get('degrees', 0):g} degrees, strength {found.get('strength', 0):g} "
                 f"(turned from {MIN_DEGREES:g} degrees at a strength of {MIN_STRENGTH:g})")
     w, h = facts.get("size", (0, 0))
+    shown = ("the tile is written straight and the asset's UVs turn it back, so the asset looks as before "
+             "(normal maps keep the source's vectors)" if facts.get("uv_turn") else
+             "the tile is written straight, so the pattern on the asset turns by that angle")
     return (f"turned {facts['degrees']:g} degrees clockwise (strength {found.get('strength', 0):g}) and cut to "
-            f"{w} x {h}; the tile is written straight, so the pattern on the asset turns by that angle")
+            f"{w} x {h}; {shown}")
 
 
 def _remade_text(facts: dict | None, what: str, done: str, moved) -> str | None:

@@ -1,0 +1,120 @@
+"""A straightened tile turned back in the asset's UVs (``process --straighten``): the turn node before the UV
+scale, in USD (UsdTransform2d) and MaterialX (place2d), its updates on later runs, and texel lengths kept."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from pxr import Usd, UsdShade
+
+from seamless_usd.authoring import UVTurn, author_mtlx, author_usd, read_mtlx_provenance, read_provenance, \
+    scale2d, uv_affine
+from seamless_usd.authoring.uvmath import turned_scale
+from test_authoring_mtlx import SCALE, chain, document, read, results  # noqa: F401  (document: a fixture)
+from test_authoring_usd import BRICK, brick_result, scene, uv_nodes  # noqa: F401  (scene: a fixture)
+
+
+def _texel_vector(affine, p, q, size):
+    """The texel offset (u right, v up) between the images of UV points ``p`` and ``q`` in a picture of ``size``."""
+    a, b = affine(p), affine(q)
+    return ((a[0] - b[0]) * size[0], (a[1] - b[1]) * size[1])
+
+
+@pytest.mark.parametrize("source, tile, degrees", [((1024, 512), (300, 200), 17.0), ((256, 256), (90, 130), -31.0)])
+def test_the_turn_keeps_texel_lengths_and_turns_them_clockwise_in_the_uvs(source, tile, degrees):
+    """Every texel step on the asset is the same length in the tile as in the source, turned by the angle: the
+    UVs turn clockwise, which shows the straight tile turned counter-clockwise, as its source ran."""
+    (w, h), (tw, th) = source, tile
+    turn = turned_scale((w / tw, h / th), degrees, h / w)
+    points = [(0.0, 0.0), (0.3, 0.1), (0.9, 0.7), (0.2, 0.95)]
+    for p in points:
+        for q in points:
+            if p == q:
+                continue
+            sx, sy = _texel_vector(lambda uv: uv, p, q, source)
+            tx, ty = _texel_vector(turn, p, q, tile)
+            assert math.hypot(tx, ty) == pytest.approx(math.hypot(sx, sy), rel=1e-9)
+            turned_by = math.degrees(math.atan2(ty, tx) - math.atan2(sy, sx))
+            assert (turned_by + degrees + 180.0) % 360.0 - 180.0 == pytest.approx(0.0, abs=1e-6)
+
+
+def _turned(result, degrees=17.0, aspect=0.5):
+    return replace(result, uv_turn=UVTurn(degrees, aspect))
+
+
+def test_usd_turn_node_before_the_scale_node_and_recorded(scene):
+    root = scene.parent
+    result = author_usd(scene, [_turned(brick_result(root))])
+    old_stage, stage = Usd.Stage.Open(str(scene)), Usd.Stage.Open(str(result.output))
+    scale = brick_result(root).uv_scale
+    for tex in ("Albedo", "Normal"):
+        old, new = uv_affine(old_stage, f"{BRICK}/{tex}"), uv_affine(stage, f"{BRICK}/{tex}")
+        assert new.close_to(old.then(turned_scale(scale, 17.0, 0.5)), tol=1e-6)
+        prov = read_provenance(stage.GetPrimAtPath(f"{BRICK}/{tex}"))
+        assert prov.uv_turn == pytest.approx(17.0) and prov.uv_scale == pytest.approx(scale)
+    added = [p for p in uv_nodes(stage) if p.GetName().startswith("Seamless")]
+    assert sorted(p.GetName() for p in added) == ["SeamlessUV", "SeamlessUVTurn"]  # shared by both maps
+    [turn] = [UsdShade.Shader(p) for p in added if p.GetName() == "SeamlessUVTurn"]
+    assert turn.GetInput("rotation").Get() == pytest.approx(-17.0)  # UsdTransform2d turns counter-clockwise
+
+
+def test_usd_turn_is_updated_in_place_by_later_runs(scene):
+    root = scene.parent
+    first = author_usd(scene, [_turned(brick_result(root))])
+    old = uv_affine(Usd.Stage.Open(str(scene)), f"{BRICK}/Albedo")
+    scale = brick_result(root).uv_scale
+    # the same again: nothing to do
+    again = author_usd(first.output, [_turned(brick_result(root))])
+    assert again.layers_written == [] and not again.plan
+    # made again from the source at another angle: the turn node is updated, never a second one
+    other = author_usd(first.output, [_turned(brick_result(root), 5.0, 0.5)])
+    stage = Usd.Stage.Open(str(other.output))
+    assert uv_affine(stage, f"{BRICK}/Albedo").close_to(old.then(turned_scale(scale, 5.0, 0.5)), tol=1e-6)
+    assert len([p for p in uv_nodes(stage) if p.GetName().startswith("Seamless")]) == 2
+    # written straight this time: the turn becomes the identity and the scale is the UV scale alone
+    straight = author_usd(other.output, [brick_result(root)])
+    stage = Usd.Stage.Open(str(straight.output))
+    assert uv_affine(stage, f"{BRICK}/Albedo").close_to(old.then(scale2d(scale)), tol=1e-6)
+    assert read_provenance(stage.GetPrimAtPath(f"{BRICK}/Albedo")).uv_turn == 0.0
+
+
+def test_usd_turn_of_a_tile_made_from_an_earlier_tile_is_inserted_and_composes(scene):
+    root = scene.parent
+    first = author_usd(scene, [brick_result(root)])  # not turned: a scale node only
+    s1 = brick_result(root).uv_scale
+    tile = root / "tileable" / "brick_albedo_tile.png"
+    s2, tile_aspect = (2.0, 1.0), 0.25
+    second = author_usd(first.output, [_turned(brick_result(root, scale=s2, albedo_resolved=tile), 9.0, tile_aspect)])
+    stage = Usd.Stage.Open(str(second.output))
+    old = uv_affine(Usd.Stage.Open(str(scene)), f"{BRICK}/Albedo")
+    total = (s1[0] * s2[0], s1[1] * s2[1])
+    # turned in the first source's texel units: its aspect is the tile's times the first scale's ratio
+    expected = old.then(turned_scale(total, 9.0, tile_aspect * s1[1] / s1[0]))
+    assert uv_affine(stage, f"{BRICK}/Albedo").close_to(expected, tol=1e-6)
+    assert len([p for p in uv_nodes(stage) if p.GetName().startswith("Seamless")]) == 2
+
+
+def test_mtlx_turn_place2d_before_the_scale_place2d(document):
+    turned = [replace(r, uv_turn=UVTurn(23.0, 1.5)) for r in results(document)]
+    result = author_mtlx(document, turned)
+    old, new = read(document), read(result.layers_written[0])
+    node = "NG_brick/image_color"
+    assert chain(new, node).close_to(chain(old, node).then(turned_scale(SCALE, 23.0, 1.5)), tol=1e-6)
+    assert read_mtlx_provenance(new.getDescendant(node)).uv_turn == pytest.approx(23.0)
+    # a tiledimage cannot turn: scaled only, written straight, and the user is told
+    tiled = "NG_brick/tiled_rough"
+    assert chain(new, tiled).close_to(chain(old, tiled).then(scale2d(SCALE)), tol=1e-6)
+    assert read_mtlx_provenance(new.getDescendant(tiled)).uv_turn == 0.0
+    assert any("cannot turn" in f.message and "tiled_rough" in f.where for f in result.findings)
+    # made again from the source, written straight: the turn is set to the identity, not removed or doubled
+    again = author_mtlx(result.layers_written[0], [replace(r, maps=[replace(m, map=replace(
+        m.map, document=str(result.layers_written[0]), file_at=replace(m.map.file_at, layer=str(
+            result.layers_written[0])))) for m in r.maps]) for r in results(document)],
+        output_path=document.with_name("again.mtlx"))
+    third = read(again.layers_written[0])
+    assert chain(third, node).close_to(chain(old, node).then(scale2d(SCALE)), tol=1e-6)
+    place2ds = [n.getName() for n in third.getDescendant("NG_brick").getNodes() if n.getCategory() == "place2d"]
+    assert sorted(place2ds) == ["place", "seamless_uv", "seamless_uv_turn"]
+
