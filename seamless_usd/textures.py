@@ -215,6 +215,16 @@ class TextureMap:
             used.update(r.channels)
         return "".join(c for c in "rgba" if c in used)
 
+    @property
+    def uv_turns(self) -> bool:
+        """Whether the tool can turn this map's texture coordinates with a UV transform of its own (how
+        ``process --straighten`` gives a straightened tile its turn back): an image node (``UsdUVTexture``,
+        MaterialX ``image``) whose texture coordinates are connected in USD (a MaterialX document's image reads
+        its default coordinates through a new ``place2d``); not a ``tiledimage`` (``uvtiling`` / ``uvoffset``
+        only), a glTF image node (a transform of its own) or a node the tool does not know."""
+        image = self.node_type == "UsdUVTexture" or self.node_type.startswith("ND_image_")
+        return image and (self.origin is Origin.MTLX or bool(self.uv.connected_from))
+
     def to_dict(self) -> dict:
         return _jsonable(asdict(self))
 

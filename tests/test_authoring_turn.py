@@ -68,6 +68,9 @@ def test_usd_turn_is_updated_in_place_by_later_runs(scene):
     # the same again: nothing to do
     again = author_usd(first.output, [_turned(brick_result(root))])
     assert again.layers_written == [] and not again.plan
+    # an angle a float input holds only to float32 precision reads back equal: still nothing to do
+    odd = author_usd(scene, [_turned(brick_result(root), 17.3, 0.37)])
+    assert not author_usd(odd.output, [_turned(brick_result(root), 17.3, 0.37)]).plan
     # made again from the source at another angle: the turn node is updated, never a second one
     other = author_usd(first.output, [_turned(brick_result(root), 5.0, 0.5)])
     stage = Usd.Stage.Open(str(other.output))
@@ -118,3 +121,58 @@ def test_mtlx_turn_place2d_before_the_scale_place2d(document):
     place2ds = [n.getName() for n in third.getDescendant("NG_brick").getNodes() if n.getCategory() == "place2d"]
     assert sorted(place2ds) == ["place", "seamless_uv", "seamless_uv_turn"]
 
+
+
+SHARED = """<?xml version="1.0"?>
+<materialx version="1.39">
+  <nodegraph name="NG">
+    <texcoord name="uv" type="vector2" />
+    <image name="color" type="color3">
+      <input name="file" type="filename" value="textures/color.png" />
+      <input name="texcoord" type="vector2" nodename="uv" />
+    </image>
+    <image name="rough" type="float">
+      <input name="file" type="filename" value="textures/rough.png" />
+      <input name="texcoord" type="vector2" nodename="uv" />
+    </image>
+    <output name="out_color" type="color3" nodename="color" />
+    <output name="out_rough" type="float" nodename="rough" />
+  </nodegraph>
+</materialx>
+"""
+
+
+def test_mtlx_place2d_shared_by_a_stack_is_updated_once_a_run(tmp_path):
+    """Two maps of one stack share the scale and turn place2d: a later run from their tiles composes its scale and
+    turn once, not once a map."""
+    from seamless_usd.authoring import MapResult, Provenance, StackResult
+    from seamless_usd.textures import AuthoredAt, TextureStack
+    from test_authoring_mtlx import mtlx_map
+
+    doc = tmp_path / "shared.mtlx"
+    doc.write_text(SHARED, encoding="utf-8")
+    (tmp_path / "textures").mkdir()
+    (tmp_path / "tileable").mkdir()
+    for name in ("color.png", "rough.png"):
+        (tmp_path / "textures" / name).write_bytes(b"source")
+        (tmp_path / "tileable" / name).write_bytes(b"tile")
+
+    def stack(document: Path, scale, turn, resolved: str):
+        maps = [replace(mtlx_map(document, f"NG/{n}", f"{n}.png", AuthoredAt(f"NG/{n}", "file", str(document))),
+                        resolved=str(tmp_path / resolved / f"{n}.png")) for n in ("color", "rough")]
+        prov = Provenance("textures/color.png", (64, 64), scale, False, 0.3, (0.1, 0.2), "h", "0.1.0")
+        return StackResult(TextureStack("M", maps[0].uv, tuple(maps)),
+                           [MapResult(m, tmp_path / "tileable" / Path(m.resolved).name) for m in maps],
+                           scale, prov, uv_turn=turn)
+
+    first = author_mtlx(doc, [stack(doc, (4.0, 3.0), UVTurn(10.0, 0.75), "textures")])
+    out = first.layers_written[0]
+    # the tiles: the source (H / W = 0.75) over the scale (4, 3), so H / W = 1 in their texels
+    second = author_mtlx(out, [stack(out, (2.0, 1.0), UVTurn(5.0, 1.0), "tileable")],
+                         output_path=tmp_path / "second.mtlx")
+    old, new = read(doc), read(second.layers_written[0])
+    for n in ("color", "rough"):
+        expected = chain(old, f"NG/{n}").then(turned_scale((8.0, 3.0), 15.0, 0.75))
+        assert chain(new, f"NG/{n}").close_to(expected, tol=1e-6), n
+        prov = read_mtlx_provenance(new.getDescendant(f"NG/{n}"))
+        assert prov.uv_turn == pytest.approx(15.0) and prov.uv_scale == pytest.approx((8.0, 3.0))

@@ -152,3 +152,43 @@ def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_tur
     seen = dominant_orientation([_seen_on_asset(layer, "/World/Looks/Brick/diffuseColorTex", tile, 256)])
     assert prim.GetAttribute("seamless:uvTurn").Get() == pytest.approx(0.0 if straight else facts["degrees"])
     assert abs(seen.degrees - (0.0 if straight else facts["degrees"])) < 0.5, seen
+
+
+TILED_DOC = """<?xml version="1.0"?>
+<materialx version="1.39" colorspace="lin_rec709">
+  <nodegraph name="NG_brick">
+    <texcoord name="uv0" type="vector2" />
+    <tiledimage name="brick_color" type="color3">
+      <input name="file" type="filename" value="brick_turned.png" colorspace="srgb_texture" />
+      <input name="texcoord" type="vector2" nodename="uv0" />
+    </tiledimage>
+    <output name="base_color_out" type="color3" nodename="brick_color" />
+  </nodegraph>
+  <standard_surface name="SR_brick" type="surfaceshader">
+    <input name="base_color" type="color3" nodegraph="NG_brick" output="base_color_out" />
+  </standard_surface>
+  <surfacematerial name="M_brick" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="SR_brick" />
+  </surfacematerial>
+</materialx>
+"""
+
+
+def test_process_straighten_writes_straight_where_the_uvs_cannot_turn(tmp_path, capsys, model_cache):
+    """A tiledimage's UVs cannot turn (uvtiling / uvoffset only): the straightened tile is written straight, as
+    with --write-straight (normal vectors turned with it), and the run says so, node by node."""
+    turned = _turned_tileable(_read(TEXTURES / "brick_albedo.png"), 17.0, 256)
+    out = oiio.ImageBuf(np.ascontiguousarray(np.clip(turned, 0.0, 1.0), dtype=np.float32))
+    out.set_write_format(oiio.UINT8)
+    assert out.write(str(tmp_path / "brick_turned.png")), out.geterror()
+    doc = tmp_path / "brick.mtlx"
+    doc.write_text(TILED_DOC, encoding="utf-8")
+    main(["process", str(doc), "--straighten", "--preset", "tiny", "--cache-dir", str(model_cache), "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    [stack] = payload["stacks"]
+    facts = stack["resampled"]["straightened"]
+    assert facts["degrees"] and not facts.get("uv_turn") and facts["uv_turn_refused"] == ["NG_brick/brick_color"]
+    warnings = [f for f in payload["findings"] if f["code"] == "uv-not-composed"]
+    assert len(warnings) == 1 and "brick_color" in warnings[0]["where"] and "written straight" in warnings[0]["message"]
+    written = (tmp_path / "brick.seamless.mtlx").read_text(encoding="utf-8")
+    assert "seamless_uv_turn" not in written and "seamless_uvturn" not in written

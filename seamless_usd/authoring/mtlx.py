@@ -130,6 +130,7 @@ class _MtlxAuthor(_PlaceUV):
         self.doc, self.src, self.out, self.result = doc, src, out, result
         self.changed = False
         self._uv_nodes: dict[tuple, str] = {}
+        self._uv_updates: dict[str, tuple] = {}  # a place2d a run before inserted -> (total scale, turn): once a run
         self._done: dict[str, tuple] = {}
 
     def _plan(self, line: str) -> None:
@@ -254,7 +255,7 @@ class _MtlxAuthor(_PlaceUV):
             total = (1.0, 1.0)
         else:
             total, degrees = self._place2d(node, scale, from_source, turn)
-        if turn is not None and not degrees:
+        if turn is not None and not degrees and from_source:
             self.result.findings.append(Finding(
                 Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(node_path),
                 f"{category} node: its UVs cannot turn, so the straightened tile is written straight and the pattern "

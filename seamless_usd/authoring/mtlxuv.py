@@ -67,7 +67,10 @@ class _PlaceUV:
 
     def _update_place2d(self, place: mx.Node, scale, from_source: bool, turn: UVTurn | None):
         """Update the scale place2d a run before inserted (and the turn before it, adding one where a turn is wanted
-        now)."""
+        now); the maps of one stack share it and update it once."""
+        key = place.getNamePath()
+        if key in self._uv_updates:
+            return self._uv_updates[key]
         tex_in = place.getInput(MtlxNames.TEXCOORD)
         upstream = tex_in.getConnectedNode() if tex_in is not None else None
         turn_node = upstream if upstream is not None and \
@@ -97,6 +100,7 @@ class _PlaceUV:
         if any(abs(new[i] - current[i]) > 1e-9 for i in range(2)):
             set_vector2(place.getInput(MtlxNames.SCALE) or place.addInput(MtlxNames.SCALE, MtlxNames.VECTOR2), new)
             self._plan(f"set {prim_ref(place.getNamePath())}.scale = {fmt(new)}")
+        self._uv_updates[key] = (total, degrees)
         return total, degrees
 
     def _new_turn(self, parent: mx.Element, connection: tuple, degrees: float, aspect: float) -> mx.Node:

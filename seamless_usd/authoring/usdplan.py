@@ -189,7 +189,7 @@ class _Author(_UVPlanner):
         applied = self._plan_uv(prim, shader, kind, scale, recorded, from_source, stack_result.uv_turn)
         if applied is None:  # the UV edit cannot be made: leave this map untouched
             return self._refused or "its UV input cannot be edited"
-        if stack_result.uv_turn and not applied[1]:
+        if stack_result.uv_turn and not applied[1] and from_source:
             self._find(Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(prim.GetPath()),
                        "the UVs of this texture node cannot turn (a tiledimage, or no UV transform authored): the "
                        "straightened tile is written straight and the pattern on the asset turns by the angle "
@@ -248,8 +248,9 @@ class _Author(_UVPlanner):
         if attr is None:
             attr = prim.GetAttribute(f"inputs:{name}")
         current = attr.Get() if attr else None
-        if current == value or (isinstance(value, tuple) and _close(current, value, 1e-9)):
-            return
+        if current == value or (isinstance(value, tuple) and _close(current, value, 1e-9)) or (
+                isinstance(value, float) and current is not None and _close((current,), (value,), 1e-6)):
+            return  # a float input holds float32: an angle read back is equal to 1e-6, not exactly
         path = attr.GetPath() if attr else prim.GetPath().AppendProperty(f"inputs:{name}")
         if attr:
             type_name = attr.GetTypeName()

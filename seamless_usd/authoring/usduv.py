@@ -106,6 +106,8 @@ class _UVPlanner:
         if not from_source and (prior_degrees or degrees):  # turned again: the turn is made in the first source's units
             degrees += prior_degrees
             aspect = prior_aspect if prior_degrees else aspect * prior[1] / prior[0]
+        if turn_node is None and upstream is None:  # nothing feeds the scale node (edited by hand): no turn to insert
+            degrees = 0.0
         if not degrees:
             aspect = 1.0
         if turn_node is not None:
@@ -113,7 +115,7 @@ class _UVPlanner:
             self._plan_input_value(turn_node.GetPrim(), turn_node, Names.SCALE, Sdf.ValueTypeNames.Float2, turn_scale)
             self._plan_input_value(turn_node.GetPrim(), turn_node, _rotation(place), Sdf.ValueTypeNames.Float,
                                    rotation)
-        elif degrees and upstream is not None:
+        elif degrees:
             target = self._target(node.GetPrim(), node.GetInput(in_name).GetAttr())
             if target is None:
                 return None

@@ -162,8 +162,22 @@ def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, p
         output_dir=out_dir,
         peak_rss_mb=_peak_rss_mb(),
         previews=previews,
-        findings=list(pixels.findings),
+        findings=list(pixels.findings) + _turn_refused(straightened),
     )
+
+
+def _turn_refused(straightened: dict | None) -> list[Finding]:
+    """A warning for each texture node whose UVs could not turn a straightened tile back (it is written straight)."""
+    nodes = (straightened or {}).get("uv_turn_refused") or []
+    if not nodes:
+        return []
+    from seamless_usd.authoring.types import Codes
+    from seamless_usd.findings import Severity, prim_ref
+    from seamless_usd.report.facts import UV_TURN_REFUSED
+
+    return [Finding(Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(node.strip("<>")),
+                    f"the straightened tile is written straight, so the pattern on the asset turns by "
+                    f"{straightened['degrees']:g} degrees: {UV_TURN_REFUSED}") for node in nodes]
 
 
 def _peak_rss_mb() -> float:

@@ -95,6 +95,10 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     if settings.seeds is not None:
         config = dataclasses.replace(config, seeds=settings.seeds)
     refine_config = None if settings.refine == "off" else synthesis.RefineConfig(lattice=settings.refine == "on")
+    # the turn goes back in the UVs only where every map's UVs can turn: else the tile is written straight, its
+    # normal vectors turned with it (a normal map is right on the asset only one way or the other)
+    unturned = [m.node for m in stack.maps if not m.uv_turns]
+    uv_turn = settings.straighten and settings.uv_turn and not unturned
     key = stack_key(
         (
             (n, p.pixels, f"{m.channels_used}|{m.color_space.value}|{m.is_normal}|{sorted(r.role for r in m.roles)}")
@@ -103,7 +107,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         {**dataclasses.asdict(config), "tile_size": settings.tile_size,
          "refine": None if refine_config is None else dataclasses.asdict(refine_config),
          **({"straighten": True} if settings.straighten else {}),
-         **({"uv_turn": True} if settings.straighten and settings.uv_turn else {})},
+         **({"uv_turn": True} if uv_turn else {"uv_turn": "refused"} if settings.straighten and settings.uv_turn
+            else {})},
         settings.seed,
     )
     entry = StackCache(settings.cache_dir).entry(key)
@@ -113,7 +118,9 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             straightened = None
             if settings.straighten:  # from here on the straightened maps are the stack's source
                 t1 = time.perf_counter()
-                pixels, straightened = straighten(pixels, [m.is_normal for m in stack.maps], settings.uv_turn)
+                pixels, straightened = straighten(pixels, [m.is_normal for m in stack.maps], uv_turn)
+                if settings.uv_turn and unturned and straightened.get("size"):
+                    straightened["uv_turn_refused"] = unturned
                 inputs = [dataclasses.replace(i, pixels=p) for i, p in zip(inputs, pixels.values)]
                 timings["straighten"] = time.perf_counter() - t1
             _drop_unusable_checkpoint(entry.checkpoint_dir, config.seeds)

@@ -110,6 +110,11 @@ def _q_text(q: dict) -> str | None:
     return f"{state} ({rest})" if state and rest else (state or rest)
 
 
+#: Why a straightened tile is written straight although its turn was to go back in the UVs.
+UV_TURN_REFUSED = ("the UVs of these texture nodes cannot turn (a tiledimage, a glTF image, texture coordinates "
+                   "not connected); an image node fed by a UV transform keeps the asset's look")
+
+
 def _straightened_text(facts: dict | None) -> str | None:
     """What ``--straighten`` found and did (None when it was not asked for)."""
     from seamless_usd.imaging.orientation import MIN_DEGREES, MIN_STRENGTH
@@ -124,6 +129,8 @@ def _straightened_text(facts: dict | None) -> str | None:
     shown = ("the tile is written straight and the asset's UVs turn it back, so the asset looks as before "
              "(normal maps keep the source's vectors)" if facts.get("uv_turn") else
              "the tile is written straight, so the pattern on the asset turns by that angle")
+    if facts.get("uv_turn_refused"):
+        shown += f" ({UV_TURN_REFUSED}: {', '.join(facts['uv_turn_refused'])})"
     return (f"turned {facts['degrees']:g} degrees clockwise (strength {found.get('strength', 0):g}) and cut to "
             f"{w} x {h}; {shown}")
 
