@@ -55,10 +55,10 @@ def test_parse_patterns(value, expected):
 def test_settings_from_maya_chaser_args_all_strings():
     s = common.settings_from_mapping(
         {"preset": "draft", "materials": "/Looks/Brick*,/Looks/Wood", "seed": "7", "dry_run": "1",
-         "max_size": "128", "iterations": "", "strict": "true", "enabled": "on"}
+         "max_size": "128", "iterations": "", "strict": "true", "enabled": "on", "straighten": "1"}
     )
     assert s == HookSettings(preset="draft", materials=("/Looks/Brick*", "/Looks/Wood"), seed=7, dry_run=True,
-                             max_size=128, iterations=0, strict=True, enabled=True)
+                             max_size=128, iterations=0, strict=True, enabled=True, straighten=True)
 
 
 def test_settings_from_houdini_parms_strip_prefix_and_ignore_other_parms():
@@ -148,9 +148,11 @@ def test_options_for_stage_maps_every_setting(tmp_path):
     Options, WriteMode = _real_options()
     stage = _stage_on_disk(tmp_path)
     s = HookSettings(preset="draft", materials=("/M/*",), output_dir="maps", device="cpu", seed=5, dry_run=True,
-                     report="report.html", cache_dir=str(tmp_path / "cache"), max_size=64, iterations=10, seeds=2)
+                     report="report.html", cache_dir=str(tmp_path / "cache"), max_size=64, iterations=10, seeds=2,
+                     straighten=True)
     o = common.options_for_stage(s, stage)
     assert isinstance(o, Options)
+    assert o.straighten and not o.write_straight  # at export the asset keeps its look: the UVs turn the tile back
     assert (o.preset, o.materials, o.device, o.seed, o.max_size, o.iterations, o.seeds) == (
         "draft", ("/M/*",), "cpu", 5, 64, 10, 2)
     assert o.output_dir == tmp_path.resolve() / "maps"
@@ -163,9 +165,9 @@ def test_options_for_stage_leaves_defaults_alone(tmp_path):
     Options, _ = _real_options()
     o = common.options_for_stage(HookSettings(), _stage_on_disk(tmp_path))
     d = Options()
-    assert (o.output_dir, o.device, o.report, o.cache_dir, o.max_size, o.iterations, o.seeds, o.mode) == (
-        d.output_dir, d.device, d.report, d.cache_dir, d.max_size, d.iterations, d.seeds, d.mode
-    )
+    assert (o.output_dir, o.device, o.report, o.cache_dir, o.max_size, o.iterations, o.seeds, o.mode,
+            o.straighten) == (d.output_dir, d.device, d.report, d.cache_dir, d.max_size, d.iterations, d.seeds, d.mode,
+                              d.straighten)
 
 
 def test_options_for_in_memory_stage_need_a_folder(tmp_path):

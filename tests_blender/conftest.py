@@ -43,7 +43,7 @@ def prefs(blender):
     """The add-on preferences, reset to their defaults for each test."""
     p = bpy.context.preferences.addons[ADDON].preferences
     for name in ("enabled", "preset", "materials", "output_dir", "device", "seed", "max_size", "iterations",
-                 "report", "cache_dir", "dry_run", "strict", "site_packages"):
+                 "report", "cache_dir", "straighten", "dry_run", "strict", "site_packages"):
         p.property_unset(name)
     return p
 

@@ -108,6 +108,11 @@ class SeamlessUsdExportPreferences(bpy.types.AddonPreferences):
     cache_dir: StringProperty(
         name="Cache folder", description="Trained models (empty: the user's cache folder)", default="", subtype="DIR_PATH"
     )
+    straighten: BoolProperty(
+        name="Straighten",
+        description="Tile stacks whose lines run at an angle straight; the UVs turn the tile back, so the look is kept",
+        default=False,
+    )
     dry_run: BoolProperty(name="Dry run", description="Plan only; write nothing", default=False)
     strict: BoolProperty(
         name="Fail export on error",
@@ -137,6 +142,7 @@ class SeamlessUsdExportPreferences(bpy.types.AddonPreferences):
         row.prop(self, "iterations")
         col.prop(self, "report")
         col.prop(self, "cache_dir")
+        col.prop(self, "straighten")
         row = col.row()
         row.prop(self, "dry_run")
         row.prop(self, "strict")

@@ -141,6 +141,8 @@ def options_for_stage(
         changes["iterations"] = settings.iterations
     if settings.seeds > 0:
         changes["seeds"] = settings.seeds
+    if settings.straighten:  # the asset keeps its look: the turn goes back in the UVs (never --write-straight)
+        changes["straighten"] = True
     if settings.dry_run:
         changes["mode"] = seamless_usd.WriteMode.DRY_RUN
     return seamless_usd.Options(**changes)

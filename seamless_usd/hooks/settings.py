@@ -44,6 +44,7 @@ class HookSettings:
     max_size: int = 0  # working-resolution cap in px (longest side); 0 = native size
     iterations: int = 0  # training iterations; 0 = the preset's
     seeds: int = 0  # seeds trained side by side, the best tile kept; 0 = the preset's
+    straighten: bool = False  # turn stacks whose lines run at an angle straight; the UVs turn the tile back
     strict: bool = False  # fail the DCC's export when a stack fails or the run raises
 
     def with_(self, **changes: Any) -> "HookSettings":
@@ -121,6 +122,7 @@ _PARSERS: dict[str, Callable[[object], Any]] = {
     "max_size": _parse_int,
     "iterations": _parse_int,
     "seeds": _parse_int,
+    "straighten": parse_bool,
     "strict": parse_bool,
 }
 assert set(_PARSERS) == set(SETTING_NAMES), "every HookSettings field needs a parser"

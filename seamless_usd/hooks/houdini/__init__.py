@@ -54,6 +54,8 @@ PARMS: tuple[ParmSpec, ...] = (
     ParmSpec("seeds", "Seeds", "int", "Seeds trained side by side, the best tile kept; 0: the preset's"),
     ParmSpec("report", "Report", "file", "HTML report path; empty: none"),
     ParmSpec("cache_dir", "Cache Folder", "directory", "Trained models; empty: the user's cache folder"),
+    ParmSpec("straighten", "Straighten", "toggle",
+             "Tile stacks whose lines run at an angle straight; the UVs turn the tile back, so the look is kept"),
     ParmSpec("dry_run", "Dry Run", "toggle", "Plan only; write nothing"),
     ParmSpec("strict", "Fail Save on Error", "toggle", "Make the ROP fail when a texture stack fails"),
 )
