@@ -176,3 +176,35 @@ def test_mtlx_place2d_shared_by_a_stack_is_updated_once_a_run(tmp_path):
         assert chain(new, f"NG/{n}").close_to(expected, tol=1e-6), n
         prov = read_mtlx_provenance(new.getDescendant(f"NG/{n}"))
         assert prov.uv_turn == pytest.approx(15.0) and prov.uv_scale == pytest.approx((8.0, 3.0))
+
+
+def test_usd_turn_inside_the_variant_that_holds_the_material(tmp_path):
+    """The floor's look lives in a variant of a payload's set: its turn node goes inside that variant of the new
+    layer, beside the scale node, and nothing lands outside it."""
+    import shutil
+
+    from pxr import Sdf
+
+    from seamless_usd.api import scan
+    from seamless_usd.authoring import MapResult, Provenance, StackResult
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("shading", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    scene = tmp_path / "shading" / "set.usda"
+    [floor] = [s for s in scan(scene).stacks if s.material == "</World/Floor/Looks/M_tiles>"]
+    (tmp_path / "tile.png").write_bytes(b"tile")
+    prov = Provenance(floor.maps[0].asset, (64, 64), (2.0, 2.0), None, 0.0, (0.0, 0.0), "h", "0.1.0")
+    result = StackResult(floor, [MapResult(m, tmp_path / "tile.png") for m in floor.maps], (2.0, 2.0), prov,
+                         uv_turn=UVTurn(12.0, 1.0))
+    written = author_usd(scene, [result])
+    layer = Sdf.Layer.FindOrOpen(str(written.output))
+    inside = "/World/Floor{floorVariant=Tiled}Looks/M_tiles"
+    assert layer.GetPrimAtPath(f"{inside}/SeamlessUVTurn") and layer.GetPrimAtPath(f"{inside}/SeamlessUV")
+    assert not layer.GetPrimAtPath("/World/Floor/Looks")
+    stage = Usd.Stage.Open(str(written.output))
+    stage.GetPrimAtPath("/World/Floor").GetVariantSet("floorVariant").SetVariantSelection("Tiled")
+    tex = "/World/Floor/Looks/M_tiles/diffuseColorTex"
+    old = Usd.Stage.Open(str(scene))
+    old.GetPrimAtPath("/World/Floor").GetVariantSet("floorVariant").SetVariantSelection("Tiled")
+    assert uv_affine(stage, tex).close_to(uv_affine(old, tex).then(turned_scale((2.0, 2.0), 12.0, 1.0)), tol=1e-6)
