@@ -48,8 +48,12 @@ WINDOW, WINDOW_AT = 0.75, 0.1
 
 
 def tileable_photos(folder: Path) -> set[str]:
-    """The files ``SOURCES.md`` marks as made to tile by their publisher (its "Tileable" column says "yes")."""
+    """The files ``SOURCES.md`` marks as made to tile by their publisher (its "Tileable" column says "yes"); for
+    ``photos/full/`` (the 2048 px versions, listed in the folder above's ``SOURCES.md`` as "(+ full/)"), the folder
+    above's."""
     sources = folder / "SOURCES.md"
+    if not sources.is_file():
+        sources = folder.parent / "SOURCES.md"
     if not sources.is_file():
         return set()
     out = set()

@@ -17,6 +17,8 @@ def test_photos_made_to_tile_are_judged_through_a_window(tmp_path):
     window = photos.load_photo(photos.PHOTOS / "sand_coast_1.jpg", 256, window=True)
     assert whole.shape == (256, 256, 3) and window.shape == (256, 256, 3)  # the window is brought to size too
     assert not np.allclose(whole, window) and -1.0 <= window.min() and window.max() <= 1.0
+    # the 2048 px versions are listed in the folder above's SOURCES.md: they are windowed too, not tiled whole
+    assert "stones_wall_1.jpg" in photos.tileable_photos(photos.PHOTOS / "full")
 
 
 def test_the_product_tile_of_a_photo_is_judged_and_pictured(tmp_path, capsys):
