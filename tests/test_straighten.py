@@ -158,10 +158,10 @@ TILED_DOC = """<?xml version="1.0"?>
 <materialx version="1.39" colorspace="lin_rec709">
   <nodegraph name="NG_brick">
     <texcoord name="uv0" type="vector2" />
-    <tiledimage name="brick_color" type="color3">
+    <NODE name="brick_color" type="color3">
       <input name="file" type="filename" value="brick_turned.png" colorspace="srgb_texture" />
       <input name="texcoord" type="vector2" nodename="uv0" />
-    </tiledimage>
+    </NODE>
     <output name="base_color_out" type="color3" nodename="brick_color" />
   </nodegraph>
   <standard_surface name="SR_brick" type="surfaceshader">
@@ -174,21 +174,48 @@ TILED_DOC = """<?xml version="1.0"?>
 """
 
 
-def test_process_straighten_writes_straight_where_the_uvs_cannot_turn(tmp_path, capsys, model_cache):
-    """A tiledimage's UVs cannot turn (uvtiling / uvoffset only): the straightened tile is written straight, as
-    with --write-straight (normal vectors turned with it), and the run says so, node by node."""
+@pytest.mark.parametrize("node", ["image", "tiledimage"])
+def test_process_straighten_on_a_materialx_document(tmp_path, capsys, model_cache, node):
+    """An image node's UVs turn the straightened tile back through a place2d before the UV scale; a tiledimage's
+    cannot (uvtiling / uvoffset only): its tile is written straight, as with --write-straight (normal vectors
+    turned with it), and the run says so, node by node."""
+    import MaterialX as mx
+
+    from seamless_usd.authoring.uvmath import place2d
+
     turned = _turned_tileable(_read(TEXTURES / "brick_albedo.png"), 17.0, 256)
     out = oiio.ImageBuf(np.ascontiguousarray(np.clip(turned, 0.0, 1.0), dtype=np.float32))
     out.set_write_format(oiio.UINT8)
     assert out.write(str(tmp_path / "brick_turned.png")), out.geterror()
     doc = tmp_path / "brick.mtlx"
-    doc.write_text(TILED_DOC, encoding="utf-8")
+    doc.write_text(TILED_DOC.replace("NODE", node), encoding="utf-8")
     main(["process", str(doc), "--straighten", "--preset", "tiny", "--cache-dir", str(model_cache), "--json"])
     payload = json.loads(capsys.readouterr().out)
     [stack] = payload["stacks"]
     facts = stack["resampled"]["straightened"]
-    assert facts["degrees"] and not facts.get("uv_turn") and facts["uv_turn_refused"] == ["NG_brick/brick_color"]
+    assert abs(facts["degrees"] - 17.0) <= 0.3
+    written = mx.createDocument()
+    mx.readFromXmlFile(written, str(tmp_path / "brick.seamless.mtlx"))
+    image = written.getDescendant("NG_brick/brick_color")
     warnings = [f for f in payload["findings"] if f["code"] == "uv-not-composed"]
-    assert len(warnings) == 1 and "brick_color" in warnings[0]["where"] and "written straight" in warnings[0]["message"]
-    written = (tmp_path / "brick.seamless.mtlx").read_text(encoding="utf-8")
-    assert "seamless_uv_turn" not in written and "seamless_uvturn" not in written
+    if node == "tiledimage":
+        assert not facts.get("uv_turn") and facts["uv_turn_refused"] == ["NG_brick/brick_color"]
+        assert len(warnings) == 1 and "brick_color" in warnings[0]["where"]
+        assert "written straight" in warnings[0]["message"]
+        assert written.getDescendant("NG_brick/seamless_uv_turn") is None and not image.getAttribute("seamless_uvturn")
+        return
+    assert facts["uv_turn"] and not warnings
+    turn = written.getDescendant("NG_brick/seamless_uv_turn")
+    assert turn.getInputValue("rotate") == pytest.approx(facts["degrees"])  # place2d turns clockwise
+    assert float(image.getAttribute("seamless_uvturn")) == pytest.approx(facts["degrees"])
+    scale = written.getDescendant("NG_brick/seamless_uv")
+    assert scale.getInput("texcoord").getNodeName() == "seamless_uv_turn"
+    assert image.getInput("texcoord").getNodeName() == "seamless_uv"
+    # the chain turns texel steps by the angle, keeping their length (the source is square: no aspect)
+    chain = place2d(rotate=turn.getInputValue("rotate"), scale=tuple(turn.getInputValue("scale"))).then(
+        place2d(scale=tuple(scale.getInputValue("scale"))))
+    u, v = chain((1.0, 0.0)), chain((0.0, 0.0))
+    th, tw = 256 / stack["uv_scale"][1], 256 / stack["uv_scale"][0]
+    step = ((u[0] - v[0]) * tw, (u[1] - v[1]) * th)
+    assert np.hypot(*step) == pytest.approx(256.0, rel=1e-6)
+    assert np.degrees(np.arctan2(step[1], step[0])) == pytest.approx(-facts["degrees"], abs=1e-4)
