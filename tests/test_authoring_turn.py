@@ -208,3 +208,32 @@ def test_usd_turn_inside_the_variant_that_holds_the_material(tmp_path):
     old = Usd.Stage.Open(str(scene))
     old.GetPrimAtPath("/World/Floor").GetVariantSet("floorVariant").SetVariantSelection("Tiled")
     assert uv_affine(stage, tex).close_to(uv_affine(old, tex).then(turned_scale((2.0, 2.0), 12.0, 1.0)), tol=1e-6)
+
+
+def test_usd_materialx_nodes_turn_through_a_place2d(tmp_path):
+    """MaterialX image nodes in a USD stage (texcoord -> place2d -> three images): one place2d turn and one
+    place2d scale shared by the stack's maps, composing as the UsdTransform2d pair does."""
+    import shutil
+
+    from seamless_usd.api import scan
+    from seamless_usd.authoring import MapResult, Provenance, StackResult
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("usd_mtlx", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    scene = tmp_path / "usd_mtlx" / "scene.usda"
+    [stack] = scan(scene).stacks
+    assert all(m.uv_turns for m in stack.maps) and len(stack.maps) == 3
+    (tmp_path / "tile.png").write_bytes(b"tile")
+    prov = Provenance(stack.maps[0].asset, (64, 64), (3.0, 1.5), None, 0.0, (0.0, 0.0), "h", "0.1.0")
+    result = StackResult(stack, [MapResult(m, tmp_path / "tile.png") for m in stack.maps], (3.0, 1.5), prov,
+                         uv_turn=UVTurn(-8.0, 0.5))
+    written = author_usd(scene, [result])
+    old, new = Usd.Stage.Open(str(scene)), Usd.Stage.Open(str(written.output))
+    for m in stack.maps:
+        node = m.node.strip("<>")
+        assert uv_affine(new, node).close_to(uv_affine(old, node).then(turned_scale((3.0, 1.5), -8.0, 0.5)), tol=1e-6)
+        assert read_provenance(new.GetPrimAtPath(node)).uv_turn == pytest.approx(-8.0)
+    added = sorted(p.GetName() for p in new.Traverse() if p.GetName().startswith("SeamlessUV"))
+    assert added == ["SeamlessUV", "SeamlessUVTurn"]
+    assert UsdShade.Shader(new.GetPrimAtPath("/World/Looks/Brick/SeamlessUVTurn")).GetShaderId() == "ND_place2d_vector2"
