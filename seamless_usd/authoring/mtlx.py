@@ -113,6 +113,7 @@ def read_mtlx_provenance(node: mx.Node) -> Provenance | None:
         levelled=floats(MtlxNames.LEVELLED, 1)[0],
         evened=floats(MtlxNames.EVENED, 1)[0],
         uv_turn=floats(MtlxNames.UV_TURN, 1)[0],
+        rectified=floats(MtlxNames.RECTIFIED, 3),
     )
 
 
@@ -284,6 +285,7 @@ class _MtlxAuthor(_PlaceUV):
             (MtlxNames.LEVELLED, fmt([float(p.levelled)]) if p.levelled else None),
             (MtlxNames.EVENED, fmt([float(p.evened)]) if p.evened else None),
             (MtlxNames.UV_TURN, fmt([float(degrees)]) if degrees else None),
+            (MtlxNames.RECTIFIED, fmt([float(v) for v in p.rectified]) if p.rectified[2] else None),
         ):
             self._set(node, name, value, name)
         if len(self.result.plan) > before and prim_ref(node_path) not in self.result.edited_prims:

@@ -47,6 +47,7 @@ class MtlxNames:
     LEVELLED = "seamless_levelled"
     EVENED = "seamless_evened"
     UV_TURN = "seamless_uvturn"
+    RECTIFIED = "seamless_rectified"
 
 
 class UnauthoredInput:

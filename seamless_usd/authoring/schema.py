@@ -45,6 +45,7 @@ class Schema:
     LEVELLED = "seamless:levelled"
     EVENED = "seamless:evened"
     UV_TURN = "seamless:uvTurn"
+    RECTIFIED = "seamless:rectified"
 
 
 # Property name -> (Sdf type, how a Provenance value becomes a USD value).
@@ -63,6 +64,7 @@ PROPERTIES = {
     Schema.LEVELLED: (Sdf.ValueTypeNames.Double, lambda p: float(p.levelled)),
     Schema.EVENED: (Sdf.ValueTypeNames.Double, lambda p: float(p.evened)),
     Schema.UV_TURN: (Sdf.ValueTypeNames.Double, lambda p: float(p.uv_turn)),
+    Schema.RECTIFIED: (Sdf.ValueTypeNames.Double3, lambda p: Gf.Vec3d(*p.rectified)),
 }
 
 
@@ -147,6 +149,7 @@ def read_provenance(prim: Usd.Prim) -> Provenance | None:
         levelled=float(get(Schema.LEVELLED, 0.0)),
         evened=float(get(Schema.EVENED, 0.0)),
         uv_turn=float(get(Schema.UV_TURN, 0.0)),
+        rectified=tuple(float(v) for v in get(Schema.RECTIFIED, (0.0, 0.0, 0.0))),
     )
 
 

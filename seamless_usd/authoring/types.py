@@ -72,6 +72,8 @@ class Provenance:
     levelled: float = 0.0  # the most a texel value was scaled by (share) to level the source's light (0: not levelled)
     evened: float = 0.0  # the most a texel moved (texels) to even the source's drifting lattice (0: not evened)
     uv_turn: float = 0.0  # degrees the authored UVs turn the straightened tile back, counter-clockwise (0: none)
+    rectified: tuple[float, float, float] = (0.0, 0.0, 0.0)  # (vx, vy, spread): where the source's lines met, as
+    #   shares of its width and height, and their leans' spread in degrees, when it was rectified (spread 0: not)
 
 
 @dataclass(frozen=True)

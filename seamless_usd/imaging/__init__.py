@@ -11,6 +11,7 @@ Pixels in, pixels out; no USD and no torch here.
 * :mod:`.stack`: :func:`load_stack_pixels` -> :class:`StackPixels`.
 * :mod:`.write`: :func:`write_map`.
 * :mod:`.orientation`: how far a stack's lines are turned from the axes.
+* :mod:`.perspective`: where lines that converge with perspective meet, and the maps rectified (``process --straighten``).
 * :mod:`.straighten`: the maps turned back and cut to source texels (``process --straighten``).
 """
 from __future__ import annotations

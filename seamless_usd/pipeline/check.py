@@ -180,8 +180,9 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
             sources = list(load_stack_pixels(src_maps, policy).values)
             # made from the source straightened, levelled or evened as recorded: judged against it made so
             h, w = sources[0].shape[:2]
+            rectified = {"vanishing": prov.rectified[:2], "spread": prov.rectified[2]} if prov.rectified[2] else None
             sources = made_values(sources, normals, prov.straightened, bool(prov.levelled), bool(prov.evened),
-                                  turn_vectors=not prov.uv_turn)
+                                  turn_vectors=not prov.uv_turn, rectified=rectified)
             uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
             sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
             item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps]).as_dict()

@@ -14,13 +14,22 @@ __all__ = ["straighten", "made_values", "as_made", "source_uv_scale", "on_tile_g
 
 
 def straighten(pixels, normals: list[bool], uv_turn: bool = False):
-    """(pixels, facts): the stack's maps turned until their lines run along the axes, when they are turned
-    (:func:`.imaging.orientation.dominant_orientation`), and what was found and done. ``uv_turn``: the turn is
-    to be authored in the asset's UVs (``facts["uv_turn"]``), so normal maps keep the source's vectors."""
+    """(pixels, facts): the stack's maps rectified where their near-vertical lines converge with perspective
+    (:mod:`.imaging.perspective`, ``facts["rectified"]``), then turned until their lines run along the axes, when
+    they are turned (:func:`.imaging.orientation.dominant_orientation`), and what was found and done. ``uv_turn``:
+    the turn is to be authored in the asset's UVs (``facts["uv_turn"]``), so normal maps keep the source's vectors;
+    never for a rectified stack, whose keystone no UV transform undoes (it is written rectified)."""
     from seamless_usd.imaging.orientation import dominant_orientation
+    from seamless_usd.imaging.perspective import find_keystone
 
+    facts = {"degrees": 0.0, "source_size": list(pixels.working_size)}
+    keystone = find_keystone(pixels.values)
+    if keystone is not None:
+        pixels = _with_values(pixels, made_values(pixels.values, normals, rectified=keystone))
+        facts.update(rectified=keystone.as_dict(), size=list(pixels.working_size))
+        uv_turn = False
     found = dominant_orientation(pixels.values)
-    facts = {"orientation": found.as_dict(), "degrees": 0.0, "source_size": list(pixels.working_size)}
+    facts["orientation"] = found.as_dict()
     if not found.straightens:
         return pixels, facts
     done = _with_values(pixels, made_values(pixels.values, normals, found.degrees, turn_vectors=not uv_turn))
@@ -29,13 +38,20 @@ def straighten(pixels, normals: list[bool], uv_turn: bool = False):
 
 
 def made_values(values, normals: list[bool], degrees: float = 0.0, levelled: bool = False,
-                evened: bool = False, turn_vectors: bool = True) -> list[np.ndarray]:
+                evened: bool = False, turn_vectors: bool = True, rectified=None) -> list[np.ndarray]:
     """``values`` (the source's maps) made as the tile's source was: turned clockwise by ``degrees`` and cut to
     source texels (:mod:`.imaging.straighten`), then, with ``levelled``, their light levelled
     (:func:`.imaging.level.level_maps`), with ``evened``, their lattice evened
     (:func:`.synthesis.lattice.drift.even_lattice`); ``turn_vectors``: normal maps' vectors turn with the picture
-    (not where the turn is authored in the asset's UVs). ``process`` and ``check`` both make the source so."""
+    (not where the turn is authored in the asset's UVs); ``rectified`` (a :class:`.imaging.perspective.Keystone` or
+    its ``as_dict()``): rectified first. ``process`` and ``check`` both make the source so."""
     out = list(values)
+    if rectified is not None:  # a Keystone, or its as_dict()
+        from seamless_usd.imaging.perspective import Keystone, rectify_maps
+
+        if isinstance(rectified, dict):
+            rectified = Keystone(*rectified["vanishing"], rectified.get("spread", 0.0))
+        out = rectify_maps(out, normals, rectified)
     if degrees:
         from seamless_usd.imaging.straighten import straighten_maps
 
@@ -56,11 +72,12 @@ def as_made(pixels, normals: list[bool], straightened_facts: dict | None, levell
     """``pixels`` made as the tile's source was (:func:`made_values`), from the facts recorded: the turn when one
     was made, the levelling or the evening when it was."""
     turn = straightened_facts["degrees"] if straightened_facts and straightened_facts.get("size") else 0.0
-    if not turn and not levelled_facts and not evened_facts:
+    rectified = (straightened_facts or {}).get("rectified")
+    if not turn and not rectified and not levelled_facts and not evened_facts:
         return pixels
     vectors = not (straightened_facts or {}).get("uv_turn")
     return _with_values(pixels, made_values(pixels.values, normals, turn, bool(levelled_facts), bool(evened_facts),
-                                            vectors))
+                                            vectors, rectified))
 
 
 def _with_values(pixels, values: list[np.ndarray]):

@@ -122,9 +122,23 @@ def _straightened_text(facts: dict | None) -> str | None:
     if not facts:
         return None
     found = facts.get("orientation", {})
+    rectified = facts.get("rectified")
+    if rectified:
+        (vx, vy), (w, h) = rectified["vanishing"], facts.get("size", (0, 0))
+        said = (f"rectified: its near-vertical lines met at ({vx:.2f}, {vy:.2f}) of its width and height (leans "
+                f"spread {rectified['spread']:g} degrees), resampled so that they run parallel, at the far row's "
+                f"texel size; written rectified, since no UV transform undoes a keystone")
+        if not facts.get("degrees"):
+            return f"{said}; cut to {w} x {h}"
+        return f"{said}; then " + _turned_text(facts, found)
     if not facts.get("degrees"):
         return (f"not turned: lines at {found.get('degrees', 0):g} degrees, strength {found.get('strength', 0):g} "
                 f"(turned from {MIN_DEGREES:g} degrees at a strength of {MIN_STRENGTH:g})")
+    return _turned_text(facts, found)
+
+
+def _turned_text(facts: dict, found: dict) -> str:
+    """What the turn of ``--straighten`` did (``facts["degrees"]`` not 0)."""
     w, h = facts.get("size", (0, 0))
     shown = ("the tile is written straight and the asset's UVs turn it back, so the asset looks as before "
              "(normal maps keep the source's vectors)" if facts.get("uv_turn") else
