@@ -72,6 +72,19 @@ def test_converging_bars_meet_where_they_were_drawn_and_are_rectified_parallel()
     assert find_keystone([_converging(128.0, -1e7)]) is None  # upright bars: not rectified
 
 
+def test_a_point_read_too_close_is_moved_out_and_one_too_close_to_keep_is_not_used():
+    """Fine bars read their point too close at first (the lines then diverge the other way once rectified): the
+    reading on the rectified picture moves it out. A point so close that rectifying keeps under 40 % of a side
+    is not used (a 64 px picture would keep 10 x 10 texels)."""
+    big = _converging(0.55 * 1025, -1.5 * 1025, 1025, 1025)
+    found = find_keystone([big])
+    assert found.vy == pytest.approx(-1.5, abs=0.1), found
+    [rect] = rectify_maps([big], [False], found)
+    assert find_keystone([rect]) is None
+    assert find_keystone([_converging(32.0, -12.8, 64, 64)]) is None
+    assert find_keystone([_converging(48.0, -20.0, 96, 96)]) is None
+
+
 @pytest.mark.parametrize("picture", ["brick_albedo.png", "gravel.png", "grass.png"])
 def test_lines_that_do_not_converge_are_left_alone(picture):
     """Straight bricks (parallel lines) and stochastic photos (leans spread at random, which no point explains)."""

@@ -20,8 +20,11 @@ side. No cut of whole periods fits such a photo, and turning it by one angle (:m
 2. **The one-point homography** that sends it to infinity (:func:`rectify_maps`): with ``X = x - vx`` and
    ``Y = y - vy``, ``x' = X Yr / Y`` and ``y' = Yr - Yr^2 / Y``. Lines through the vanishing point become vertical,
    and rows evenly spaced on the plane (a camera pitched about the horizontal axis) come out evenly spaced.
-   ``Yr`` is the far row, so no texel is magnified: nearer rows are shrunk, through a Gaussian prefilter as wide
-   as the mean shrink, and the picture is cut to the largest rectangle of source texels. A point below the
+   ``Yr`` is the far row, so no texel is magnified: nearer rows are shrunk, each through a Gaussian prefilter as
+   wide as its own shrink (from a few levels of blur; the far row is not blurred), and the picture is cut to
+   the largest rectangle of source texels. The far row keeps its proportions: a surface seen at a slant is
+   foreshortened there too, and its true aspect is not known from its vanishing point alone, so a rectified
+   brick may be shorter than it is. A point below the
    picture is handled upside down. Normal maps keep their vectors (the surface's own frame, up to the lines'
    lean), renormalised.
 
@@ -40,6 +43,7 @@ __all__ = ["Keystone", "find_keystone", "rectify_maps", "MIN_SPREAD"]
 CELLS = 8
 LEAN_MAX = np.radians(30.0)  # lines leaning further from the vertical are not read
 LIGHT = 6.0  # px: broader changes are light, taken away first
+SIGMAS = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)  # the prefilter's levels of blur (px)
 SIDE = 512  # the grey picture is read at most this many px on its longer side
 #: Leans spread by fewer degrees (10th to 90th percentile) are parallel lines: the 512 px photos of a tiled floor,
 #: a corrugated panel and a concrete-tile facade read 0.8-1.5, the brick pavement shot at a slant 17.
@@ -146,8 +150,12 @@ def _back(vx: float, vy: float, point: tuple[float, float], hw: tuple[int, int])
 
 #: Times the vanishing point is read again on the picture rectified by it: the structure tensors of short, noisy
 #: lines read them nearer the vertical than they lean, so a first point lies too far off (a brick wall pitched
-#: with its point 1.8 heights above it: read at 3.2); each reading takes away most of what is left.
+#: with its point 1.8 heights above it: read at 3.2), fine ones further (bars with their point 1.5 heights above: read
+#: at 1.2, after which they diverge the other way); each reading takes away most of what is left.
 PASSES = 3
+#: A rectification that keeps less than this share of either side of the picture (a point very close above it)
+#: is not made: the stack is left as it is.
+KEEP = 0.4
 
 
 def find_keystone(values: Sequence[np.ndarray]) -> Keystone | None:
@@ -169,11 +177,22 @@ def find_keystone(values: Sequence[np.ndarray]) -> Keystone | None:
         try:
             r = _rectify(g[..., None], vx, vy)[..., 0]
         except ValueError:
-            break
+            return None
         again = _fit(r)
-        if again is None or not 0.5 <= again[3] or -again[1] <= 0:  # parallel now (or a point below: noise)
+        if again is None or again[3] < 0.5:  # parallel now
             break
-        vx, vy = _back(vx, vy, (again[0], again[1]), (h, w))
+        # the point of what is left, in the picture's own rows: closer where it was read too far (left above),
+        # further where too close (the lines now diverge upwards: left below)
+        nx, ny = _back(vx, vy, (again[0], again[1]), (h, w))
+        if not ny < 0:
+            break
+        vx, vy = nx, ny
+    try:  # what the rectification keeps: at least KEEP of each side, else the stack is left as it is
+        r = _rectify(g[..., None], vx, vy)
+    except ValueError:
+        return None
+    if r.shape[0] < KEEP * h or r.shape[1] < KEEP * w:
+        return None
     if below:
         vy = h - 1 - vy
     return Keystone(vx / w, vy / h, spread)
@@ -195,10 +214,21 @@ def _rectify(flat: np.ndarray, vx: float, vy: float) -> np.ndarray:
     yp, xp = np.mgrid[0:out_h, 0:out_w].astype(np.float64)
     big_y = yr * yr / (yr - yp)
     sy, sx = big_y + vy, (xp + left) * big_y / yr + vx
-    sigma = 0.5 * max(0.0, y_bottom / yr - 1.0)  # one prefilter for the whole picture: the mean shrink's
-    chans = [ndimage.map_coordinates(ndimage.gaussian_filter(flat[..., k], sigma) if sigma else flat[..., k],
-                                     [sy, sx], order=3, mode="nearest") for k in range(flat.shape[2])]
-    return np.stack(chans, axis=-1)
+    # each output row is sampled from the picture blurred as much as that row shrinks (Y / Yr along x, its square
+    # along y: their geometric mean), from a few levels of blur: the far rows, not shrunk, are not blurred
+    shrink = (big_y[:, 0] / yr) ** 1.5
+    want = 0.5 * np.maximum(0.0, shrink - 1.0)
+    levels = [s for s in SIGMAS if s <= max(want.max(), 0.0) * 2 or s == 0.0]
+    level = np.array([min(range(len(levels)), key=lambda i: abs(levels[i] - v)) for v in want])
+    out = np.empty((out_h, out_w, flat.shape[2]))
+    for i, sigma in enumerate(levels):
+        rows = np.flatnonzero(level == i)
+        if not rows.size:
+            continue
+        for k in range(flat.shape[2]):
+            src = ndimage.gaussian_filter(flat[..., k], sigma) if sigma else flat[..., k]
+            out[rows, :, k] = ndimage.map_coordinates(src, [sy[rows], sx[rows]], order=3, mode="nearest")
+    return out
 
 
 def rectify_maps(values: Sequence[np.ndarray], normals: Sequence[bool], keystone: Keystone) -> list[np.ndarray]:

@@ -25,9 +25,14 @@ def straighten(pixels, normals: list[bool], uv_turn: bool = False):
     facts = {"degrees": 0.0, "source_size": list(pixels.working_size)}
     keystone = find_keystone(pixels.values)
     if keystone is not None:
-        pixels = _with_values(pixels, made_values(pixels.values, normals, rectified=keystone))
-        facts.update(rectified=keystone.as_dict(), size=list(pixels.working_size))
-        uv_turn = False
+        try:
+            rectified = _with_values(pixels, made_values(pixels.values, normals, rectified=keystone))
+        except ValueError:  # it keeps too little of a map of another size: the stack is left as it is
+            rectified = None
+        if rectified is not None:
+            pixels = rectified
+            facts.update(rectified=keystone.as_dict(), size=list(pixels.working_size))
+            uv_turn = False
     found = dominant_orientation(pixels.values)
     facts["orientation"] = found.as_dict()
     if not found.straightens:

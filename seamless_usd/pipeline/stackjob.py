@@ -119,7 +119,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
             if settings.straighten:  # from here on the straightened maps are the stack's source
                 t1 = time.perf_counter()
                 pixels, straightened = straighten(pixels, [m.is_normal for m in stack.maps], uv_turn)
-                if settings.uv_turn and unturned and straightened.get("size"):
+                if settings.uv_turn and unturned and straightened.get("degrees") and not straightened.get("rectified"):
                     straightened["uv_turn_refused"] = unturned
                 inputs = [dataclasses.replace(i, pixels=p) for i, p in zip(inputs, pixels.values)]
                 timings["straighten"] = time.perf_counter() - t1
