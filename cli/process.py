@@ -68,8 +68,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "along the axes, and that is tiled; the tile is written straight and the asset's UVs turn "
                         "it back (a UV transform before the UV scale), so the asset looks as before")
     p.add_argument("--write-straight", action="store_true",
-                   help="with --straighten: no UV turn; the pattern on the asset turns by the angle the report "
-                        "and seamless:straightened record (normal maps' vectors turn with it)")
+                   help="straighten (implies --straighten) but author no UV turn: the pattern on the asset turns by "
+                        "the angle the report and seamless:straightened record (normal maps' vectors turn with it)")
     p.add_argument("--force", action="store_true",
                    help="process every stack, also those classed uv-atlas, already-tileable or other")
     p.add_argument("--force-materials", action="append", default=[], metavar="GLOB",
@@ -110,7 +110,7 @@ def _options(args: argparse.Namespace, progress) -> Options:
         scheduler=args.scheduler,
         refine=args.refine,
         tile_size=args.tile_size,
-        straighten=args.straighten,
+        straighten=args.straighten or args.write_straight,
         write_straight=args.write_straight,
         force=args.force,
         force_materials=tuple(args.force_materials),

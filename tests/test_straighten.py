@@ -122,8 +122,9 @@ def _seen_on_asset(stage: Usd.Stage, texture: str, tile: np.ndarray, size: int) 
 def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_turn(tmp_path, capsys, model_cache,
                                                                                   straight):
     scene = _turned_scene(tmp_path, 17.0)
-    code = main(["process", str(scene), "--straighten", "--preset", "tiny", "--cache-dir", str(model_cache),
-                 "--json", "--report", str(tmp_path / "report.html")] + (["--write-straight"] if straight else []))
+    # --write-straight straightens too (it implies --straighten)
+    code = main(["process", str(scene), "--write-straight" if straight else "--straighten", "--preset", "tiny",
+                 "--cache-dir", str(model_cache), "--json", "--report", str(tmp_path / "report.html")])
     payload = json.loads(capsys.readouterr().out)
     [stack] = payload["stacks"]
     facts = stack["resampled"]["straightened"]

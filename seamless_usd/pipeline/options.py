@@ -59,8 +59,8 @@ class Options:
     tile_size: str = "source"  # "source": tile has the source's pixel size; "paper": the paper's 2c x 2c tile
     straighten: bool = False  # turn a stack whose lines run at an angle until they run along the axes, and tile
     #                         that; the turn is authored in the asset's UVs, so the asset looks as before
-    write_straight: bool = False  # with straighten: no UV turn; the tile is written straight and the pattern
-    #                               on the asset turns by the angle
+    write_straight: bool = False  # straighten (implies it) with no UV turn: the tile is written straight and the
+    #                               pattern on the asset turns by the angle
     force: bool = False  # process every stack whatever its tiling intent (uv-atlas, already-tileable, other)
     force_materials: tuple[str, ...] = ()  # fnmatch patterns of materials processed whatever their intent
     progress: Callable[[ProgressEvent], None] | None = field(default=None, compare=False)

@@ -61,7 +61,8 @@ class JobSettings:
             preset=options.preset, iterations=options.iterations, seeds=seeds, seed=options.seed,
             device=options.device, max_size=options.max_size, cache_dir=options.cache_dir,
             max_pixels=options.max_pixels, refine=options.refine, tile_size=options.tile_size,
-            straighten=options.straighten, uv_turn=options.straighten and not options.write_straight,
+            straighten=options.straighten or options.write_straight,
+            uv_turn=options.straighten and not options.write_straight,
         )
 
 
