@@ -115,3 +115,30 @@ def test_process_straighten_rectifies_a_pitched_wall_and_check_agrees(tmp_path, 
     [item] = json.loads(capsys.readouterr().out)["items"]
     assert item["verdict"]["passed"] == (stack["status"] == "passed")
     assert item["verdict"]["strongest"] == pytest.approx(stack["verdict"]["strongest"], abs=0.05)
+
+
+def _normals_of(height: np.ndarray) -> np.ndarray:
+    """Unit normals (x right, y up) of a height field whose rows run downwards."""
+    dy, dx = np.gradient(height.astype(np.float64))
+    n = np.stack([-dx, dy, np.ones_like(dx)], axis=-1)
+    return (n / np.linalg.norm(n, axis=-1, keepdims=True)).astype(np.float32)
+
+
+@pytest.mark.parametrize("below", [False, True], ids=["above", "below"])
+def test_normal_vectors_turn_with_the_lines_they_belong_to(below):
+    """Ridges along lines that converge: once rectified, each ridge stands upright, so its normals must point
+    across it, to the left or the right, everywhere (before, their direction leans with the ridge, +-13 degrees)."""
+    bars = _converging(140.0, -500.0)[..., 0]
+    height = 6.0 * bars
+    grey, normals = (height[::-1], _normals_of(height[::-1])) if below else (height, _normals_of(height))
+    found = find_keystone([grey[..., None]])
+    assert found is not None
+    [rect] = rectify_maps([normals], [True], found)
+    inner = rect[6:-6, 6:-6]
+    steep = np.hypot(inner[..., 0], inner[..., 1]) > 0.3
+    direction = np.degrees(np.arctan2(inner[..., 1], inner[..., 0]))[steep]
+    off = np.abs((direction + 90.0) % 180.0 - 90.0)  # from the horizontal, either way
+    assert np.percentile(off, 95) < 4.0, np.percentile(off, [50, 95])
+    before = np.degrees(np.arctan2(normals[..., 1], normals[..., 0]))[np.hypot(normals[..., 0], normals[..., 1]) > 0.3]
+    assert np.percentile(np.abs((before + 90.0) % 180.0 - 90.0), 95) > 8.0  # the test can see a lean
+    assert np.allclose(np.linalg.norm(rect[..., :3], axis=-1), 1.0, atol=1e-4)

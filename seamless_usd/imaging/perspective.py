@@ -25,8 +25,8 @@ side. No cut of whole periods fits such a photo, and turning it by one angle (:m
    the largest rectangle of source texels. The far row keeps its proportions: a surface seen at a slant is
    foreshortened there too, and its true aspect is not known from its vanishing point alone, so a rectified
    brick may be shorter than it is. A point below the
-   picture is handled upside down. Normal maps keep their vectors (the surface's own frame, up to the lines'
-   lean), renormalised.
+   picture is handled upside down. Normal maps' vectors turn with the picture, texel by texel (each line
+   through the point is turned upright where it passes), and are renormalised.
 
 The experiment this came from, with its figures: ``benchmarks/experiments/keystone.py`` (``docs/decisions.md``,
 "Rectifying perspective").
@@ -231,10 +231,25 @@ def _rectify(flat: np.ndarray, vx: float, vy: float) -> np.ndarray:
     return out
 
 
+def _lean(h: int, w: int, vx: float, vy: float) -> np.ndarray:
+    """(out_h, out_w) radians: how far the picture turns at each texel of its rectification by (vx, vy) (px, above
+    it): the line through the point there is made vertical (its lean from the vertical, down and to the right
+    positive)."""
+    yr, y_bottom = -vy, h - 1 - vy
+    out_h = int(yr - yr * yr / y_bottom)
+    left = max(-vx, -vx * yr / y_bottom)
+    out_w = int(min((w - 1 - vx), (w - 1 - vx) * yr / y_bottom) - left)
+    yp, xp = np.mgrid[0:out_h, 0:out_w].astype(np.float64)
+    big_y = yr * yr / (yr - yp)
+    sx = (xp + left) * big_y / yr + vx
+    return np.arctan2(sx - vx, big_y)
+
+
 def rectify_maps(values: Sequence[np.ndarray], normals: Sequence[bool], keystone: Keystone) -> list[np.ndarray]:
     """Every map of ``values`` (decoded, (H, W, C), one texel grid) rectified by ``keystone`` (module notes): its
     lines through the vanishing point made vertical, its rows evenly spaced, at the far row's texel size, cut to
-    source texels. Values are held to each channel's range in the source; normal maps renormalised."""
+    source texels. Values are held to each channel's range in the source; normal maps' vectors (x right, y up)
+    turn with the picture, texel by texel, and are renormalised."""
     from .straighten import renormalise
 
     out = []
@@ -244,11 +259,25 @@ def rectify_maps(values: Sequence[np.ndarray], normals: Sequence[bool], keystone
         flat = a.reshape(h, w, -1)
         vx, vy = keystone.vx * w, keystone.vy * h
         below = vy > h  # the lines meet below the picture: rectified upside down
-        made = _rectify(flat[::-1] if below else flat, vx, (h - 1 - vy) if below else vy)
-        made = made[::-1] if below else made
+        vector = is_normal and flat.shape[2] >= 3
+        src = flat[::-1].copy() if below else flat
+        if below and vector:  # upside down, a vector's y (up) points the other way
+            src[..., 1] = -src[..., 1]
+        py = (h - 1 - vy) if below else vy
+        made = _rectify(src, vx, py)
         lo, hi = flat.min(axis=(0, 1)), flat.max(axis=(0, 1))
+        if vector:  # the vectors turn with the picture, texel by texel: each line through the point made vertical
+            turn = -_lean(h, w, vx, py)  # turned back against the lean
+            x, y = made[..., 0].copy(), made[..., 1].copy()
+            made[..., 0] = x * np.cos(turn) - y * np.sin(turn)
+            made[..., 1] = x * np.sin(turn) + y * np.cos(turn)
+            if below:
+                made[..., 1] = -made[..., 1]
+            lo, hi = lo.copy(), hi.copy()
+            lo[:2], hi[:2] = -1.0, 1.0
+        made = made[::-1] if below else made
         made = np.clip(made, lo, hi).astype(np.float32)
-        if is_normal and made.shape[2] >= 3:
+        if vector:
             made = np.concatenate([renormalise(made[..., :3]), made[..., 3:]], axis=2)
         out.append(np.ascontiguousarray(made.reshape(made.shape[:2] + np.shape(v)[2:])))
     return out
