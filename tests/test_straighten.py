@@ -143,6 +143,7 @@ def test_process_straighten_tiles_the_turned_bricks_straight_and_records_the_tur
     assert (code == 0) == (stack["status"] == "passed")
     assert f"turned {facts['degrees']:g} degrees clockwise" in (tmp_path / "report.html").read_text()
     assert ("so the asset looks as before" in (tmp_path / "report.html").read_text()) != straight
+    assert ("On the asset, through the UV turn" in (tmp_path / "report.html").read_text()) != straight
     # check judges the written tile against its source straightened the same way: one answer
     main(["check", str(tmp_path / "scene.seamless.usda"), "--json"])
     [item] = json.loads(capsys.readouterr().out)["items"]
@@ -220,3 +221,17 @@ def test_process_straighten_on_a_materialx_document(tmp_path, capsys, model_cach
     step = ((u[0] - v[0]) * tw, (u[1] - v[1]) * th)
     assert np.hypot(*step) == pytest.approx(256.0, rel=1e-6)
     assert np.degrees(np.arctan2(step[1], step[0])) == pytest.approx(-facts["degrees"], abs=1e-4)
+
+
+def test_the_report_sees_a_tile_through_its_uv_turn_as_the_asset_does():
+    """The report's asset picture samples the tile through the authored UV map: with no turn it is the tile
+    repeated (as the same-scale view shows it), and through a turn the courses run at the source's angle."""
+    from seamless_usd.authoring.uvmath import Affine2, turned_scale
+    from seamless_usd.report.repeat import ViewGeometry, repeat_view, through_uv
+
+    tile = _read(TEXTURES / "brick_albedo.png")[:32, :32]
+    g = ViewGeometry(window=(2.0, 2.0), tile_extent=(1.0, 1.0), size=(64, 64))
+    assert np.allclose(through_uv(tile, Affine2(), g), repeat_view(tile, (1.0, 1.0), g), atol=1e-5)
+    straight = _read(TEXTURES / "brick_albedo.png")
+    seen = through_uv(straight, turned_scale((1.0, 1.0), 17.0, 1.0), ViewGeometry((1.0, 1.0), (1.0, 1.0), (256, 256)))
+    assert abs(dominant_orientation([seen]).degrees - 17.0) < 0.5

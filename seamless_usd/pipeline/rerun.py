@@ -40,7 +40,7 @@ def previews_to_arrays(p: Previews) -> tuple[dict[str, np.ndarray], dict[str, An
     """The pictures as named arrays, and what is not a picture as JSON."""
     arrays = {f"source_view/{k}": v for k, v in p.source_view.items()}
     arrays |= {f"tile_view/{k}": v for k, v in p.tile_view.items()}
-    arrays |= {name: v for name in ("lit_source", "lit_tile", "thumbnail", "discriminator")
+    arrays |= {name: v for name in ("lit_source", "lit_tile", "thumbnail", "discriminator", "asset_source", "asset_tile")
                if (v := getattr(p, name)) is not None}
     arrays |= {f"level/{i}": pic for i, (_, pic) in enumerate(p.levels)}
     return ({k: np.ascontiguousarray(v) for k, v in arrays.items()},
@@ -55,6 +55,7 @@ def previews_from_arrays(arrays: dict[str, np.ndarray], info: dict[str, Any]) ->
         lit_source=arrays.get("lit_source"), lit_tile=arrays.get("lit_tile"), lit_note=info["lit_note"],
         view=info["view"], thumbnail=arrays.get("thumbnail"), discriminator=arrays.get("discriminator"),
         levels=[(caption, arrays[f"level/{i}"]) for i, caption in enumerate(info["levels"])],
+        asset_source=arrays.get("asset_source"), asset_tile=arrays.get("asset_tile"),
     )
 
 

@@ -19,7 +19,7 @@ from seamless_usd.textures import TextureStack
 from seamless_usd.fileio import confine
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
-from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, straighten
+from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straighten
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
 from seamless_usd.naming import tile_filename
 from seamless_usd.pipeline.rerun import load_judged, save_judged
@@ -83,6 +83,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     t0 = time.perf_counter()
     policy = imaging.WorkingResolution(max_size=settings.max_size)
     pixels = imaging.load_stack_pixels(list(stack.maps), policy, max_pixels=settings.max_pixels)
+    authored = pixels.values[0]  # the first map as the asset shows it today (the report's view of a UV turn)
     timings["load"] = time.perf_counter() - t0
 
     names = [f"m{i}" for i in range(len(stack.maps))]
@@ -216,8 +217,12 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     timings["inside"] = time.perf_counter() - t5  # bad joins, coherence and structure of every map
     for m, figures in zip(stack.maps, inside):
         outcomes[map_identity(m)].metrics.update(figures)
+    turn = None
+    if straightened and straightened.get("uv_turn") and straightened.get("degrees"):
+        width, height = straightened["source_size"]
+        turn = (authored, float(straightened["degrees"]), height / width, source_uv_scale(uv_scale, straightened))
     previews = stack_previews(stack.maps, shown, [tiles[n] for n in names], uv_scale, discriminator,
-                              levels=levels)
+                              levels=levels, turn=turn)
     record = {"outputs": {json.dumps(list(k)): {"path": str(o.output), "metrics": o.metrics,
                                                 "source_metrics": o.source_metrics} for k, o in outcomes.items()},
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}

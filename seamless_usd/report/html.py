@@ -226,6 +226,10 @@ def stack_html(stack: StackReport) -> str:
         lit = _pair(stack, g, p.lit_source, p.lit_tile, "lit") if p.lit_tile is not None else ""
         blocks.append(f'<div class="block"><h3>Material, lit from a grazing angle</h3>'
                       f'<div class="row">{lit}<p class="note muted">{esc(p.lit_note)}.{_LIT_HINT if lit else ""}</p></div></div>')
+    if p.asset_tile is not None and p.asset_source is not None:
+        blocks.append('<div class="block"><h3>On the asset, through the UV turn</h3><div class="row">'
+                      + figure(p.asset_source, "source as authored, on the same UVs")
+                      + figure(p.asset_tile, "new tile through its authored UV turn and scale") + "</div></div>")
     for m in stack.maps:
         pictures = ""
         if g is not None and m.node in p.tile_view:

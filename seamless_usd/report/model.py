@@ -60,6 +60,8 @@ class Previews:
     discriminator: np.ndarray | None = None  # D map with the seam bands drawn
     levels: list[tuple[str, np.ndarray]] = field(default_factory=list)  # (caption, uint8 RGB): the layout and
     #                                                                       each refinement level (run details)
+    asset_source: np.ndarray | None = None  # a tile turned back in the UVs: the first map's source as authored
+    asset_tile: np.ndarray | None = None  # ... and its tile as the asset shows it, through the UV turn and scale
 
 
 @dataclass

@@ -14,7 +14,7 @@ import numpy as np
 
 from seamless_usd.report.lit import exposure_for, shade, shading_inputs, to_display
 from seamless_usd.report.model import Previews
-from seamless_usd.report.repeat import REPEATS, VIEW_MAX, ViewGeometry, repeat_view, view_geometry
+from seamless_usd.report.repeat import REPEATS, VIEW_MAX, ViewGeometry, repeat_view, through_uv, view_geometry
 
 __all__ = ["THUMBNAIL_MAX", "stack_previews", "map_picture", "lit_pictures"]
 
@@ -60,7 +60,7 @@ def _lit_note(maps: Sequence, has_lit: bool) -> str:
 def stack_previews(maps: Sequence, sources: Sequence[np.ndarray], tiles: Sequence[np.ndarray],
                    uv_scale: tuple[float, float] | None, discriminator: np.ndarray | None = None, *,
                    repeats: int = REPEATS, max_px: int = VIEW_MAX,
-                   levels: Sequence[tuple[str, np.ndarray]] = ()) -> Previews:
+                   levels: Sequence[tuple[str, np.ndarray]] = (), turn: tuple | None = None) -> Previews:
     """Previews of a stack.
 
     Parameters
@@ -73,6 +73,9 @@ def stack_previews(maps: Sequence, sources: Sequence[np.ndarray], tiles: Sequenc
     repeats : repeats of the larger of source and tile across the shared window.
     max_px : longest side of the same-scale pictures.
     levels : (caption, first map in the network domain) per synthesis stage, shown as they are.
+    turn : for a tile the asset's UVs turn back (``process --straighten``): (the first map's source as authored,
+        degrees, its height over width, the UV scale against it): the source and the tile as the asset shows
+        them, over one window of the source's UVs.
 
     Examples
     --------
@@ -99,6 +102,14 @@ def stack_previews(maps: Sequence, sources: Sequence[np.ndarray], tiles: Sequenc
         tile_views.append(tv)
         out.source_view[m.node] = map_picture(sv, m.is_normal)
         out.tile_view[m.node] = map_picture(tv, m.is_normal)
+    if turn is not None:
+        from seamless_usd.authoring.uvmath import turned_scale
+
+        original, degrees, aspect, uv = turn
+        seen = view_geometry((original.shape[1], original.shape[0]), uv, repeats, max_px)
+        affine = turned_scale(tuple(uv), degrees, aspect)
+        out.asset_source = map_picture(repeat_view(original, (1.0, 1.0), seen), maps[0].is_normal)
+        out.asset_tile = map_picture(through_uv(tiles[0], affine, seen), maps[0].is_normal)
     out.lit_source, out.lit_tile = lit_pictures(maps, source_views, tile_views)
     out.lit_note = _lit_note(maps, out.lit_tile is not None)
     first = out.lit_tile if out.lit_tile is not None else out.tile_view[maps[0].node]

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["VIEW_MAX", "REPEATS", "ViewGeometry", "view_geometry", "repeat_view"]
+__all__ = ["VIEW_MAX", "REPEATS", "ViewGeometry", "view_geometry", "repeat_view", "through_uv"]
 
 VIEW_MAX = 576  # longest side of a same-scale picture, px (3 repeats of 192 px)
 REPEATS = 3  # repeats of the larger of source and tile across the window
@@ -155,3 +155,25 @@ def repeat_view(img: np.ndarray, extent: tuple[float, float], geometry: ViewGeom
     xs = (np.arange(out_w) + 0.5) * step_x - 0.5
     ys = (np.arange(out_h) + 0.5) * step_y - 0.5
     return _sample_axis(_sample_axis(a, ys, 0), xs, 1)
+
+
+def through_uv(img: np.ndarray, affine, geometry: ViewGeometry) -> np.ndarray:
+    """``img`` (one tile, repeating) as the asset shows it over the window when its texture coordinates go through
+    ``affine`` (asset UV -> the tile's UV, one tile a UV unit; :class:`.authoring.uvmath.Affine2`), ``(H, W, C)``
+    float: the picture turned and scaled as the authored UV nodes turn and scale it. v runs up, rows down."""
+    a = np.asarray(img, dtype=np.float32)
+    a = a[..., None] if a.ndim == 2 else a
+    h, w = a.shape[:2]
+    out_w, out_h = geometry.size
+    u = (np.arange(out_w) + 0.5) / out_w * geometry.window[0]
+    v = geometry.window[1] - (np.arange(out_h) + 0.5) / out_h * geometry.window[1]
+    u, v = np.meshgrid(u, v)
+    tu, tv = affine.a * u + affine.b * v + affine.tx, affine.c * u + affine.d * v + affine.ty
+    step = max(abs(affine.a), abs(affine.b), abs(affine.c), abs(affine.d)) * geometry.window[0] / out_w * max(h, w)
+    a = _periodic_blur(a, (0.5 * step, 0.5 * step)) if step > 1 else a
+    x, y = tu * w - 0.5, (1.0 - tv) * h - 0.5
+    x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
+    fx, fy = (x - x0)[..., None].astype(np.float32), (y - y0)[..., None].astype(np.float32)
+    at = lambda yy, xx: a[yy % h, xx % w]  # noqa: E731
+    return ((at(y0, x0) * (1 - fx) + at(y0, x0 + 1) * fx) * (1 - fy)
+            + (at(y0 + 1, x0) * (1 - fx) + at(y0 + 1, x0 + 1) * fx) * fy)
