@@ -19,7 +19,7 @@ import MaterialX as mx
 from seamless_usd.authoring.mtlxinputs import MtlxNames, UnauthoredInput, fmt, gltf_identity, set_vector2, vector2
 from seamless_usd.authoring.mtlxuv import _PlaceUV
 from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset_path, write_atomically
-from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult, UVTurn, WriteMode
+from seamless_usd.authoring.types import TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn, WriteMode
 from seamless_usd.textures import Origin
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
@@ -259,9 +259,7 @@ class _MtlxAuthor(_PlaceUV):
         if turn is not None and not degrees and from_source:
             self.result.findings.append(Finding(
                 Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(node_path),
-                f"{category} node: its UVs cannot turn, so the straightened tile is written straight and the pattern "
-                "on the asset turns by the angle recorded as seamless_straightened (use an image node fed by a "
-                "place2d to keep the asset's look)"))
+                f"{category} node: {TURN_NOT_AUTHORED}"))
         # provenance
         if recorded and not from_source:
             source = recorded.source_asset  # the tile was made from an earlier tile: keep the origin

@@ -12,7 +12,7 @@ import MaterialX as mx
 
 from seamless_usd.authoring.mtlxinputs import MtlxNames, fmt, set_vector2, vector2
 from seamless_usd.authoring.types import UVTurn
-from seamless_usd.authoring.uvmath import scale_node_value, total_from_node, turn_inputs, turn_of_inputs
+from seamless_usd.authoring.uvmath import composed_turn, scale_node_value, total_from_node, turn_inputs, turn_of_inputs
 from seamless_usd.findings import prim_ref
 
 __all__ = []
@@ -79,13 +79,7 @@ class _PlaceUV:
                                                       _number(turn_node, MtlxNames.ROTATE), True)
                                        if turn_node is not None else (0.0, 1.0))
         prior = total_from_node(_pair(place, MtlxNames.SCALE, (1.0, 1.0)), prior_aspect, True)
-        total = scale if from_source else (prior[0] * scale[0], prior[1] * scale[1])
-        degrees, aspect = (turn.degrees, turn.aspect) if turn else (0.0, 1.0)
-        if not from_source and (prior_degrees or degrees):  # turned again: in the first source's units
-            degrees += prior_degrees
-            aspect = prior_aspect if prior_degrees else aspect * prior[1] / prior[0]
-        if not degrees:
-            aspect = 1.0
+        total, degrees, aspect = composed_turn((*prior, prior_degrees, prior_aspect), scale, turn, from_source)
         if turn_node is not None:
             self._set_turn(turn_node, degrees, aspect)
         elif degrees:

@@ -76,6 +76,12 @@ class Provenance:
     #   shares of its width and height, and their leans' spread in degrees, when it was rectified (spread 0: not)
 
 
+#: Said of a texture node whose UVs were to turn a straightened tile back and could not.
+TURN_NOT_AUTHORED = ("its UVs cannot turn (a tiledimage, or no UV transform authored): the straightened tile is written "
+                     "straight and the pattern on the asset turns by the angle recorded as straightened (an image node "
+                     "fed by a UV transform keeps the asset's look)")
+
+
 @dataclass(frozen=True)
 class UVTurn:
     """The turn a straightened tile is given back in the asset's UVs, so the asset looks as before: the source

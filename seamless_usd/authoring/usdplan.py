@@ -9,7 +9,7 @@ from pxr import Gf, Sdf, Usd, UsdShade
 
 from seamless_usd.authoring.files import relative_asset_path
 from seamless_usd.authoring.schema import PROPERTIES, Schema, has_applied, read_provenance, schemas_known
-from seamless_usd.authoring.types import AuthoringResult, Codes, Provenance, StackResult
+from seamless_usd.authoring.types import TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult
 from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target, variant_not_composed
 from seamless_usd.authoring.usduv import _UVPlanner
 from seamless_usd.authoring.usdnodes import (
@@ -191,9 +191,7 @@ class _Author(_UVPlanner):
             return self._refused or "its UV input cannot be edited"
         if stack_result.uv_turn and not applied[1] and from_source:
             self._find(Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(prim.GetPath()),
-                       "the UVs of this texture node cannot turn (a tiledimage, or no UV transform authored): the "
-                       "straightened tile is written straight and the pattern on the asset turns by the angle "
-                       "recorded as seamless:straightened (an image node fed by a UV transform keeps its look)")
+                       TURN_NOT_AUTHORED)
         if recorded and not from_source:  # made from an earlier tile: keep the origin
             origin = prim.GetAttribute(Schema.SOURCE_ASSET).Get()
             source = origin.resolvedPath or origin.path

@@ -20,7 +20,7 @@ from seamless_usd.authoring.usdnodes import (
     _uv_input_name,
     _value,
 )
-from seamless_usd.authoring.uvmath import scale_node_value, total_from_node, turn_inputs, turn_of_inputs
+from seamless_usd.authoring.uvmath import composed_turn, scale_node_value, total_from_node, turn_inputs, turn_of_inputs
 from seamless_usd.findings import Severity, prim_ref
 
 __all__ = []
@@ -101,15 +101,9 @@ class _UVPlanner:
                                                       _value(turn_node.GetInput(_rotation(place)), 0.0), place)
                                        if turn_node is not None else (0.0, 1.0))
         prior = total_from_node(_value(node.GetInput(Names.SCALE), (1.0, 1.0)), prior_aspect, place)
-        total = scale if from_source else (prior[0] * scale[0], prior[1] * scale[1])
-        degrees, aspect = (turn.degrees, turn.aspect) if turn else (0.0, 1.0)
-        if not from_source and (prior_degrees or degrees):  # turned again: the turn is made in the first source's units
-            degrees += prior_degrees
-            aspect = prior_aspect if prior_degrees else aspect * prior[1] / prior[0]
+        total, degrees, aspect = composed_turn((*prior, prior_degrees, prior_aspect), scale, turn, from_source)
         if turn_node is None and upstream is None:  # nothing feeds the scale node (edited by hand): no turn to insert
-            degrees = 0.0
-        if not degrees:
-            aspect = 1.0
+            degrees, aspect = 0.0, 1.0
         if turn_node is not None:
             turn_scale, rotation = turn_inputs(degrees, aspect, place)
             self._plan_input_value(turn_node.GetPrim(), turn_node, Names.SCALE, Sdf.ValueTypeNames.Float2, turn_scale)

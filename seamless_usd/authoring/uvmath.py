@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass
 
 __all__ = ["Affine2", "transform2d", "place2d", "scale2d", "turned_scale", "turn_inputs", "turn_of_inputs",
-           "scale_node_value", "total_from_node"]
+           "scale_node_value", "total_from_node", "composed_turn"]
 
 
 @dataclass(frozen=True)
@@ -132,3 +132,19 @@ def total_from_node(value: tuple[float, float], aspect: float, place: bool) -> t
     """The total UV scale a scale node holding ``value`` applies (:func:`scale_node_value` undone)."""
     u, v = (1.0 / value[0], 1.0 / value[1]) if place else (float(value[0]), float(value[1]))
     return (u, v * aspect)
+
+
+def composed_turn(prior: tuple[float, float, float, float], scale: tuple[float, float], turn, from_source: bool
+                  ) -> tuple[tuple[float, float], float, float]:
+    """(total UV scale, degrees, aspect) the UV nodes a run before inserted must hold now: ``prior`` is what they
+    hold (total scale u, v, degrees, aspect), ``scale`` and ``turn`` (a :class:`.types.UVTurn` or None) this run's.
+    Made from the source, this run's replace them; made from an earlier tile, they compose: the scales multiply
+    and the turns add, in the first source's texel units (its aspect is the tile's times the first scale's ratio).
+    No turn: aspect 1."""
+    pu, pv, prior_degrees, prior_aspect = prior
+    total = scale if from_source else (pu * scale[0], pv * scale[1])
+    degrees, aspect = (turn.degrees, turn.aspect) if turn else (0.0, 1.0)
+    if not from_source and (prior_degrees or degrees):
+        degrees += prior_degrees
+        aspect = prior_aspect if prior_degrees else aspect * pv / pu
+    return total, degrees, (aspect if degrees else 1.0)

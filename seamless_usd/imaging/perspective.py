@@ -138,14 +138,26 @@ def _converges(fit, h: int) -> bool:
             and not 0.0 <= fit[1] <= h)
 
 
-def _back(vx: float, vy: float, point: tuple[float, float], hw: tuple[int, int]) -> tuple[float, float]:
-    """The picture's (x, y) of the rectified picture's ``point`` (px), rectified by (vx, vy) (px, above it)."""
-    h, w = hw
+def _frame(h: int, w: int, vx: float, vy: float) -> tuple[float, float, int, int]:
+    """(Yr, left, out_w, out_h) of an ``h`` x ``w`` picture's rectification by (vx, vy) (px, above it): the far row
+    (it keeps its texel size; nearer rows shrink, none is magnified), the first column kept, and the size of the
+    largest rectangle of source texels."""
     yr, y_bottom = -vy, h - 1 - vy
-    left = max(-vx * yr / yr, -vx * yr / y_bottom)
-    xp, yp = point
+    left = max(-vx, -vx * yr / y_bottom)
+    right = min(w - 1 - vx, (w - 1 - vx) * yr / y_bottom)
+    return yr, left, int(right - left), int(yr - yr * yr / y_bottom)
+
+
+def _source(vx: float, vy: float, yr: float, left: float, xp, yp):
+    """The picture's (x, y) of the rectified picture's (xp, yp) (the module notes' homography, inverted)."""
     big_y = yr * yr / (yr - yp)
     return (xp + left) * big_y / yr + vx, big_y + vy
+
+
+def _back(vx: float, vy: float, point: tuple[float, float], hw: tuple[int, int]) -> tuple[float, float]:
+    """The picture's (x, y) of the rectified picture's ``point`` (px), rectified by (vx, vy) (px, above it)."""
+    yr, left, _, _ = _frame(*hw, vx, vy)
+    return _source(vx, vy, yr, left, *point)
 
 
 #: Times the vanishing point is read again on the picture rectified by it: the structure tensors of short, noisy
@@ -187,11 +199,8 @@ def find_keystone(values: Sequence[np.ndarray]) -> Keystone | None:
         if not ny < 0:
             break
         vx, vy = nx, ny
-    try:  # what the rectification keeps: at least KEEP of each side, else the stack is left as it is
-        r = _rectify(g[..., None], vx, vy)
-    except ValueError:
-        return None
-    if r.shape[0] < KEEP * h or r.shape[1] < KEEP * w:
+    _, _, out_w, out_h = _frame(h, w, vx, vy)  # what the rectification keeps: at least KEEP of each side
+    if out_h < KEEP * h or out_w < KEEP * w:
         return None
     if below:
         vy = h - 1 - vy
@@ -203,20 +212,14 @@ def _rectify(flat: np.ndarray, vx: float, vy: float) -> np.ndarray:
     from scipy import ndimage
 
     h, w = flat.shape[:2]
-    y_top, y_bottom = -vy, h - 1 - vy
-    yr = y_top  # the far row keeps its texel size; nearer rows shrink, none is magnified
-    out_h = int(yr - yr * yr / y_bottom)
-    left = max(-vx * yr / y_top, -vx * yr / y_bottom)
-    right = min((w - 1 - vx) * yr / y_top, (w - 1 - vx) * yr / y_bottom)
-    out_w = int(right - left)
+    yr, left, out_w, out_h = _frame(h, w, vx, vy)
     if out_w < 16 or out_h < 16:
         raise ValueError(f"a {w} x {h} picture rectified keeps only {out_w} x {out_h} texels")
     yp, xp = np.mgrid[0:out_h, 0:out_w].astype(np.float64)
-    big_y = yr * yr / (yr - yp)
-    sy, sx = big_y + vy, (xp + left) * big_y / yr + vx
+    sx, sy = _source(vx, vy, yr, left, xp, yp)
     # each output row is sampled from the picture blurred as much as that row shrinks (Y / Yr along x, its square
     # along y: their geometric mean), from a few levels of blur: the far rows, not shrunk, are not blurred
-    shrink = (big_y[:, 0] / yr) ** 1.5
+    shrink = ((sy[:, 0] - vy) / yr) ** 1.5
     want = 0.5 * np.maximum(0.0, shrink - 1.0)
     levels = [s for s in SIGMAS if s <= max(want.max(), 0.0) * 2 or s == 0.0]
     level = np.array([min(range(len(levels)), key=lambda i: abs(levels[i] - v)) for v in want])
@@ -235,14 +238,10 @@ def _lean(h: int, w: int, vx: float, vy: float) -> np.ndarray:
     """(out_h, out_w) radians: how far the picture turns at each texel of its rectification by (vx, vy) (px, above
     it): the line through the point there is made vertical (its lean from the vertical, down and to the right
     positive)."""
-    yr, y_bottom = -vy, h - 1 - vy
-    out_h = int(yr - yr * yr / y_bottom)
-    left = max(-vx, -vx * yr / y_bottom)
-    out_w = int(min((w - 1 - vx), (w - 1 - vx) * yr / y_bottom) - left)
+    yr, left, out_w, out_h = _frame(h, w, vx, vy)
     yp, xp = np.mgrid[0:out_h, 0:out_w].astype(np.float64)
-    big_y = yr * yr / (yr - yp)
-    sx = (xp + left) * big_y / yr + vx
-    return np.arctan2(sx - vx, big_y)
+    sx, sy = _source(vx, vy, yr, left, xp, yp)
+    return np.arctan2(sx - vx, sy - vy)
 
 
 def rectify_maps(values: Sequence[np.ndarray], normals: Sequence[bool], keystone: Keystone) -> list[np.ndarray]:

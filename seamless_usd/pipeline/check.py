@@ -153,6 +153,15 @@ def _sources(stage, stack) -> tuple[list, object] | None:
     return sources, prov
 
 
+def keystone_of(prov):
+    """The rectification recorded in ``prov`` (``seamless:rectified``: the point and the leans' spread), or None."""
+    if not prov.rectified[2]:
+        return None
+    from seamless_usd.imaging.perspective import Keystone
+
+    return Keystone(*prov.rectified)
+
+
 def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     from seamless_usd.imaging import WorkingResolution, load_stack_pixels
     from seamless_usd.pipeline.madefrom import made_values, on_tile_grid
@@ -180,9 +189,8 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
             sources = list(load_stack_pixels(src_maps, policy).values)
             # made from the source straightened, levelled or evened as recorded: judged against it made so
             h, w = sources[0].shape[:2]
-            rectified = {"vanishing": prov.rectified[:2], "spread": prov.rectified[2]} if prov.rectified[2] else None
             sources = made_values(sources, normals, prov.straightened, bool(prov.levelled), bool(prov.evened),
-                                  turn_vectors=not prov.uv_turn, rectified=rectified)
+                                  turn_vectors=not prov.uv_turn, rectified=keystone_of(prov))
             uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
             sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
             item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps]).as_dict()

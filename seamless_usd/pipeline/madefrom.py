@@ -10,7 +10,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["straighten", "made_values", "as_made", "source_uv_scale", "on_tile_grid"]
+__all__ = ["straighten", "made_values", "as_made", "source_uv_scale", "on_tile_grid", "uv_turn_of"]
 
 
 def straighten(pixels, normals: list[bool], uv_turn: bool = False):
@@ -48,14 +48,12 @@ def made_values(values, normals: list[bool], degrees: float = 0.0, levelled: boo
     source texels (:mod:`.imaging.straighten`), then, with ``levelled``, their light levelled
     (:func:`.imaging.level.level_maps`), with ``evened``, their lattice evened
     (:func:`.synthesis.lattice.drift.even_lattice`); ``turn_vectors``: normal maps' vectors turn with the picture
-    (not where the turn is authored in the asset's UVs); ``rectified`` (a :class:`.imaging.perspective.Keystone` or
-    its ``as_dict()``): rectified first. ``process`` and ``check`` both make the source so."""
+    (not where the turn is authored in the asset's UVs); ``rectified`` (a :class:`.imaging.perspective.Keystone`):
+    rectified first. ``process`` and ``check`` both make the source so."""
     out = list(values)
-    if rectified is not None:  # a Keystone, or its as_dict()
-        from seamless_usd.imaging.perspective import Keystone, rectify_maps
+    if rectified is not None:
+        from seamless_usd.imaging.perspective import rectify_maps
 
-        if isinstance(rectified, dict):
-            rectified = Keystone(*rectified["vanishing"], rectified.get("spread", 0.0))
         out = rectify_maps(out, normals, rectified)
     if degrees:
         from seamless_usd.imaging.straighten import straighten_maps
@@ -78,6 +76,10 @@ def as_made(pixels, normals: list[bool], straightened_facts: dict | None, levell
     was made, the levelling or the evening when it was."""
     turn = straightened_facts["degrees"] if straightened_facts and straightened_facts.get("size") else 0.0
     rectified = (straightened_facts or {}).get("rectified")
+    if rectified:
+        from seamless_usd.imaging.perspective import Keystone
+
+        rectified = Keystone(*rectified["vanishing"], rectified["spread"])
     if not turn and not rectified and not levelled_facts and not evened_facts:
         return pixels
     vectors = not (straightened_facts or {}).get("uv_turn")
@@ -89,6 +91,16 @@ def _with_values(pixels, values: list[np.ndarray]):
     """``pixels`` holding ``values``, its working size theirs."""
     h, w = values[0].shape[:2]
     return dataclasses.replace(pixels, values=tuple(values), working_size=(w, h))
+
+
+def uv_turn_of(straightened_facts: dict | None) -> tuple[float, float] | None:
+    """(degrees, the source's height over width) of the turn the asset's UVs give a straightened tile back; None
+    when none is authored (not turned, ``--write-straight``, rectified, or a map whose UVs cannot turn)."""
+    facts = straightened_facts or {}
+    if not facts.get("uv_turn") or not facts.get("size") or not facts.get("degrees"):
+        return None
+    width, height = facts["source_size"]
+    return float(facts["degrees"]), float(height) / float(width)
 
 
 def source_uv_scale(uv_scale, straightened_facts: dict | None) -> tuple[float, float]:

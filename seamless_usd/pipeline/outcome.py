@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from seamless_usd.findings import Finding
-from seamless_usd.pipeline.madefrom import source_uv_scale
+from seamless_usd.pipeline.madefrom import source_uv_scale, uv_turn_of
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.textures import TextureMap, TextureStack
 
@@ -123,11 +123,8 @@ class StackOutcome:
         None when the tile was not straightened or is written straight (``--write-straight``)."""
         from seamless_usd.authoring import UVTurn
 
-        facts = self.resampled.get("straightened") or {}
-        if not facts.get("uv_turn") or not facts.get("size") or not facts.get("degrees"):
-            return None
-        width, height = facts["source_size"]
-        return UVTurn(float(facts["degrees"]), float(height) / float(width))
+        turn = uv_turn_of(self.resampled.get("straightened"))
+        return None if turn is None else UVTurn(*turn)
 
 
 def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,

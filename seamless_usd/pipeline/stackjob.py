@@ -19,7 +19,7 @@ from seamless_usd.textures import TextureStack
 from seamless_usd.fileio import confine
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
-from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straighten
+from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straighten, uv_turn_of
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
 from seamless_usd.naming import tile_filename
 from seamless_usd.pipeline.rerun import load_judged, save_judged
@@ -44,7 +44,7 @@ class JobSettings:
     refine: str = "on"  # refinement or lattice cut ("gan": no lattice cut; "off": the pure GAN tile)
     tile_size: str = "source"  # "source" (same pixel size as the source) or "paper" (2c x 2c)
     straighten: bool = False  # turn the stack's lines onto the axes before tiling (imaging.straighten)
-    uv_turn: bool = False  # with straighten: the turn is authored in the asset's UVs (normal vectors keep theirs)
+    uv_turn: bool = False  # straighten, the turn authored in the asset's UVs (normal vectors keep theirs)
 
     @classmethod
     def from_options(cls, options, threads: int | None = None) -> "JobSettings":
@@ -100,7 +100,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     # the turn goes back in the UVs only where every map's UVs can turn: else the tile is written straight, its
     # normal vectors turned with it (a normal map is right on the asset only one way or the other)
     unturned = [m.node for m in stack.maps if not m.uv_turns]
-    uv_turn = settings.straighten and settings.uv_turn and not unturned
+    uv_turn = settings.uv_turn and not unturned
     key = stack_key(
         (
             (n, p.pixels, f"{m.channels_used}|{m.color_space.value}|{m.is_normal}|{sorted(r.role for r in m.roles)}")
@@ -109,8 +109,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         {**dataclasses.asdict(config), "tile_size": settings.tile_size,
          "refine": None if refine_config is None else dataclasses.asdict(refine_config),
          **({"straighten": True} if settings.straighten else {}),
-         **({"uv_turn": True} if uv_turn else {"uv_turn": "refused"} if settings.straighten and settings.uv_turn
-            else {})},
+         **({"uv_turn": True if uv_turn else "refused"} if settings.uv_turn else {})},
         settings.seed,
     )
     entry = StackCache(settings.cache_dir).entry(key)
@@ -217,10 +216,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     timings["inside"] = time.perf_counter() - t5  # bad joins, coherence and structure of every map
     for m, figures in zip(stack.maps, inside):
         outcomes[map_identity(m)].metrics.update(figures)
-    turn = None
-    if straightened and straightened.get("uv_turn") and straightened.get("degrees"):
-        width, height = straightened["source_size"]
-        turn = (authored, float(straightened["degrees"]), height / width, source_uv_scale(uv_scale, straightened))
+    turned = uv_turn_of(straightened)
+    turn = None if turned is None else (authored, *turned, source_uv_scale(uv_scale, straightened))
     previews = stack_previews(stack.maps, shown, [tiles[n] for n in names], uv_scale, discriminator,
                               levels=levels, turn=turn)
     record = {"outputs": {json.dumps(list(k)): {"path": str(o.output), "metrics": o.metrics,
