@@ -45,6 +45,7 @@ if str(HERE) not in sys.path:  # steps.py sits beside this script
 from seamless_usd.synthesis import MapInput, get_preset, sample, train  # noqa: E402
 from seamless_usd.synthesis.precision import cpu_supports_bf16, resolve_precision  # noqa: E402
 from seamless_usd.synthesis.gan.train import TrainedModel, build_networks  # noqa: E402
+from pictures import side_by_side, write_picture  # noqa: E402
 from results_io import write_results  # noqa: E402
 from steps import (CHANNELS, bench_compile, bench_seeds, bench_steps, bench_wait_policy, load_average,  # noqa: E402
                    profile_step)
@@ -100,21 +101,6 @@ def load_brick_512() -> list[MapInput]:
     return maps
 
 
-def write_side_by_side(path: Path, tile: np.ndarray, source: np.ndarray) -> None:
-    """2x2 tiling of ``tile`` (left) beside the naive 2x2 tiling of ``source`` (right), 8-bit PNG."""
-    import OpenImageIO as oiio
-    a, b = np.tile(tile, (2, 2, 1)), np.tile(source, (2, 2, 1))
-    h = max(a.shape[0], b.shape[0])
-    pad = lambda x: np.pad(x, ((0, h - x.shape[0]), (0, 8), (0, 0)), constant_values=1.0)  # noqa: E731
-    img = np.concatenate([pad(a), pad(b)], 1)
-    img = ((np.clip(img, -1, 1) + 1) * 127.5).round().astype(np.uint8)
-    spec = oiio.ImageSpec(img.shape[1], img.shape[0], img.shape[2], oiio.UINT8)
-    out = oiio.ImageOutput.create(str(path))
-    out.open(str(path), spec)
-    out.write_image(img)
-    out.close()
-
-
 def end_to_end(preset: str) -> dict:
     maps = load_brick_512()
     cfg = get_preset(preset)
@@ -134,7 +120,8 @@ def end_to_end(preset: str) -> dict:
     tiles = RESULTS / "tiles"
     tiles.mkdir(parents=True, exist_ok=True)
     for m in maps:
-        write_side_by_side(tiles / f"speed_{preset}__brick512__{m.name}.png", res.maps[m.name], m.pixels)
+        write_picture(tiles / f"speed_{preset}__brick512__{m.name}.png",
+                          side_by_side(res.maps[m.name], m.pixels, m.is_normal))
     rec = {"preset": preset, "train_s": t1 - t0, "sample_s": t2 - t1, "total_s": t2 - t0,
            "iterations": cfg.iterations, "crop_size": list(res.crop_size), "q_passed": res.q_passed,
            "candidates": len(res.candidates), "precision": res.precision}
