@@ -23,6 +23,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
+from seamless_usd.errors import InputError, UsageError
 from seamless_usd.pipeline.check import CheckReport, check_paths
 
 __all__ = ["add_arguments", "run"]
@@ -71,11 +72,21 @@ def _checked(args: argparse.Namespace, err: Console) -> CheckReport:
 
 def run(args: argparse.Namespace) -> int:
     err = Console(stderr=True)
-    report = _checked(args, err)
+    if args.jobs < 0:
+        raise UsageError(f"--jobs {args.jobs}: give a number of worker processes, or 0 for one per core")
+    sheet = None
     if args.report is not None:
+        from seamless_usd.report.target import report_target
+
+        try:  # refused before any work when it would replace a file of the user's (a picture, a stage)
+            sheet = report_target(args.report)
+        except InputError as exc:
+            raise UsageError(f"--report: {exc}") from None
+    report = _checked(args, err)
+    if sheet is not None:
         from seamless_usd.report.contact import write_contact_sheet
 
-        written = write_contact_sheet([item.card() for item in report.items], args.report)
+        written = write_contact_sheet([item.card() for item in report.items], sheet)
         err.print(f"contact sheet: {escape(str(written))}", highlight=False)
     if args.json:
         json.dump(report.to_dict(), sys.stdout, indent=2)

@@ -299,9 +299,7 @@ def _finish(run: Run, started: float) -> Report:
     report.options = run.options.summary()
     report.timings["total"] = time.perf_counter() - started
     if run.options.report is not None:
-        target = Path(run.options.report)
-        html_path = target if target.suffix.lower() in (".html", ".htm") else target.with_suffix(".html")
-        json_path = html_path.with_suffix(".json")
+        html_path, json_path = _report_paths(run.options.report)
         html_path.parent.mkdir(parents=True, exist_ok=True)
         if len(report.sources) > 1:
             write_library_html(report, html_path)
@@ -311,6 +309,18 @@ def _finish(run: Run, started: float) -> Report:
         report.options["report_html"] = str(html_path)
         report.options["report_json"] = str(json_path)
     return report
+
+
+def _report_paths(asked: Path) -> tuple[Path, Path]:
+    """The HTML report's path and the JSON report's beside it (:func:`.report.target.report_target`); a
+    :class:`UsageError` when either would replace a file that is not one of this tool's reports."""
+    from seamless_usd.report.target import report_target
+
+    try:
+        html_path = report_target(asked)
+        return html_path, report_target(html_path, ".json")
+    except InputError as exc:
+        raise UsageError(f"--report: {exc}") from None
 
 
 def _new_run(options: Options) -> Run:
@@ -329,6 +339,8 @@ def _new_run(options: Options) -> Run:
         )
     if options.device is not None:
         check_device(options.device)
+    if options.report is not None:
+        _report_paths(options.report)  # refused before any work when it would replace a file of the user's
     if options.mode is None:
         options = options.with_(mode=authoring.WriteMode.NEW_LAYER)
     return Run(options=options, executor=make_executor(options.scheduler, options.jobs))

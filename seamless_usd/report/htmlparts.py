@@ -126,6 +126,7 @@ def figure(pixels: np.ndarray | None, caption: str, overlay: str = "", lossless:
 def page(title: str, body: str, extra_css: str = "", toggle: bool = True) -> str:
     """A whole self-contained HTML document."""
     return (f'<!doctype html><html lang="en"><head><meta charset="utf-8">'
+            f'<meta name="generator" content="seamless-usd">'
             f'<meta name="viewport" content="width=device-width,initial-scale=1"><link rel="icon" href="data:,">'
             f"<title>{esc(title)}</title><style>{CSS}{extra_css}</style></head><body>"
             f'{OVERLAY_TOGGLE if toggle else ""}<main>{body}</main></body></html>\n')
