@@ -166,7 +166,9 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
 
 
 def atomic_write_text(path: str | os.PathLike, text: str, encoding: str = "utf-8") -> Path:
-    """Write ``text`` to ``path`` atomically (see :func:`atomic_write`); newlines kept as given.
+    """Write ``text`` to ``path`` atomically (see :func:`atomic_write`); newlines kept as given. A character
+    the encoding cannot hold (a file name's undecodable byte, kept by Python as a lone surrogate) is written as
+    ``?``: a report naming such a file is still written.
 
     Examples
     --------
@@ -175,7 +177,7 @@ def atomic_write_text(path: str | os.PathLike, text: str, encoding: str = "utf-8
     >>> atomic_write_text(Path(tempfile.mkdtemp()) / "r.json", "{}").read_text()
     '{}'
     """
-    data = text.encode(encoding)
+    data = text.encode(encoding, errors="replace")
     return atomic_write(path, lambda tmp: tmp.write_bytes(data))
 
 

@@ -65,7 +65,7 @@ def test_check_a_folder_with_json_and_a_contact_sheet(tmp_path, capsys):
     assert set(items) == {"tileable.png", "window.png", "with_alpha.png", "one_pixel.png", "nan.exr", "broken.png"}
     assert items["tileable.png"]["passed"] and items["with_alpha.png"]["passed"]  # alpha is not part of the look
     assert not items["window.png"]["passed"] and items["window.png"]["verdict"]["seams"]
-    for bad, why in (("one_pixel.png", "at least 8 px"), ("nan.exr", "NaN or infinite"), ("broken.png", "broken.png")):
+    for bad, why in (("one_pixel.png", "too small to be judged"), ("nan.exr", "NaN or infinite"), ("broken.png", "broken.png")):
         assert not items[bad]["passed"] and why in items[bad]["error"], items[bad]
     assert _digests(lib) == before  # nothing written beside the pictures, nothing changed
     html = sheet.read_text(encoding="utf-8")
@@ -117,3 +117,25 @@ def test_a_stack_inside_a_usdz_package_is_named_not_misread(tmp_path):
     [item] = report.items
     assert not item.passed and "inside a .usdz package" in item.error and "@./wood_tileable" in item.error
     assert report.exit_code == 1
+
+
+def test_a_name_that_is_not_utf8_and_a_small_picture_are_named_and_the_rest_judged(tmp_path, capsys):
+    """A file name the image library cannot take (an undecodable byte) and a picture too small to be judged on its
+    own each get an error naming them; the other pictures are judged and the contact sheet is written."""
+    import os
+    import shutil
+
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    wood = oiio.ImageBuf(str(SAMPLES / "wood_tileable.jpg")).get_pixels(oiio.FLOAT)  # tiles as a whole
+    _write(lib / "tileable.png", wood)
+    shutil.copy(lib / "tileable.png", os.fsdecode(bytes(lib) + b"/odd\xff.png"))
+    _write(lib / "icon.png", wood[:40, :40])
+    sheet = tmp_path / "sheet.html"
+    assert main(["check", str(lib), "--json", "--report", str(sheet)]) == 1
+    items = {Path(i["name"]).name: i for i in json.loads(capsys.readouterr().out)["items"]}
+    assert items["tileable.png"]["passed"]
+    odd = items[os.fsdecode(b"odd\xff.png")]
+    assert "not valid UTF-8" in odd["error"] and "rename" in odd["error"]
+    assert "40 x 40 px is too small to be judged on its own" in items["icon.png"]["error"]
+    assert "not valid UTF-8" in sheet.read_text(encoding="utf-8")

@@ -32,6 +32,7 @@ __all__ = [
     "output_dtype",
     "alpha_channel",
     "norm_ext",
+    "oiio_name",
 ]
 
 DEFAULT_MAX_PIXELS = 1 << 28  # 268 Mpx (16k x 16k): larger headers are refused before decoding
@@ -62,12 +63,24 @@ def _input_config() -> oiio.ImageSpec:
     return config
 
 
+def oiio_name(path: str | Path) -> str:
+    """``path`` as the image library takes it; :class:`InputError` naming it when its name is not valid UTF-8
+    (bytes the file system holds but text cannot: the library cannot open such a file)."""
+    name = str(path)
+    try:
+        name.encode("utf-8")
+    except UnicodeEncodeError:
+        raise InputError(f"{asset_ref(name)}: its file name is not valid "
+                         "UTF-8 text, so the image library cannot open it; rename the file") from None
+    return name
+
+
 def _open(path: Path) -> oiio.ImageInput:
     if not path.is_file():
         raise InputError(
             f"{asset_ref(path)}: image file not found; check the asset path or restore the file"
         )
-    inp = oiio.ImageInput.open(str(path), _input_config())
+    inp = oiio.ImageInput.open(oiio_name(path), _input_config())
     if inp is None:
         reason = " ".join((oiio.geterror() or "unknown format").split())
         raise InputError(
