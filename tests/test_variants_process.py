@@ -161,3 +161,32 @@ def test_a_dcc_stage_names_the_stacks_of_other_selections_and_plans_its_own(tmp_
     floors = [s for s in report.stacks if s.material == "</Prop/Materials/M_floor>"]
     assert [(s.variant, s.status.value) for s in floors] == [("", "planned")]
     assert report.variants and report.variants[0]["combinations"] == 2
+
+
+def test_an_open_stage_is_edited_inside_the_variant_that_holds_the_material(tmp_path):
+    """A DCC stage's edits (its root layer, the default edit target) go inside the variant whose opinion they
+    replace: the other selection keeps its own texture."""
+    from seamless_usd.authoring import MapResult, Provenance, StackResult, author_usd_stage
+    from seamless_usd.discover import scan_stage
+
+    for name in ("prop", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    stage = Usd.Stage.Open(str(tmp_path / "prop" / "prop.usda"))
+    vset = stage.GetPrimAtPath("/Prop").GetVariantSet("finish")
+    assert vset.GetVariantSelection() == "wood"
+    floor = [s for s in scan_stage(stage).stacks if not s.selection and s.material == "</Prop/Materials/M_floor>"]
+    prov = Provenance(source_asset="", crop_size=(0, 0), uv_scale=(1.0, 1.0), q_passed=True, q_tau=0.0,
+                      q_band_min=(0.0, 0.0), model_hash="", tool_version="test")
+    tile = Path(floor[0].maps[0].resolved).with_name("wood_color.tile.png")
+    shutil.copy(floor[0].maps[0].resolved, tile)
+    result = author_usd_stage(stage, [StackResult(stack=floor[0], maps=[MapResult(map=m, output_path=tile)
+                                                                         for m in floor[0].maps],
+                                                  uv_scale=(2.0, 2.0), provenance=prov)])
+    assert result.edited_prims and not result.findings
+    files = {}
+    for selection in ("wood", "cloth"):
+        vset.SetVariantSelection(selection)
+        files[selection] = stage.GetAttributeAtPath("/Prop/Materials/M_floor/diffuseColorTex.inputs:file").Get().path
+    assert files == {"wood": "../textures/wood_color.tile.png", "cloth": "../textures/cloth.png"}
+    root = stage.GetRootLayer()
+    assert root.GetPrimAtPath("/Prop{finish=wood}Materials/M_floor/diffuseColorTex") is not None

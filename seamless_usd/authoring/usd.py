@@ -164,7 +164,11 @@ def author_usd_stage(
         anchor_dir = Path(layer.realPath or layer.identifier).parent
     result = AuthoringResult()
     author = _Author(stage, result, anchor_dir=Path(anchor_dir) if anchor_dir else None)
-    author.plan_all(results, lambda prim, prop=None: target)
+    # a plain layer of the stage: a map whose file value is authored inside a variant is edited inside that
+    # variant there, so the other variants keep their own textures (an edit target already mapped into a
+    # variant or a reference is used as it is)
+    plain = target.GetMapFunction().isIdentity
+    author.plan_all(results, lambda prim, prop=None: target, variant_layer=layer if plain else None)
     author.apply()
     return result
 
