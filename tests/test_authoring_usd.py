@@ -386,6 +386,28 @@ def test_open_in_memory_stage(tmp_path: Path, scene: Path):
     assert any(f.code == "absolute-asset-path" for f in res2.findings)
 
 
+def test_an_edit_a_stronger_layer_hides_is_named_not_passed_off(tmp_path: Path, scene: Path):
+    """Edits into a sublayer of a root layer that sets the same values lose to it: each such texture node is
+    recorded as not written, with a finding naming the layer that holds the stronger value."""
+    root = scene.parent
+    stage = Usd.Stage.CreateInMemory()
+    stage.GetRootLayer().ImportFromString(LOOKS_LAYER.replace('over "World"', 'def Xform "World"')
+                                          .replace('over "Looks"', 'def Scope "Looks"'))
+    weaker = Sdf.Layer.CreateAnonymous(".usda")
+    stage.GetRootLayer().subLayerPaths.insert(0, weaker.identifier)
+    result = author_usd_stage(stage, [brick_result(root)], edit_target_layer=weaker, anchor_dir=root)
+    hidden = [f for f in result.findings if f.code == "edit-not-composed"]
+    assert hidden and all(f.severity is Severity.ERROR and "holds a stronger value" in f.message for f in hidden)
+    assert f"<{BRICK}/Albedo>" in result.unwritten_nodes()
+    # over the scene instead (a new root layer that sublayers it): the edits compose
+    over = Sdf.Layer.CreateAnonymous(".usda")
+    over.subLayerPaths.append(stage.GetRootLayer().identifier)
+    top = Usd.Stage.Open(over)
+    result = author_usd_stage(top, [brick_result(root)], anchor_dir=root)
+    assert not result.unwritten_nodes() and not [f for f in result.findings if f.severity is Severity.ERROR]
+    assert top.GetPrimAtPath(BRICK).GetAttribute("inputs:albedoFile").Get().path == "./tileable/brick_albedo_tile.png"
+
+
 def test_shared_texture_node_is_edited_once(scene: Path):
     root = scene.parent
     brick = brick_result(root)

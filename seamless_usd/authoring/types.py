@@ -36,6 +36,7 @@ class Codes:
     MTLX_INCLUDES_MOVED = "mtlx-includes-moved"
     SCHEMA_NOT_REGISTERED = "schema-not-registered"
     VARIANT_NOT_EDITABLE = "variant-not-editable"
+    EDIT_NOT_COMPOSED = "edit-not-composed"  # an edit a stronger opinion hides
 
 
 class WriteMode(str, Enum):

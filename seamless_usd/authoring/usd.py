@@ -25,10 +25,10 @@ from seamless_usd.authoring.files import check_layer, layer_lock, relative_asset
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode
 from seamless_usd.authoring.usdinplace import _author_in_place, _open_layer
 from seamless_usd.authoring.usdnodes import Names, uv_affine
-from seamless_usd.authoring.usdplan import _Author
+from seamless_usd.authoring.usdplan import _Author, _layer_name
 from seamless_usd.textures import Origin
 from seamless_usd.errors import InputError, UsageError
-from seamless_usd.findings import Finding, Severity, asset_ref
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = [
     "Names",
@@ -170,6 +170,34 @@ def author_usd_stage(
     plain = target.GetMapFunction().isIdentity
     author.plan_all(results, lambda prim, prop=None: target, variant_layer=layer if plain else None)
     author.apply()
+    if not result.dry_run:
+        _check_composed(stage, author.edits, results, result)
     return result
+
+
+def _check_composed(stage: Usd.Stage, edits, results: Sequence[StackResult], result: AuthoringResult) -> None:
+    """Every file value authored is the one the stage composes; a texture node whose new file loses to a stronger
+    opinion (an edit target weaker than the layer that holds the value, such as a sublayer of a root layer that
+    sets it) is recorded as not written, with a finding naming that layer."""
+    from seamless_usd.authoring.usdedits import _EditKind
+
+    nodes = {Sdf.Path(m.map.file_at.prim).AppendProperty(m.map.file_at.attribute): m.map.node
+             for r in results for m in r.maps}  # where each map's file value is authored -> its texture node
+    for edit in edits:
+        if edit.kind != _EditKind.VALUE or not isinstance(edit.value, Sdf.AssetPath):
+            continue
+        attr = stage.GetAttributeAtPath(edit.path)
+        got = attr.Get() if attr else None
+        if got is not None and got.path == edit.value.path:
+            continue
+        node = prim_ref(nodes.get(edit.path, str(edit.path.GetPrimPath())).strip("<>"))
+        specs = attr.GetPropertyStack() if attr else []
+        holder = (specs[0].layer.realPath or specs[0].layer.identifier) if specs else "another layer"
+        why = (f"its new file is authored in {asset_ref(_layer_name(edit.target.GetLayer()))} but "
+               f"{asset_ref(holder)} holds a stronger value, which the stage keeps; author into that layer or a "
+               "stronger one (for edits in a layer of their own, open a new root layer that sublayers the scene)")
+        if node not in result.unwritten_nodes():
+            result.not_written.append((node, why))
+            result.findings.append(Finding(Severity.ERROR, Codes.EDIT_NOT_COMPOSED, node, why))
 
 
