@@ -7,17 +7,20 @@ from collections.abc import Sequence
 
 from seamless_usd.discover.intent import Intent
 from seamless_usd.textures import ScanResult, TextureStack
-from seamless_usd.findings import Severity
+from seamless_usd.findings import Finding, Severity
 
-__all__ = ["BLOCKING_SKIPS", "select_stacks", "blocked_stacks", "left_alone_stacks"]
+__all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "blocked_stacks", "left_alone_stacks",
+           "unread_materials"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
 # the other maps tileable (and rescaling their UVs) would misalign them with the skipped one.
 BLOCKING_SKIPS = frozenset({"missing-file", "unreadable-file", "udim", "too-small"})
+#: Of those, the skips that are a broken asset rather than a texture this tool does not handle.
+UNREAD_SKIPS = frozenset({"missing-file", "unreadable-file"})
 
 
-def _matches(stack: TextureStack, patterns: Sequence[str]) -> bool:
-    path = stack.material.strip("<>")
+def _matches(stack: TextureStack | str, patterns: Sequence[str]) -> bool:
+    path = (stack if isinstance(stack, str) else stack.material).strip("<>")
     name = path.rsplit("/", 1)[-1]
     return any(fnmatch.fnmatchcase(path, p) or fnmatch.fnmatchcase(name, p) for p in patterns)
 
@@ -55,4 +58,17 @@ def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str
                 f"left alone: {', '.join(reasons)} of this material cannot be processed, and tiling the other "
                 "maps would misalign them; fix or remove that texture and run again"
             )
+    return out
+
+
+def unread_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[str, list[Finding]]:
+    """Materials (matching ``patterns``, all when empty) none of whose textures could be read (missing or
+    unreadable files), so the scan has no stack for them: material -> the findings that skipped its textures. A
+    material with a readable map too has a stack, which :func:`blocked_stacks` names."""
+    have = {s.material for s in scan.stacks}
+    out: dict[str, list[Finding]] = {}
+    for f in scan.findings:
+        if (f.severity is Severity.SKIPPED and f.code in UNREAD_SKIPS and f.material and f.material not in have
+                and (not patterns or _matches(f.material, patterns))):
+            out.setdefault(f.material, []).append(f)
     return out

@@ -201,6 +201,24 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     return item
 
 
+def _unread(result) -> dict[str, list]:
+    """Material -> the scan's findings that skipped a texture of it as missing or unreadable."""
+    from seamless_usd.discover.select import UNREAD_SKIPS
+    from seamless_usd.findings import Severity
+
+    out: dict[str, list] = {}
+    for f in result.findings:
+        if f.severity is Severity.SKIPPED and f.code in UNREAD_SKIPS and f.material:
+            out.setdefault(f.material, []).append(f)
+    return out
+
+
+def _unread_item(scene: Path, material: str, skipped: list, maps: list[str]) -> CheckItem:
+    files = ", ".join(f"{f.where.split(' ')[-1]} ({f.code})" for f in skipped)
+    return CheckItem(material, str(scene), maps + [f.where.split(" ")[-1].strip("@") for f in skipped],
+                     error=f"not judged: a texture of it cannot be read: {files}; fix or restore it and check again")
+
+
 def _judged_pictures(pictures: list[Path], jobs: int) -> Iterator[CheckItem]:
     """Each picture's item, in order; ``jobs`` > 1 judges them in that many worker processes (a picture is
     judged in numpy alone, one core each)."""
@@ -245,9 +263,16 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
             report.unreadable.append(str(exc))
             continue
         judged = [s for s in result.stacks if not s.duplicate_of and s.intent in _JUDGED_INTENTS]
+        unread = _unread(result)
         stage = open_stage(scene) if judged and scene.suffix.lower() != ".mtlx" else None  # once per stage
         for stack in judged:
-            report.items.append(_judge_stack(scene, stage, stack))
+            if stack.material in unread:  # judged on the maps that are left, it would pass a broken material
+                report.items.append(_unread_item(scene, stack.material, unread.pop(stack.material),
+                                                 [m.asset for m in stack.maps]))
+            else:
+                report.items.append(_judge_stack(scene, stage, stack))
+        for material, skipped in unread.items():  # no map of it could be read: it has no stack
+            report.items.append(_unread_item(scene, material, skipped, []))
     found = []
     for picture in pictures:
         if picture.is_file():

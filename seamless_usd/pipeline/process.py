@@ -16,7 +16,7 @@ from pathlib import Path
 
 from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
-from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_stacks
+from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_stacks, unread_materials
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
@@ -185,6 +185,19 @@ def _reports_for(run: Run, stacks: list[TextureStack], source_label: str, out_di
         first_of.setdefault(stack.content_key, stack.id)
         run.report.stacks.append(report)
     return results, handed
+
+
+def _unread(run: Run, scan: ScanResult, source_label: str) -> None:
+    """A failed row for each selected material none of whose textures could be read: it has no stack, and is
+    not left out of the table, the counts or the exit code."""
+    for material, skipped in unread_materials(scan, run.options.materials).items():
+        slug = material.strip("<>").strip("/").replace("/", "_") or "material"
+        files = ", ".join(f"{f.where.split(' ')[-1]} ({f.code})" for f in skipped)
+        message = f"nothing processed: no texture of it can be read: {files}; fix or restore them and run again"
+        run.report.stacks.append(StackReport(id=f"{slug}-unread", material=material, source=source_label,
+                                             status=StackStatus.FAILED, message=message))
+        run.report.findings.append(Finding(Severity.ERROR, "stack-unread", prim_ref(material.strip("<>")), message,
+                                           material))
 
 
 def _check_written(run: Run, handed, edit, failure: str | None = None) -> None:
@@ -369,6 +382,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
         try:
             src = _scan_source(path, run.options.materials, _triage_dir(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
+            _unread(run, src.scan, str(src.path))
             run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
             sources.append(src)
         except InputError as exc:
@@ -404,6 +418,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.report.findings += [variant_not_composed(s) for s in stacks if s.selection]
     stacks = [s for s in stacks if not s.selection]
     run.blocked.update(blocked_stacks(scan, stacks, label))
+    _unread(run, scan, label)
     run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))
     out_dir = _output_dir(run.options, source)
     if run.options.mode != authoring.WriteMode.DRY_RUN:
