@@ -14,6 +14,7 @@ Example
 """
 from __future__ import annotations
 
+import contextlib
 import glob
 import hashlib
 import os
@@ -26,7 +27,7 @@ from pathlib import Path
 from seamless_usd.errors import InputError
 from seamless_usd.findings import asset_ref
 
-__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine", "file_sha256"]
+__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine", "file_sha256", "folder_problem"]
 
 _UMASK = os.umask(0o022)  # read once at import (os.umask can only be read by setting it)
 os.umask(_UMASK)
@@ -251,3 +252,34 @@ def _keep_mode(tmp: Path, target: Path) -> None:
     except FileNotFoundError:
         mode = 0o666 & ~_UMASK
     os.chmod(tmp, mode)
+
+
+def folder_problem(path: str | os.PathLike) -> str | None:
+    """Why files cannot be written in the folder ``path`` (made if it does not exist), or None when they can: a
+    part of it that is a file, the deepest existing folder not writable, or the folder failing to be made (it is
+    made and removed again: nothing is left behind).
+
+    >>> folder_problem(tempfile.gettempdir()) is None
+    True
+    """
+    p = Path(os.path.abspath(path))
+    probe = p
+    while not probe.exists():
+        if probe.parent == probe:
+            return f"{asset_ref(p)} cannot be made: no part of it exists"
+        probe = probe.parent
+    if not probe.is_dir():
+        return f"{asset_ref(probe)} is a file, so the folder {asset_ref(p)} cannot be made there"
+    if not os.access(probe, os.W_OK | os.X_OK):
+        return (f"cannot write in {asset_ref(probe)}; check its permissions" if probe == p else
+                f"cannot make the folder {asset_ref(p)}: {asset_ref(probe)} is not writable; check its permissions")
+    made = [q for q in [p, *p.parents] if q.is_relative_to(probe) and q != probe]
+    try:  # permissions are not the whole story (a read-only mount, a special file system): try, then undo
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        return f"cannot make the folder {asset_ref(p)}: {exc.strerror or exc}"
+    finally:
+        for q in made:  # deepest first
+            with contextlib.suppress(OSError):
+                q.rmdir()
+    return None

@@ -21,3 +21,18 @@ def test_options_refuse_unknown_refine_and_tile_size_modes():
         Options(refine="yes")
     with pytest.raises(ValueError, match="Options.tile_size must be one of source, paper"):
         Options().with_(tile_size="2x")
+
+
+def test_an_output_folder_that_cannot_be_made_is_refused_before_any_work(tmp_path, capsys):
+    import shutil
+    from pathlib import Path
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    (tmp_path / "afile").write_text("not a folder")
+    scene = tmp_path / "brick" / "scene.usda"
+    assert main(["process", str(scene), "--preset", "tiny", "--output-dir", str(tmp_path / "afile" / "sub")]) == 2
+    err = capsys.readouterr().err
+    assert "--output-dir" in err and "afile@ is a file" in err and "internal error" not in err
+    assert sorted(p.name for p in (tmp_path / "brick").iterdir()) == ["scene.usda"]  # nothing done

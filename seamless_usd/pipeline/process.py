@@ -20,6 +20,7 @@ from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
+from seamless_usd.fileio import folder_problem
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 from seamless_usd.pipeline.cache import JobIndex, StackCache, job_fingerprint
 from seamless_usd.pipeline.executors import Executor, InProcessExecutor, make_executor
@@ -354,6 +355,10 @@ def _new_run(options: Options) -> Run:
         check_device(options.device)
     if options.report is not None:
         _report_paths(options.report)  # refused before any work when it would replace a file of the user's
+    if options.output_dir is not None and options.mode is not authoring.WriteMode.DRY_RUN:
+        problem = folder_problem(options.output_dir)
+        if problem:
+            raise UsageError(f"--output-dir: {problem}")
     if options.mode is None:
         options = options.with_(mode=authoring.WriteMode.NEW_LAYER)
     return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
