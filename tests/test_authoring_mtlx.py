@@ -241,3 +241,31 @@ def test_address_modes_through_interface_inputs_and_missing_tile(document: Path)
     new = read(result.output)
     assert new.getDescendant("NG_brick/wrap").getValueString() == "periodic"
     assert new.getDescendant("NG_brick/image_color").getInput("uaddressmode").getInterfaceName() == "wrap"
+
+
+def _file_values(path: Path) -> dict[str, str]:
+    doc = read(path)
+    return {e.getParent().getNamePath(): e.getValueString() for e in doc.traverseTree()
+            if isinstance(e, mx.Input) and e.getType() == "filename"}
+
+
+def test_a_second_run_for_other_materials_keeps_the_first_runs_edits(document: Path):
+    """Two stages that use the same document, each processing one of its maps: the new document holds both edits
+    (it was written whole from the source by each, and the last one undid the first's); once the source changes,
+    it is made again from it, and the edits lost are named."""
+    albedo, rough = results(document)
+    first = author_mtlx(document, [albedo])
+    assert "tileable/albedo_tile.png" in _file_values(first.output).values()
+    second = author_mtlx(document, [rough])
+    values = _file_values(second.output)
+    assert "tileable/albedo_tile.png" in values.values() and "tileable/rough_tile.png" in values.values()
+    assert not [f for f in second.findings if f.code == "mtlx-edits-replaced"]
+    again = author_mtlx(document, [albedo, rough])  # nothing new: nothing written
+    assert not again.layers_written
+    document.write_text(document.read_text(encoding="utf-8").replace("<materialx", "<!-- edited -->\n<materialx", 1),
+                        encoding="utf-8")
+    third = author_mtlx(document, [rough])
+    values = _file_values(third.output)
+    assert "tileable/albedo_tile.png" not in values.values() and "tileable/rough_tile.png" in values.values()
+    [lost] = [f for f in third.findings if f.code == "mtlx-edits-replaced"]
+    assert "NG_brick/image_color" in lost.message and "tiled_rough" not in lost.message

@@ -22,6 +22,7 @@ from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset
 from seamless_usd.authoring.types import TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn, WriteMode
 from seamless_usd.textures import Origin
 from seamless_usd.errors import InputError
+from seamless_usd.fileio import file_sha256
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["MtlxNames", "author_mtlx", "default_output_document", "read_mtlx_provenance"]
@@ -54,15 +55,20 @@ def author_mtlx(
     out = src if in_place else (
         Path(output_path).resolve() if output_path else default_output_document(src))
     result = AuthoringResult(dry_run=mode is WriteMode.DRY_RUN, output=None if in_place else out)
+    source_hash = file_sha256(src) if src.is_file() else ""
+    base, earlier = (src, []) if in_place else _earlier_output(src, out, source_hash)
     doc = mx.createDocument()
     try:
-        mx.readFromXmlFile(doc, str(src))
+        mx.readFromXmlFile(doc, str(base))
     except Exception as exc:  # MaterialX raises its own ExceptionFileMissing / ExceptionParseError
         raise InputError(f"{asset_ref(src)}: cannot be read as a MaterialX document ({exc})") from None
     author = _MtlxAuthor(doc, src, out, result)
-    if out.parent != src.parent:
+    if base == src and out.parent != src.parent:
         author.rebase_files()
+    if not in_place:  # what the new document was made from: a later run adds its edits to this one
+        author.set_source_hash(source_hash)
     checked = 0
+    edited: set[str] = set()
     for stack_result in results:
         for map_result in stack_result.maps:
             tex_map = map_result.map
@@ -71,6 +77,14 @@ def author_mtlx(
             author.edit_map(map_result, stack_result.uv_scale, stack_result.provenance, stack_result.wrap_only,
                             stack_result.uv_turn)
             checked += 1
+            edited.add(tex_map.node.strip("<>").lstrip("/"))
+    lost = [n for n in earlier if n not in edited]
+    if lost:
+        result.findings.append(Finding(
+            Severity.WARNING, Codes.MTLX_EDITS_REPLACED, asset_ref(out),
+            f"was made from another version of {asset_ref(src)}, so it is made again from the document as it is now "
+            f"and the earlier edits of {', '.join(prim_ref(n) for n in lost)} are not kept: process the stages that "
+            "use them again"))
     if not author.changed:
         if checked and not result.findings:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(src),
@@ -87,6 +101,23 @@ def author_mtlx(
         write_atomically(out, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     result.layers_written.append(out)
     return result
+
+
+def _earlier_output(src: Path, out: Path, source_hash: str) -> tuple[Path, list[str]]:
+    """The document the new one starts from, and the image nodes an earlier new document had edited that are
+    otherwise lost: the new document written before (``out``) when it was made from the source as it is now, so
+    that the edits of materials this run does not process (another stage's that uses the same document, an earlier
+    run's) are kept; else the source."""
+    if not out.is_file() or out == src:
+        return src, []
+    earlier = mx.createDocument()
+    try:
+        mx.readFromXmlFile(earlier, str(out))
+    except Exception:  # not a document any more: it is replaced
+        return src, []
+    if source_hash and earlier.getAttribute(MtlxNames.MADE_FROM) == source_hash:
+        return out, []
+    return src, [e.getNamePath() for e in earlier.traverseTree() if e.hasAttribute(MtlxNames.SOURCE_ASSET)]
 
 
 def read_mtlx_provenance(node: mx.Node) -> Provenance | None:
@@ -147,6 +178,11 @@ class _MtlxAuthor(_PlaceUV):
         if elem.getAttribute(name) != value:
             elem.setAttribute(name, value)
             self._plan(f"set {prim_ref(elem.getNamePath())}.{label} = {value}")
+
+    def set_source_hash(self, source_hash: str) -> None:
+        """Record on the new document what it was made from (:data:`MtlxNames.MADE_FROM`)."""
+        if source_hash and self.doc.getAttribute(MtlxNames.MADE_FROM) != source_hash:
+            self.doc.setAttribute(MtlxNames.MADE_FROM, source_hash)  # not a change of its own: no plan line
 
     def rebase_files(self) -> None:
         """Keep this document's relative file paths valid from a new folder."""

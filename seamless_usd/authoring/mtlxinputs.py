@@ -48,6 +48,7 @@ class MtlxNames:
     EVENED = "seamless_evened"
     UV_TURN = "seamless_uvturn"
     RECTIFIED = "seamless_rectified"
+    MADE_FROM = "seamless_madefrom"  # on a new document: the SHA-256 of the document it was made from
 
 
 class UnauthoredInput:

@@ -37,6 +37,7 @@ class Codes:
     SCHEMA_NOT_REGISTERED = "schema-not-registered"
     VARIANT_NOT_EDITABLE = "variant-not-editable"
     EDIT_NOT_COMPOSED = "edit-not-composed"  # an edit a stronger opinion hides
+    MTLX_EDITS_REPLACED = "mtlx-edits-replaced"  # a new document made again from a changed source
 
 
 class WriteMode(str, Enum):
