@@ -150,8 +150,7 @@ class _ProgressView:
             p.update(self.step, total=d.total, completed=d.iteration, rate=f"{d.it_per_s:.1f} it/s")
         elif event.kind == "sample" and self.step is not None and event.detail is not None:
             d = event.detail
-            c_h, c_w = d.candidate.crop_size
-            p.update(self.step, total=d.planned, completed=d.index, rate=f"Q search, crop {c_h}x{c_w}")
+            p.update(self.step, total=d.planned, completed=d.index, rate=f"Q search, crop {_wh(d.candidate.crop_size)}")
         elif event.kind == "refine" and self.step is not None and event.detail is not None:
             d = event.detail
             p.update(self.step, total=None, rate=f"refining at {d['tile'][1]}x{d['tile'][0]} ({d['seconds']:.1f}s)")
@@ -160,6 +159,11 @@ class _ProgressView:
             if self.step is not None:  # the stack's own bar goes with it (a stack cut from its source has no steps)
                 p.remove_task(self.step)
                 self.step = None
+
+
+def _wh(size) -> str:
+    """An (h, w) size as people read sizes: width x height."""
+    return f"{size[1]}x{size[0]}"
 
 
 def _summary(report: Report, console: Console) -> None:
@@ -187,10 +191,10 @@ def _stack_table(report: Report, console: Console) -> None:
             escape(s.material + (f" in {s.variant}" if s.variant else "")),
             f"[{style}]{s.status.value}[/]" if style else s.status.value,
             str(len(s.maps)),
-            "x".join(map(str, s.crop_size)) if s.crop_size and s.model_hash else "-",  # no GAN, no crop
-            "x".join(map(str, s.tile_size)) if s.tile_size else "-",
+            _wh(s.crop_size) if s.crop_size and s.model_hash else "-",  # no GAN, no crop
+            _wh(s.tile_size) if s.tile_size else "-",
             ", ".join(f"{v:.3g}" for v in s.uv_scale) if s.uv_scale else "-",
-            f"{sum(s.timings.values()):.0f}s" if s.timings else "-",
+            "cached" if s.origin == "cache" else f"{sum(s.timings.values()):.0f}s" if s.timings else "-",
             s.message if s.status in (StackStatus.NOT_PASSED, StackStatus.FAILED) else "",
         )
     console.print(table)

@@ -165,9 +165,9 @@ def stack_facts(stack: StackReport) -> tuple[str, str]:
     main = {
         "source": stack.source,
         "variant selection": stack.variant or None,
-        "tile size (h x w)": fmt(stack.tile_size) if stack.tile_size else None,
+        "tile size (w x h)": fmt(tuple(stack.tile_size[::-1])) if stack.tile_size else None,
         "UV scale": f"{fmt(tuple(uv))}{cover}" if uv else None,
-        "crop size (h x w)": fmt(stack.crop_size) if stack.crop_size and stack.model_hash else None,  # GAN crop
+        "crop size (w x h)": fmt(tuple(stack.crop_size[::-1])) if stack.crop_size and stack.model_hash else None,  # GAN crop
         "Q (the discriminator's view)": _q_text(stack.q),
         "straightened": _straightened_text(stack.resampled.get("straightened")),
         "levelled": _remade_text(stack.resampled.get("levelled"), "light", "levelled",
