@@ -6,8 +6,9 @@ tile this tool wrote, faithful to its recorded source) or not, and where each se
 with no separate source is judged against itself: its own lines are the reference, and a seam is a
 line unlike them. ``--json`` prints the result following ``schemas/check.schema.json``; ``--report``
 writes a contact sheet (each picture repeated 2 x 2 with its seams drawn in red). A progress bar runs on a
-terminal. Exit codes: 0 everything tiles; 1 something does not (or a texture could not be read); 2
-unreadable input.
+terminal. Exit codes: 0 everything tiles; 1 something does not (a picture or texture that cannot be read
+included); 2 a path that does not exist, a folder with nothing to judge, or a stage or document that cannot be
+opened.
 """
 from __future__ import annotations
 
@@ -51,6 +52,10 @@ def render(report: CheckReport, console: Console) -> None:
     console.print(table)
     for why in report.unreadable:
         console.print(f"[red]unreadable[/] {escape(why)}", soft_wrap=True)
+    if report.not_judged:
+        shown = ", ".join(f"@{p}@" for p in report.not_judged[:3]) + (", ..." if len(report.not_judged) > 3 else "")
+        console.print(f"not judged: {len(report.not_judged)} pictures in folders of stages or documents that none of "
+                      f"them uses ({escape(shown)}); name them, or a folder of pictures, to judge them", soft_wrap=True)
     console.print(f"{sum(i.passed for i in report.items)} of {len(report.items)} passed")
 
 

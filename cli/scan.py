@@ -10,25 +10,41 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import PurePath
+from pathlib import Path, PurePath
 
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
 from seamless_usd.discover import ScanResult, TextureMap, TextureStack, UVChain, scan_paths
+from seamless_usd.errors import InputError
+from seamless_usd.findings import asset_ref
+from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.textures import describe_selection
 
 __all__ = ["add_arguments", "run", "render"]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("paths", nargs="+", metavar="PATH", help="USD stage (.usd/.usda/.usdc/.usdz) or .mtlx document")
+    parser.add_argument("paths", nargs="+", metavar="PATH",
+                        help="USD stage (.usd/.usda/.usdc/.usdz), .mtlx document, folder (walked for them) or glob")
     parser.add_argument("--json", action="store_true", help="print the scan as JSON (schemas/scan.schema.json)")
 
 
+def _inputs(paths: list[str]) -> list[Path]:
+    """Stages and documents named, found in folders or matched by globs (as ``process`` takes them); an
+    :class:`InputError` for a folder that holds none."""
+    out: list[Path] = []
+    for item in paths:
+        found = expand_inputs([item])
+        if not found and Path(item).is_dir():
+            raise InputError(f"{asset_ref(item)}: no USD stage or MaterialX document found in this folder")
+        out += found
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
-    result = scan_paths(args.paths)
+    result = scan_paths(_inputs(args.paths))
     if args.json:
         print(json.dumps(result.to_dict(), indent=2))
     else:

@@ -139,3 +139,27 @@ def test_a_name_that_is_not_utf8_and_a_small_picture_are_named_and_the_rest_judg
     assert "not valid UTF-8" in odd["error"] and "rename" in odd["error"]
     assert "40 x 40 px is too small to be judged on its own" in items["icon.png"]["error"]
     assert "not valid UTF-8" in sheet.read_text(encoding="utf-8")
+
+
+def test_folders_with_nothing_to_judge_and_pictures_no_stage_uses_are_named(tmp_path, capsys):
+    """An empty folder or a path that does not exist is unreadable input (exit 2), not '0 of 0 passed'; in a folder
+    of stages the pictures none of them uses are listed as not judged, and ``scan`` walks folders as ``process``."""
+    import shutil
+
+    (tmp_path / "empty").mkdir()
+    assert main(["check", str(tmp_path / "empty"), str(tmp_path / "nowhere")]) == 2
+    out = capsys.readouterr().out
+    assert "no USD stage, MaterialX document or picture found in this folder" in out and "no such file or folder" in out
+    lib = tmp_path / "lib"
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES.parent / name, lib / name)
+    _write(lib / "loose.png", _wood())
+    assert main(["check", str(lib), "--json"]) == 1
+    payload = json.loads(capsys.readouterr().out)
+    jsonschema.validate(payload, json_schema("check"))
+    assert [i["name"] for i in payload["items"]] == ["</World/Looks/Brick>"]
+    not_judged = {Path(p).name for p in payload["not_judged"]}
+    assert "loose.png" in not_judged and "brick_albedo.png" not in not_judged  # used by the stage: judged there
+    assert main(["scan", str(lib)]) == 0 and "</World/Looks/Brick>" in capsys.readouterr().out
+    assert main(["scan", str(tmp_path / "empty")]) == 2
+    assert "no USD stage or MaterialX document found" in capsys.readouterr().err

@@ -26,6 +26,8 @@ __all__ = ["scan_paths", "scan_stage", "scan_mtlx", "open_stage"]
 def open_stage(path: str | Path) -> Usd.Stage:
     """Open a USD stage with all payloads loaded; InputError naming the file when it cannot be."""
     path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{asset_ref(path)} is a folder, not a USD stage")
     if not path.is_file():
         raise InputError(f"{asset_ref(path)}: no such file")
     try:

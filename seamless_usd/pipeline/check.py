@@ -76,6 +76,7 @@ class CheckItem:
 class CheckReport:
     items: list[CheckItem] = field(default_factory=list)
     unreadable: list[str] = field(default_factory=list)  # inputs that could not be opened, with why
+    not_judged: list[str] = field(default_factory=list)  # pictures in folders of scenes that no scene uses
 
     @property
     def exit_code(self) -> int:
@@ -86,27 +87,41 @@ class CheckReport:
 
     def to_dict(self) -> dict:
         return {"items": [i.to_dict() for i in self.items], "unreadable": list(self.unreadable),
+                "not_judged": list(self.not_judged),
                 "passed": sum(i.passed for i in self.items), "not_passed": sum(not i.passed for i in self.items),
                 "exit_code": self.exit_code}
 
 
-def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path]]:
-    """(scenes, pictures): pictures named or found in folders that hold no scene."""
-    scenes, pictures = [], []
+def _folder_pictures(folder: Path) -> list[Path]:
+    return sorted(q for q in folder.rglob("*") if q.is_file() and q.suffix.lower() in IMAGE_SUFFIXES
+                  and not is_own_output(q.relative_to(folder)))
+
+
+def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path], list[Path], list[str]]:
+    """(scenes, pictures, loose, problems): the scenes and the pictures named or found in folders that hold no
+    scene; ``loose``: the pictures of folders that hold scenes (a texture there is judged with its stack, the
+    others are listed as not judged: a library's textures are judged by how its materials use them); and why an
+    input gives nothing to judge (no such path, a folder with nothing in it to judge)."""
+    scenes, pictures, loose, problems = [], [], [], []
     for item in paths:
         p = Path(item)
         if p.is_dir():
             found = expand_inputs([p])
+            in_folder = _folder_pictures(p)
             if found:
                 scenes += found
+                loose += in_folder
+            elif in_folder:
+                pictures += in_folder
             else:
-                pictures += sorted(q for q in p.rglob("*") if q.is_file() and q.suffix.lower() in IMAGE_SUFFIXES
-                                   and not is_own_output(q.relative_to(p)))
+                problems.append(f"{asset_ref(p)}: no USD stage, MaterialX document or picture found in this folder")
         elif p.suffix.lower() in IMAGE_SUFFIXES:
             pictures.append(p)
+        elif not p.exists() and not set(str(p)) & set("*?["):
+            problems.append(f"{asset_ref(p)}: no such file or folder")
         else:
             scenes += expand_inputs([p])
-    return scenes, pictures
+    return scenes, pictures, loose, problems
 
 
 def _alone(item: CheckItem, files: list) -> None:
@@ -240,7 +255,8 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
     ``progress(name, done, total)`` is called before each stage or document is judged and as each picture's
     verdict comes in. ``jobs``: worker processes judging the pictures (1: in this process)."""
     report = CheckReport()
-    scenes, pictures = _expand(paths)
+    scenes, pictures, loose, report.unreadable = _expand(paths)
+    used: set[Path] = set()  # the files the scenes use: judged with their stacks, not listed as not judged
     if scenes:  # USD and MaterialX are imported only for scenes: a picture is judged without them
         from seamless_usd.discover import scan_paths
         from seamless_usd.discover.scan import open_stage
@@ -262,6 +278,7 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
         except InputError as exc:
             report.unreadable.append(str(exc))
             continue
+        used.update(Path(m.resolved).resolve() for st in result.stacks for m in st.maps if m.resolved)
         judged = [s for s in result.stacks if not s.duplicate_of and s.intent in _JUDGED_INTENTS]
         unread = _unread(result)
         stage = open_stage(scene) if judged and scene.suffix.lower() != ".mtlx" else None  # once per stage
@@ -273,6 +290,8 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
                 report.items.append(_judge_stack(scene, stage, stack))
         for material, skipped in unread.items():  # no map of it could be read: it has no stack
             report.items.append(_unread_item(scene, material, skipped, []))
+    known = {p.resolve() for p in pictures}
+    report.not_judged = [str(p) for p in loose if p.resolve() not in used and p.resolve() not in known]
     found = []
     for picture in pictures:
         if picture.is_file():
