@@ -202,6 +202,7 @@ class TextureMap:
     normal_y_flip: bool = False  # the file's green channel stores -Y (DirectX convention):
     # UsdUVTexture scale.y < 0, or a MaterialX normalmap with a negative y scale
     selection: Selection = ()  # variant selection it was found under (() : the stage's own)
+    recorded_passed: bool | None = None  # a tile this tool wrote: whether it passed when written (else None)
 
     @property
     def is_normal(self) -> bool:

@@ -83,3 +83,30 @@ def test_check_and_scan_agree_on_every_corpus_picture(tmp_path):
     assert not disagree, disagree
     # the answers are not all one way: the corpus has pictures each side, and the verdict finds both
     assert {p.passed for p in pictures.values()} == {True, False}
+
+
+def test_a_processed_stage_gets_one_answer_from_process_scan_and_check(tmp_path, capsys):
+    """The stage a run wrote: the scan's triage reads the verdict recorded with each tile (against its source, as
+    ``check`` judges it again), not the texture judged on its own; the names it reads are the authoring's."""
+    import json
+    import shutil
+
+    from seamless_usd.authoring.mtlxinputs import MtlxNames
+    from seamless_usd.authoring.schema import Schema
+    from seamless_usd.discover.tokens import Recorded
+    from seamless_usd_cli.main import main
+
+    assert (Recorded.USD_SOURCE, Recorded.USD_PASSED) == (Schema.SOURCE_ASSET, Schema.PASSED)
+    assert (Recorded.MTLX_SOURCE, Recorded.MTLX_PASSED) == (MtlxNames.SOURCE_ASSET, MtlxNames.PASSED)
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    code = main(["process", str(tmp_path / "brick" / "scene.usda"), "--preset", "tiny", "--cache-dir",
+                 str(tmp_path / "cache"), "--json"])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    written = tmp_path / "brick" / "scene.seamless.usda"
+    [scanned] = scan_paths([written]).stacks
+    [checked] = check_paths([written]).items
+    assert checked.verdict["reference"] == "source"
+    assert (stack["status"] == "passed") == (scanned.intent == "already-tileable") == checked.passed == (code == 0)
+    assert "seamless:passed" in scanned.intent_reason

@@ -41,6 +41,7 @@ class TextureUse:
     document: str | None = None
     normal_y_flip: bool = False
     selection: tuple = ()  # variant selection it was found under (VariantChoice; () : the stage's own)
+    recorded_passed: bool | None = None  # a tile this tool wrote: whether it passed when written (else None)
 
     def key(self) -> tuple:
         """What makes two uses found under two variant selections the same use."""
@@ -143,6 +144,7 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         in_package=is_package_path(first.resolved),
         normal_y_flip=first.normal_y_flip,
         selection=first.selection,
+        recorded_passed=first.recorded_passed,
     )
     if (
         tmap.is_normal

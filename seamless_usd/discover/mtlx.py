@@ -19,6 +19,7 @@ from seamless_usd.discover.tokens import (
     Codes,
     MtlxCategories,
     MtlxInputs,
+    Recorded,
     Terminals,
     Wrap,
 )
@@ -177,4 +178,6 @@ def _texture_use(material: str, tex: mx.Node, role: RoleUse, flip: bool, documen
         uv=mtlx_uv_chain(tex, document),
         document=document,
         normal_y_flip=flip and role.role in NORMAL_ROLES,
+        recorded_passed=(tex.getAttribute(Recorded.MTLX_PASSED) == "true"
+                         if tex.hasAttribute(Recorded.MTLX_SOURCE) and tex.hasAttribute(Recorded.MTLX_PASSED) else None),
     )

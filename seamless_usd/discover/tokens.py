@@ -176,4 +176,14 @@ class Codes:
 MIN_CROP = 100  # px: the smallest crop SeamlessGAN samples (DESIGN: c_min); a smaller stack gets a cut tile only
 MIN_IMAGE_SIZE = 16  # px: below this no tile can be cut from a map either: skipped as too-small
 UDIM_TOKEN = "<UDIM>"
+
+
+class Recorded:
+    """The provenance a tile this tool wrote carries, as the scan reads it (the names the authoring writes:
+    ``seamless_usd.authoring.schema.Schema`` for USD, ``MtlxNames`` for MaterialX; a test keeps them equal)."""
+
+    USD_SOURCE = "seamless:sourceAsset"
+    USD_PASSED = "seamless:passed"
+    MTLX_SOURCE = "seamless_sourceasset"
+    MTLX_PASSED = "seamless_passed"
 MTLX_SUFFIX = ".mtlx"

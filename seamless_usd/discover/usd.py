@@ -23,6 +23,7 @@ from seamless_usd.discover.tokens import (
     Inputs,
     MtlxInputs,
     Codes,
+    Recorded,
     ShaderIds,
     Terminals,
     Wrap,
@@ -231,7 +232,16 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
         wrap_t=str(wrap_t),
         uv=usd_uv_chain(tex, sid),
         normal_y_flip=flip and role.role in NORMAL_ROLES,
+        recorded_passed=_recorded_passed(tex),
     )
+
+
+def _recorded_passed(tex: Usd.Prim) -> bool | None:
+    """Whether the tile on ``tex`` passed when this tool wrote it (its provenance), or None when it is not one."""
+    source, passed = tex.GetAttribute(Recorded.USD_SOURCE), tex.GetAttribute(Recorded.USD_PASSED)
+    if not (source and source.HasAuthoredValue() and passed and passed.HasAuthoredValue()):
+        return None
+    return bool(passed.Get())
 
 
 def _anchor(attr: Usd.Attribute, asset: str) -> str:
