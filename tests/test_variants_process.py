@@ -190,3 +190,12 @@ def test_an_open_stage_is_edited_inside_the_variant_that_holds_the_material(tmp_
     assert files == {"wood": "../textures/wood_color.tile.png", "cloth": "../textures/cloth.png"}
     root = stage.GetRootLayer()
     assert root.GetPrimAtPath("/Prop{finish=wood}Materials/M_floor/diffuseColorTex") is not None
+
+
+def test_check_judges_the_stack_of_a_selection_the_stage_does_not_make():
+    """The floor under finish=cloth uses the same file as a clamped label (not judged): it is judged itself, and
+    named with its selection."""
+    from seamless_usd.pipeline.check import check_paths
+
+    names = [i.name for i in check_paths([SAMPLES / "prop" / "prop.usda"]).items]
+    assert names == ["</Prop/Materials/M_floor>", "</Prop/Materials/M_floor> in finish=cloth"]

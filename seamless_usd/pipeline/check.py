@@ -183,7 +183,10 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     from seamless_usd.verdict import judge
     from seamless_usd.verdict.alone import FileMap
 
-    item = CheckItem(stack.material, str(stage_path), [m.asset for m in stack.maps])
+    from seamless_usd.textures import describe_selection
+
+    name = stack.material + (f" in {describe_selection(stack.selection)}" if stack.selection else "")
+    item = CheckItem(name, str(stage_path), [m.asset for m in stack.maps])
     t0 = time.perf_counter()
     packed = [m for m in stack.maps if m.in_package]
     try:
@@ -279,7 +282,11 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
             report.unreadable.append(str(exc))
             continue
         used.update(Path(m.resolved).resolve() for st in result.stacks for m in st.maps if m.resolved)
-        judged = [s for s in result.stacks if not s.duplicate_of and s.intent in _JUDGED_INTENTS]
+        judged, seen = [], set()
+        for s in result.stacks:  # a stack the same as one judged is judged once (its twin may be one not judged)
+            if s.intent in _JUDGED_INTENTS and s.content_key not in seen:
+                seen.add(s.content_key)
+                judged.append(s)
         unread = _unread(result)
         stage = open_stage(scene) if judged and scene.suffix.lower() != ".mtlx" else None  # once per stage
         for stack in judged:
