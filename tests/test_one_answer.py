@@ -110,3 +110,10 @@ def test_a_processed_stage_gets_one_answer_from_process_scan_and_check(tmp_path,
     assert checked.verdict["reference"] == "source"
     assert (stack["status"] == "passed") == (scanned.intent == "already-tileable") == checked.passed == (code == 0)
     assert "seamless:passed" in scanned.intent_reason
+    # cut from its source with no network trained: said so, and no Q figures or model hash recorded
+    assert stack["origin"] == "cut" and not stack["model_hash"]
+    opened = Usd.Stage.Open(str(written))
+    albedo = opened.GetPrimAtPath("/World/Looks/Brick/Albedo")
+    assert albedo.GetAttribute("seamless:passed").Get() == (stack["status"] == "passed")
+    for name in ("seamless:qPassed", "seamless:qTau", "seamless:qBandMin", "seamless:modelHash"):
+        assert not albedo.GetAttribute(name).HasAuthoredValue(), name

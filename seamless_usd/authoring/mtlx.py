@@ -313,7 +313,7 @@ class _MtlxAuthor(_PlaceUV):
             (MtlxNames.Q_PASSED, None if p.q_passed is None else "true" if p.q_passed else "false"),
             (MtlxNames.Q_TAU, None if p.q_passed is None else fmt([float(p.q_tau)])),
             (MtlxNames.Q_BAND_MIN, None if p.q_passed is None else fmt(p.q_band_min)),
-            (MtlxNames.MODEL_HASH, p.model_hash),
+            (MtlxNames.MODEL_HASH, p.model_hash or None),  # no network made it: not recorded
             (MtlxNames.TOOL_VERSION, p.tool_version),
             (MtlxNames.STRAIGHTENED, fmt([float(p.straightened)]) if p.straightened else None),
             (MtlxNames.LEVELLED, fmt([float(p.levelled)]) if p.levelled else None),

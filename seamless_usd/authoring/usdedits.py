@@ -38,6 +38,8 @@ class _Edit:
         where = f"in {asset_ref(layer_name)}"
         if self.kind == _EditKind.VALUE and self.value is None:
             return f"declare {prim_ref(self.path)} {where}"
+        if self.kind == _EditKind.VALUE and isinstance(self.value, Sdf.ValueBlock):
+            return f"block {prim_ref(self.path)} {where}"
         if self.kind == _EditKind.VALUE:
             shown = asset_ref(self.value.path) if isinstance(self.value, Sdf.AssetPath) else self.value
             return f"set {prim_ref(self.path)} = {shown} {where}"

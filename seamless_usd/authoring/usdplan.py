@@ -8,7 +8,7 @@ from typing import Iterable
 from pxr import Gf, Sdf, Usd, UsdShade
 
 from seamless_usd.authoring.files import relative_asset_path
-from seamless_usd.authoring.schema import PROPERTIES, Schema, has_applied, read_provenance, schemas_known
+from seamless_usd.authoring.schema import PROPERTIES, Q_PROPERTIES, Schema, has_applied, read_provenance, schemas_known
 from seamless_usd.authoring.types import TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult
 from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target, variant_not_composed
 from seamless_usd.authoring.usduv import _UVPlanner
@@ -280,6 +280,13 @@ class _Author(_UVPlanner):
         if not has_applied(prim, Schema.TILE_API):
             self.edits.append(_Edit(target, _EditKind.SCHEMA, prim.GetPath(), value=Schema.TILE_API))
         for name, (type_name, convert) in PROPERTIES.items():
+            if (name in Q_PROPERTIES and p.q_passed is None) or (name == Schema.MODEL_HASH and not p.model_hash):
+                # Q never ran / no network made it: nothing recorded (an earlier run's value is blocked)
+                earlier = prim.GetAttribute(name)
+                if earlier and earlier.HasAuthoredValue() and earlier.Get() is not None:
+                    self.edits.append(_Edit(target, _EditKind.VALUE, prim.GetPath().AppendProperty(name), type_name,
+                                            Sdf.ValueBlock()))
+                continue
             self.edits.append(_Edit(target, _EditKind.VALUE, prim.GetPath().AppendProperty(name), type_name,
                                     convert(p)))
 

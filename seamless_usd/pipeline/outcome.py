@@ -74,7 +74,8 @@ class StackOutcome:
         report.status = (
             StackStatus.REUSED if reused else StackStatus.PASSED if self.passed else StackStatus.NOT_PASSED
         )
-        report.origin = "duplicate" if reused else "cache" if self.cached else "trained"
+        report.origin = ("duplicate" if reused else "cache" if self.cached else
+                         "trained" if self.model_hash else "cut")  # no model: cut from the source, no GAN trained
         report.peak_rss_mb = round(self.peak_rss_mb, 1)
         if reused:
             report.duplicate_of = self.stack_id

@@ -73,7 +73,8 @@ class StackReport:
     message: str = ""
     maps: list[MapReport] = field(default_factory=list)
     duplicate_of: str | None = None
-    origin: str = ""  # "trained", "cache" (finished entry reused), "duplicate" (same stack earlier in the run)
+    origin: str = ""  # "trained" (GAN trained), "cut" (from the source alone), "cache" (finished entry reused),
+    # "duplicate" (same stack earlier in the run)
     peak_rss_mb: float = 0.0  # peak memory of the process that ran the stack
     crop_size: tuple[int, int] | None = None  # (c_h, c_w) input crop of the chosen candidate
     tile_size: tuple[int, int] | None = None  # (H, W) pixels of the written tile
