@@ -199,3 +199,13 @@ def test_check_judges_the_stack_of_a_selection_the_stage_does_not_make():
 
     names = [i.name for i in check_paths([SAMPLES / "prop" / "prop.usda"]).items]
     assert names == ["</Prop/Materials/M_floor>", "</Prop/Materials/M_floor> in finish=cloth"]
+
+
+def test_a_dry_run_plan_names_the_variant_each_edit_goes_into(tmp_path, capsys):
+    for name in ("prop", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    assert main(["process", str(tmp_path / "prop" / "prop.usda"), "--dry-run"]) == 0
+    plan = [line for line in capsys.readouterr().err.splitlines() if "diffuseColorTex.inputs:file>" in line]
+    assert len(plan) == 2 and {line.rsplit("inside variant ", 1)[1] for line in plan} == {
+        "{finish=wood} of </Prop>", "{finish=cloth} of </Prop>"}
+    assert all("tileable/" in line for line in plan)

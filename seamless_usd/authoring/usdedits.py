@@ -36,6 +36,13 @@ class _Edit:
 
     def describe(self, layer_name: str) -> str:
         where = f"in {asset_ref(layer_name)}"
+        spec = self.target.MapToSpecPath(self.path)
+        if spec.ContainsPrimVariantSelection():  # inside a variant: the other selections keep their opinions
+            site = spec
+            while not site.IsPrimVariantSelectionPath():
+                site = site.GetParentPath()
+            vset, vsel = site.GetVariantSelection()
+            where += f", inside variant {{{vset}={vsel}}} of {prim_ref(site.GetParentPath().StripAllVariantSelections())}"
         if self.kind == _EditKind.VALUE and self.value is None:
             return f"declare {prim_ref(self.path)} {where}"
         if self.kind == _EditKind.VALUE and isinstance(self.value, Sdf.ValueBlock):

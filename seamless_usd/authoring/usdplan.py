@@ -294,9 +294,17 @@ class _Author(_UVPlanner):
 
     def apply(self) -> None:
         """Record the plan and, unless dry-running, apply it in one change block."""
+        recorded: set = set()
         for edit in self.edits:
             layer = edit.target.GetLayer()
             name = self.layer_names.get(layer) or _layer_name(layer)
+            if edit.kind == _EditKind.VALUE and edit.path.IsPropertyPath() and edit.path.name.startswith("seamless:"):
+                prim = edit.path.GetPrimPath()  # provenance: one line per node, not its (planned) values
+                if prim not in recorded:
+                    recorded.add(prim)
+                    self.result.plan.append(f"record the tile's provenance (seamless:* of {Schema.TILE_API}) on "
+                                            f"{prim_ref(prim)} in {asset_ref(name)}")
+                continue
             self.result.plan.append(edit.describe(name))
         if self.result.dry_run:
             return
