@@ -64,13 +64,14 @@ def _checked(args: argparse.Namespace, err: Console) -> CheckReport:
     jobs = args.jobs if args.jobs > 0 else min(8, os.cpu_count() or 1)
     if not err.is_terminal:
         return check_paths(args.paths, jobs=jobs)
-    with Progress(TextColumn("checking"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+    with Progress(TextColumn("checking"), BarColumn(), TextColumn("{task.fields[count]}"),
                   TimeElapsedColumn(), TimeRemainingColumn(), TextColumn("{task.description}"),
                   console=err, transient=True) as bar:
-        task = bar.add_task("", total=None)
+        task = bar.add_task("", total=None, count="")  # the count shows once the inputs are known
 
         def step(name: str, done: int, total: int) -> None:
-            bar.update(task, completed=done, total=total, description=escape(Path(name).name) if name else "")
+            bar.update(task, completed=done, total=total, count=f"{done}/{total}",
+                       description=escape(Path(name).name) if name else "")
 
         return check_paths(args.paths, progress=step, jobs=jobs)
 

@@ -85,7 +85,10 @@ def judged_alone(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> di
     from seamless_usd.verdict.alone import FileMap, judge_alone
 
     for m in stack.maps:
-        if not m.resolved or m.in_package or m.image is None:
+        if m.in_package:
+            return {"error": f"@{m.asset}@ is inside a .usdz package, whose pixels are not judged in place (unpack the "
+                             "package to judge or process it)"}
+        if not m.resolved or m.image is None:
             return {"error": f"@{m.asset}@ is not a file on disk"}
         if m.image.width * m.image.height > thresholds.measure_max_pixels:
             return {"error": f"@{m.asset}@ is {m.image.width}x{m.image.height} px, too large to judge before "

@@ -50,10 +50,20 @@ def quiet_mtlx():
 
 
 def _tf_message(text: str) -> str:
-    """The useful part of a Tf error (``3:40: Expected ) at ...``), on one line."""
-    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "unreadable")
-    quoted = re.search(r" : '(.*)'", first)
-    message = quoted.group(1) if quoted else first
+    """The useful part of a Tf error (``3:40: Expected ) at ...``), on one line: the quoted message whole (a
+    parse error quotes the text it stopped at, newlines included), USD's internal namespace left out.
+
+    >>> _tf_message("Error in 'f' at line 1 in file x.cpp : '/a/b.usda:4:1: parse error matching "
+    ...             "pxrInternal_v0_26_11__pxrReserved__::Sdf_TextFileFormatParser::ListValueClose at '}\\n''")
+    "line 4:1: parse error matching Sdf_TextFileFormatParser::ListValueClose at '}'"
+    """
+    text = text.strip() or "unreadable"
+    blocks = [b for b in re.split(r"(?=\bError in ')", text) if b.strip()]  # the first error says why
+    text = blocks[0] if blocks else text
+    quoted = re.search(r" : '(.*)'", text, re.DOTALL)
+    message = quoted.group(1) if quoted else next(ln.strip() for ln in text.splitlines() if ln.strip())
+    message = re.sub(r"pxrInternal_v[0-9_]+?__pxrReserved__::", "", " ".join(message.split()))
+    message = re.sub(r"at '(.*?)\s*'$", r"at '\1'", message)
     return re.sub(r"^\S+?\.usd[acz]?:(?=\d)", "line ", message)
 
 
