@@ -46,9 +46,11 @@ def render(report: CheckReport, console: Console) -> None:
     table.add_column("verdict", no_wrap=True)
     table.add_column("against", no_wrap=True)
     table.add_column("where", overflow="fold")
+    scenes = {i.source for i in report.items if i.source != i.name}
     for item in report.items:
         state = "[green]passed[/]" if item.passed else "[red]error[/]" if item.error else "[yellow]not passed[/]"
-        table.add_row(escape(item.name), state, item.verdict.get("reference", "-"), escape(item.words()))
+        name = f"{item.name} in {item.source}" if len(scenes) > 1 and item.source != item.name else item.name
+        table.add_row(escape(name), state, item.verdict.get("reference", "-"), escape(item.words()))
     console.print(table)
     for why in report.unreadable:
         console.print(f"[red]unreadable[/] {escape(why)}", soft_wrap=True)

@@ -163,3 +163,24 @@ def test_folders_with_nothing_to_judge_and_pictures_no_stage_uses_are_named(tmp_
     assert main(["scan", str(lib)]) == 0 and "</World/Looks/Brick>" in capsys.readouterr().out
     assert main(["scan", str(tmp_path / "empty")]) == 2
     assert "no USD stage or MaterialX document found" in capsys.readouterr().err
+
+
+def test_stacks_of_two_stages_are_told_apart_and_a_broken_link_is_named(tmp_path, capsys):
+    import os
+    import shutil
+
+    for stage in ("a", "b"):
+        shutil.copytree(SAMPLES.parent / "brick", tmp_path / "lib" / stage)
+    shutil.copytree(SAMPLES, tmp_path / "lib" / "textures")
+    sheet = tmp_path / "sheet.html"
+    main(["check", str(tmp_path / "lib"), "--report", str(sheet)])
+    out = " ".join(capsys.readouterr().out.split())
+    assert out.count("</World/Looks/Brick> in ") == 2
+    html = sheet.read_text(encoding="utf-8")
+    assert all(f"&lt;/World/Looks/Brick&gt; in {tmp_path / 'lib' / s / 'scene.usda'}" in html for s in ("a", "b"))
+    pictures = tmp_path / "pictures"
+    pictures.mkdir()
+    _write(pictures / "ok.png", _wood())
+    os.symlink(pictures / "gone.png", pictures / "link.png")
+    assert main(["check", str(pictures)]) == 2
+    assert "link.png@: no such file (a link to a file that is gone)" in " ".join(capsys.readouterr().out.split())

@@ -56,12 +56,13 @@ class CheckItem:
         the thumbnail's pixels."""
         status = "error" if self.error else "passed" if self.passed else "not-passed"
         words = self.words()
+        title = self.name if self.source == self.name else f"{self.name} in {self.source}"  # a stack: its stage too
         if not self.thumbnail:
-            return SheetCard(self.name, status, words)
+            return SheetCard(title, status, words)
         uri, size, scale = self.thumbnail
         seams = [{**s, "position": s["position"] * scale, "start": s["start"] * scale, "end": s["end"] * scale}
                  for s in self.verdict.get("seams", [])]
-        return SheetCard(self.name, status, words, uri, size, seams)
+        return SheetCard(title, status, words, uri, size, seams)
 
     @property
     def passed(self) -> bool:
@@ -93,7 +94,9 @@ class CheckReport:
 
 
 def _folder_pictures(folder: Path) -> list[Path]:
-    return sorted(q for q in folder.rglob("*") if q.is_file() and q.suffix.lower() in IMAGE_SUFFIXES
+    """The pictures in ``folder`` and below (this tool's outputs left out); a link to a picture that is gone is
+    kept, and reported as missing when judged."""
+    return sorted(q for q in folder.rglob("*") if (q.is_file() or q.is_symlink()) and q.suffix.lower() in IMAGE_SUFFIXES
                   and not is_own_output(q.relative_to(folder)))
 
 
@@ -305,7 +308,8 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
             found.append(picture)
         else:
             done += 1
-            report.unreadable.append(f"{asset_ref(picture)}: no such file")
+            gone = " (a link to a file that is gone)" if picture.is_symlink() else ""
+            report.unreadable.append(f"{asset_ref(picture)}: no such file{gone}")
     for item in _judged_pictures(found, jobs):
         emit(item.name)
         done += 1
