@@ -112,7 +112,8 @@ def write_provenance(prim: Usd.Prim, provenance: Provenance, source_asset: str |
     """
     prim.AddAppliedSchema(Schema.TILE_API)
     for name, (type_name, convert) in PROPERTIES.items():
-        if name in Q_PROPERTIES and provenance.q_passed is None:  # Q never ran: record none of its figures
+        if (name in Q_PROPERTIES and provenance.q_passed is None) or (name == Schema.MODEL_HASH and not provenance.model_hash):
+            # Q never ran / no network made the tile: record none of it
             attr = prim.GetAttribute(name)
             if attr:
                 attr.Block()

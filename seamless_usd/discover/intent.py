@@ -158,8 +158,9 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo,
     if all(r is not None for r in recorded):  # tiles this tool wrote: the verdict against their recorded source
         if all(recorded):
             return IntentDecision(Intent.ALREADY_TILEABLE,
-                                  f"made tileable by seamless-usd and passed by the verdict against its recorded "
-                                  f"source when written (seamless:passed; check judges it again against that source); {decision.reason}")
+                                  "made tileable by seamless-usd and passed by the verdict against its recorded source "
+                                  "when written (seamless:passed; check judges it again against that source); "
+                                  f"{decision.reason}")
         return IntentDecision(Intent.TILING, f"{decision.reason}; made by seamless-usd and not passed by the verdict "
                                              "against its recorded source when written (seamless:passed)")
     judged = memo.get("verdict", stack.maps, lambda: judged_alone(stack))

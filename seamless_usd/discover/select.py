@@ -10,7 +10,7 @@ from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.findings import Finding, Severity
 
 __all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "blocked_stacks", "left_alone_stacks",
-           "unread_materials"]
+           "unread_findings", "unread_materials"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
 # the other maps tileable (and rescaling their UVs) would misalign them with the skipped one.
@@ -61,14 +61,19 @@ def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str
     return out
 
 
-def unread_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[str, list[Finding]]:
-    """Materials (matching ``patterns``, all when empty) none of whose textures could be read (missing or
-    unreadable files), so the scan has no stack for them: material -> the findings that skipped its textures. A
-    material with a readable map too has a stack, which :func:`blocked_stacks` names."""
-    have = {s.material for s in scan.stacks}
+def unread_findings(scan: ScanResult) -> dict[str, list[Finding]]:
+    """Material -> the scan's findings that skipped a texture of it as missing or unreadable."""
     out: dict[str, list[Finding]] = {}
     for f in scan.findings:
-        if (f.severity is Severity.SKIPPED and f.code in UNREAD_SKIPS and f.material and f.material not in have
-                and (not patterns or _matches(f.material, patterns))):
+        if f.severity is Severity.SKIPPED and f.code in UNREAD_SKIPS and f.material:
             out.setdefault(f.material, []).append(f)
     return out
+
+
+def unread_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[str, list[Finding]]:
+    """Of :func:`unread_findings`, the materials (matching ``patterns``, all when empty) none of whose textures
+    could be read, so the scan has no stack for them. A material with a readable map too has a stack, which
+    :func:`blocked_stacks` names."""
+    have = {s.material for s in scan.stacks}
+    return {m: found for m, found in unread_findings(scan).items()
+            if m not in have and (not patterns or _matches(m, patterns))}

@@ -176,6 +176,7 @@ class Codes:
 MIN_CROP = 100  # px: the smallest crop SeamlessGAN samples (DESIGN: c_min); a smaller stack gets a cut tile only
 MIN_IMAGE_SIZE = 16  # px: below this no tile can be cut from a map either: skipped as too-small
 UDIM_TOKEN = "<UDIM>"
+MTLX_SUFFIX = ".mtlx"
 
 
 class Recorded:
@@ -186,4 +187,3 @@ class Recorded:
     USD_PASSED = "seamless:passed"
     MTLX_SOURCE = "seamless_sourceasset"
     MTLX_PASSED = "seamless_passed"
-MTLX_SUFFIX = ".mtlx"

@@ -183,10 +183,9 @@ def keystone_of(prov):
 def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     from seamless_usd.imaging import WorkingResolution, load_stack_pixels
     from seamless_usd.pipeline.madefrom import made_values, on_tile_grid
+    from seamless_usd.textures import describe_selection
     from seamless_usd.verdict import judge
     from seamless_usd.verdict.alone import FileMap
-
-    from seamless_usd.textures import describe_selection
 
     name = stack.material + (f" in {describe_selection(stack.selection)}" if stack.selection else "")
     item = CheckItem(name, str(stage_path), [m.asset for m in stack.maps])
@@ -222,18 +221,6 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     return item
 
 
-def _unread(result) -> dict[str, list]:
-    """Material -> the scan's findings that skipped a texture of it as missing or unreadable."""
-    from seamless_usd.discover.select import UNREAD_SKIPS
-    from seamless_usd.findings import Severity
-
-    out: dict[str, list] = {}
-    for f in result.findings:
-        if f.severity is Severity.SKIPPED and f.code in UNREAD_SKIPS and f.material:
-            out.setdefault(f.material, []).append(f)
-    return out
-
-
 def _unread_item(scene: Path, material: str, skipped: list, maps: list[str]) -> CheckItem:
     files = ", ".join(f"{f.where.split(' ')[-1]} ({f.code})" for f in skipped)
     return CheckItem(material, str(scene), maps + [f.where.split(" ")[-1].strip("@") for f in skipped],
@@ -266,6 +253,7 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
     if scenes:  # USD and MaterialX are imported only for scenes: a picture is judged without them
         from seamless_usd.discover import scan_paths
         from seamless_usd.discover.scan import open_stage
+        from seamless_usd.discover.select import unread_findings
     total = len(scenes) + len(pictures)
     done = 0
 
@@ -290,7 +278,7 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
             if s.intent in _JUDGED_INTENTS and s.content_key not in seen:
                 seen.add(s.content_key)
                 judged.append(s)
-        unread = _unread(result)
+        unread = unread_findings(result)
         stage = open_stage(scene) if judged and scene.suffix.lower() != ".mtlx" else None  # once per stage
         for stack in judged:
             if stack.material in unread:  # judged on the maps that are left, it would pass a broken material
