@@ -157,6 +157,21 @@ def test_expand_inputs_walks_folders_and_globs_and_leaves_outputs_out(tmp_path):
         expand_inputs([str(lib / "nothing*" / "*.usda")])
 
 
+def test_a_folder_walk_takes_the_stages_and_not_the_layers_they_compose(tmp_path, capsys):
+    """A payload, a look layer, a geometry layer and the .mtlx document a stage composes are processed through it,
+    not as scenes of their own: alone they bind no geometry, and their UV atlas would be tiled into the asset."""
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("chess", "prop", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    assert [p.relative_to(tmp_path).as_posix() for p in expand_inputs([tmp_path])] == ["chess/piece.usda",
+                                                                                     "prop/prop.usda"]
+    assert main(["process", str(tmp_path), "--dry-run", "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert {Path(s).name for s in payload["sources"]} == {"piece.usda", "prop.usda"}
+    atlases = [s for s in payload["stacks"] if s["material"] in ("</Piece/Materials/M_piece>", "</Prop/Materials/M_body>")]
+    assert atlases and all(s["status"] == "left-alone" for s in atlases)
+
+
 def test_make_executor_validates_names():
     assert isinstance(make_executor(None), InProcessExecutor)
     assert isinstance(make_executor("inprocess", 1), InProcessExecutor)

@@ -21,11 +21,38 @@ def is_own_output(path: Path) -> bool:
 
 
 def _walk(folder: Path) -> list[Path]:
-    found = [
+    """The stages and documents in ``folder`` and below that no other one there composes: a sublayer, a payload, a
+    reference or a ``.mtlx`` document a stage uses is processed through that stage (on its own it has no geometry
+    bound, so a UV atlas would read as a material meant to tile), not again as a scene of its own."""
+    found = sorted(
         p for p in folder.rglob("*")
         if p.is_file() and p.suffix.lower() in SCENE_SUFFIXES and not is_own_output(p.relative_to(folder))
-    ]
-    return sorted(found)
+    )
+    used = _composed_by(found)
+    roots = [p for p in found if p.resolve() not in used]
+    return roots or found  # layers that only compose one another (a cycle): every one is a scene
+
+
+def _composed_by(files: Sequence[Path]) -> set[Path]:
+    """The files (resolved) that the USD layers among ``files`` compose directly: sublayers, references, payloads."""
+    layers = [f for f in files if f.suffix.lower() != ".mtlx"]
+    if not layers:
+        return set()
+    from pxr import Sdf  # only for a folder that holds stages
+
+    used: set[Path] = set()
+    for f in layers:
+        try:
+            layer = Sdf.Layer.FindOrOpen(str(f))
+        except Exception:  # noqa: BLE001 - a layer that cannot be opened is reported when it is processed
+            continue
+        if layer is None:
+            continue
+        for dep in layer.GetCompositionAssetDependencies():
+            target = Path(dep) if Path(dep).is_absolute() else f.parent / dep
+            if target.exists():
+                used.add(target.resolve())
+    return used
 
 
 def expand_inputs(items: Sequence[str | Path]) -> list[Path]:
