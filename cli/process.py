@@ -194,7 +194,8 @@ def _stack_table(report: Report, console: Console) -> None:
             _wh(s.crop_size) if s.crop_size and s.model_hash else "-",  # no GAN, no crop
             _wh(s.tile_size) if s.tile_size else "-",
             ", ".join(f"{v:.3g}" for v in s.uv_scale) if s.uv_scale else "-",
-            "cached" if s.origin == "cache" else f"{sum(s.timings.values()):.0f}s" if s.timings else "-",
+            "cached" if s.origin == "cache" else "-" if s.origin == "duplicate"  # a duplicate's work was its twin's
+            else f"{sum(s.timings.values()):.0f}s" if s.timings else "-",
             s.message if s.status in (StackStatus.NOT_PASSED, StackStatus.FAILED) else "",
         )
     console.print(table)

@@ -13,7 +13,7 @@ from seamless_usd.pipeline.madefrom import source_uv_scale, uv_turn_of
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.textures import TextureMap, TextureStack
 
-__all__ = ["MapOutcome", "StackOutcome", "map_identity", "outcome_from_record"]
+__all__ = ["MapOutcome", "StackOutcome", "map_identity", "outcome_from_record", "reused_message"]
 
 
 def map_identity(m: TextureMap) -> tuple[str, str]:
@@ -71,15 +71,17 @@ class StackOutcome:
         return out + ([advice] if advice else [])
 
     def fill_report(self, report: StackReport, stack: TextureStack, reused: bool) -> None:
+        # a copy of a tile that did not pass is not passed either: 'reused' is kept for a passed one
         report.status = (
-            StackStatus.REUSED if reused else StackStatus.PASSED if self.passed else StackStatus.NOT_PASSED
+            StackStatus.REUSED if reused and self.passed else StackStatus.PASSED if self.passed
+            else StackStatus.NOT_PASSED
         )
         report.origin = ("duplicate" if reused else "cache" if self.cached else
                          "trained" if self.model_hash else "cut")  # no model: cut from the source, no GAN trained
         report.peak_rss_mb = round(self.peak_rss_mb, 1)
         if reused:
             report.duplicate_of = self.stack_id
-            report.message = f"identical to stack {self.stack_id}: its result is reused"
+            report.message = reused_message(self.stack_id, self)
         elif not self.passed:
             report.message = "; ".join(self.reasons())
         elif self.cached:
@@ -193,3 +195,10 @@ def _peak_rss_mb() -> float:
     except ImportError:  # pragma: no cover - Windows
         return 0.0
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
+
+
+def reused_message(first: str, outcome: "StackOutcome") -> str:
+    """The row message of a stack identical to ``first`` whose result (``outcome``) it reuses: why that did not
+    pass, when it did not."""
+    said = f"identical to stack {first}: its result is reused"
+    return said if outcome.passed else f"{said}, not passed: {'; '.join(outcome.reasons())}"

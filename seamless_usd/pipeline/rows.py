@@ -13,7 +13,7 @@ from seamless_usd.errors import SeamlessUsdError
 from seamless_usd.findings import Finding, Severity, prim_ref
 from seamless_usd.pipeline.executors import Executor
 from seamless_usd.pipeline.options import Options, ProgressEvent
-from seamless_usd.pipeline.outcome import StackOutcome
+from seamless_usd.pipeline.outcome import StackOutcome, reused_message
 from seamless_usd.pipeline.planned import planned_result, wrap_only_result
 from seamless_usd.pipeline.stackjob import JobSettings, StackJob, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
@@ -112,7 +112,7 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
                     run.report.findings += list(outcome.findings)
                 if reused:
                     report.duplicate_of = first[1] if first[0] == source_label else f"{first[1]} in {first[0]}"
-                    report.message = f"identical to stack {report.duplicate_of}: its result is reused"
+                    report.message = reused_message(report.duplicate_of, outcome)
                 results.append(outcome.stack_result(stack))
             else:
                 message = error_message(outcome)

@@ -270,7 +270,7 @@ def _variants(report: Report) -> str:
 def render_html(report: Report, title: str = "seamless-usd report") -> str:
     """The whole page of one run (or one source of a library run)."""
     counts = report.counts()
-    summary = "".join(f"<span><b>{v}</b> {esc(k)}</span>" for k, v in counts.items() if v)
+    summary = "".join(f"<span><b>{v}</b> {esc(k.replace('_', ' '))}</span>" for k, v in counts.items() if v)
     layers = "".join(f"<li>{esc(p)}</li>" for p in report.layers_written)
     status = "all stacks passed" if report.ok else "some stacks failed or did not pass"
     body = (

@@ -130,7 +130,7 @@ def render_index(report: Report, pages: dict[str, str], title: str = "seamless-u
         for f in report.findings if f.severity.value == "error"
     )
     counts = report.counts()
-    summary = "".join(f"<span><b>{v}</b> {esc(k)}</span>" for k, v in counts.items() if v)
+    summary = "".join(f"<span><b>{v}</b> {esc(k.replace('_', ' '))}</span>" for k, v in counts.items() if v)
     total = report.timings.get("total")
     body = (
         f'<h1>{esc(title)}</h1><p class="muted">{len(report.sources)} files · {len(report.stacks)} stacks · '
