@@ -40,11 +40,13 @@ def test_an_unchanged_rerun_takes_the_judged_result_back_and_a_changed_tile_is_j
     first = _run(tmp_path, capsys)
     written = _outputs(first)
     assert written and first["stacks"][0]["status"] == "passed"
-    stamps = {p: Path(p).stat().st_mtime_ns for p in written}
+    layer = tmp_path / "brick" / "scene.seamless.usda"
+    stamps = {p: Path(p).stat().st_mtime_ns for p in [*written, str(layer)]}
 
     again = _run(tmp_path, capsys)
     assert _judged(again) == _judged(first) and again["stacks"][0]["origin"] == "cache"
-    assert {p: Path(p).stat().st_mtime_ns for p in written} == stamps  # nothing written again
+    assert {p: Path(p).stat().st_mtime_ns for p in stamps} == stamps  # nothing written again, the layer neither
+    assert not again["layers_written"] and "not written again" in json.dumps(again["findings"])
     assert again["stacks"][0]["timings"] == first["stacks"][0]["timings"]  # not judged again: the same record
 
     # a tile changed by hand (a dark stripe across it) is written and judged again, and the run says so

@@ -137,6 +137,10 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
     saved = Sdf.Layer.CreateAnonymous(".usda")
     saved.TransferContent(overrides)
     saved.subLayerPaths[0] = relative_asset_path(stage_path, out.parent)
+    if _holds(out, saved.ExportToString()):  # an unchanged rerun: the layer on disk is this one, left untouched
+        result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(out),
+                                       "the layer on disk already holds these edits; not written again"))
+        return result
     write_atomically(out, lambda tmp: saved.Export(str(tmp)), check=check_layer)
     stale = Sdf.Layer.Find(str(out))
     if stale:  # a previous version is open in this process: show it the new content
@@ -173,6 +177,14 @@ def author_usd_stage(
     if not result.dry_run:
         _check_composed(stage, author.edits, results, result)
     return result
+
+
+def _holds(path: Path, text: str) -> bool:
+    """Whether the file at ``path`` holds exactly ``text``."""
+    try:
+        return path.read_text(encoding="utf-8") == text
+    except (OSError, UnicodeDecodeError):
+        return False
 
 
 def _check_composed(stage: Usd.Stage, edits, results: Sequence[StackResult], result: AuthoringResult) -> None:
