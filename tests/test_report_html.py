@@ -149,8 +149,9 @@ def test_run_details_say_what_seeded_the_refinement():
     stack = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.PASSED,
                         resampled={"gan": {"layout": "lattice", "lattice": lattice}})
     page = render_html(Report(sources=["s.usda"], stacks=[stack]))
-    assert "a cut of whole lattice periods from the source; repeats every 107.49 x 106.51 px" in page
-    assert ("lattice cut 215x213 px scored 0.98 (Q passed, lattice ratio 0.97, passes) against 1.94 from gan "
+    # width x height: the period across x first, the tile's width first
+    assert "a cut of whole lattice periods from the source; repeats every 106.51 x 107.49 px (across x, down y)" in page
+    assert ("lattice cut 213x215 px scored 0.98 (Q passed, lattice ratio 0.97, passes) against 1.94 from gan "
             "(Q not passed, lattice ratio 0.45)") in page
     plain = StackReport(id="M-2", material="</M2>", source="s.usda", status=StackStatus.PASSED,
                         resampled={"gan": {"layout": "gan", "lattice": {"period_px": [None, None]}}})

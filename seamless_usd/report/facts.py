@@ -53,8 +53,8 @@ def _layout_text(gan: dict) -> str | None:
     lattice = gan.get("lattice") or {}
     periods = lattice.get("period_px") or [None, None]
     if any(p is not None for p in periods):
-        axes = " x ".join("none" if p is None else f"{p:g}" for p in periods)
-        text += f"; repeats every {axes} px (y x x)"
+        axes = " x ".join("none" if p is None else f"{p:g}" for p in periods[::-1])
+        text += f"; repeats every {axes} px (across x, down y)"
     refused = lattice.get("window_refused")
     if refused:
         lags = ", ".join(f"{axis} {value:.2f}" for axis, value in refused["lag_difference"].items())
@@ -91,7 +91,7 @@ def _layout_text(gan: dict) -> str | None:
         elif lattice.get("cut") == "mend" and "band" in lattice:
             blocks = (f", band {2 * sum(lattice['band'])} px wide (worst difference along a cut "
                       f"{lattice['difference_worst']:.3f})")
-        text += (f"; {name} {lattice['tile'][0]}x{lattice['tile'][1]} px{blocks} scored {lattice['score']:.2f}"
+        text += (f"; {name} {lattice['tile'][1]}x{lattice['tile'][0]} px{blocks} scored {lattice['score']:.2f}"
                  f" ({verdict('')})")
         if rival is not None:
             text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)});"

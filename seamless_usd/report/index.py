@@ -79,7 +79,8 @@ def _card(stack: StackReport, link: str | None) -> str:
     return (
         f'<div class="card s-{esc(stack.status.value)}" data-status="{esc(stack.status.value)}">{picture}'
         f'<div>{title}<span class="badge {esc(stack.status.value)}">{esc(stack.status.value)}</span></div>'
-        f'<div class="file">{esc(Path(stack.source).name)}</div>'
+        f'<div class="file">{esc(Path(stack.source).name)}'
+        f'{esc(f" (variant {stack.variant})") if stack.variant else ""}</div>'
         f'<div class="reason">{esc(stack_reason(stack))}</div></div>'
     )
 
