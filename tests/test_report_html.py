@@ -166,7 +166,7 @@ def test_run_details_say_what_seeded_the_refinement():
     page = render_html(Report(sources=["s.usda"], stacks=[cut]))
     assert "one window of the source, joined across its wraps along minimum-error cuts" in page
     assert "repeats every" not in page
-    assert ("window cut 364x386 px scored 0.91 (Q not passed, passes) against 2.07 from random (Q not passed)"
+    assert ("window cut 386x364 px scored 0.91 (Q not passed, passes) against 2.07 from random (Q not passed)"
             in page)
     refused = {"period_px": [None, None], "strength": [None, None], "score_random": 2.07, "passes_random": False,
                "window_refused": {"lag_difference": {"y": 0.64, "x": 0.68}, "most": 0.05}}
