@@ -199,7 +199,7 @@ def test_run_details_say_what_seeded_the_refinement():
     page = render_html(Report(sources=["s.usda"], stacks=[made]))
     assert ("lattice cut not written: the verdict passes it, but its wrap across the axis that does not repeat joins "
             "places that differ by 0.21 (its joins hide at 0.05 or less)") in page
-    assert "lattice cut 448x506 px (no repeat along y: difference along that wrap&#x27;s cut 0.208) scored 0.95" in page
+    assert "lattice cut 506x448 px (no repeat along y: difference along that wrap&#x27;s cut 0.208) scored 0.95" in page
     # not passed with a seam: the box says what to do where the joins cannot hide (refined, or the quilt's
     # blocks differ along a cut), and not where the quilt's joins hide
     seam = {"axis": "x", "position": 68, "start": 66, "end": 112, "figure": 0.28, "map": "stack"}
