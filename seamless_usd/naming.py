@@ -4,7 +4,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-__all__ = ["tile_filename", "override_layer_path", "slug"]
+__all__ = ["tile_filename", "source_digest", "override_layer_path", "slug"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
@@ -15,15 +15,33 @@ def slug(text: str, limit: int = 48) -> str:
     return cleaned[:limit]
 
 
-def tile_filename(source_asset: str, stack_id: str, extension: str) -> str:
-    """``brick_albedo.png`` of stack ``Looks_Brick-3f2a`` -> ``brick_albedo.Looks_Brick-3f2a.tile.png``.
+def tile_filename(source_asset: str, stack_id: str, extension: str, source_digest: str = "") -> str:
+    """``brick_albedo.png`` of stack ``Looks_Brick-3f2a`` -> ``brick_albedo.Looks_Brick-3f2a.tile.png``; with a
+    digest of the source file's bytes, its first eight characters too (``brick_albedo.Looks_Brick-3f2a.5d41402a
+    .tile.png``).
 
-    The stack id keeps two materials that share one source file from overwriting each other's
-    tiles. The stem keeps non-ASCII letters and spaces out of nothing: only unsafe characters
-    are replaced.
+    The stack id keeps two materials that share one source file from overwriting each other's tiles; the source's
+    digest keeps two stages whose materials share a path and a file name (``albedo.png`` of two folders) from
+    overwriting each other's tiles in one output folder, while a library copied elsewhere names its tiles alike.
+    The stem keeps non-ASCII letters and spaces: only unsafe characters are replaced.
+
+    >>> tile_filename("tex/albedo.png", "Looks_M-1a", ".png", "5d41402abc4b2a76")
+    'albedo.Looks_M-1a.5d41402a.tile.png'
     """
     stem = Path(source_asset.replace("\\", "/")).stem
-    return f"{slug(stem)}.{slug(stack_id, 64)}.tile{extension}"
+    digest = f".{slug(source_digest[:8])}" if source_digest else ""
+    return f"{slug(stem)}.{slug(stack_id, 64)}{digest}.tile{extension}"
+
+
+def source_digest(path: str) -> str:
+    """The digest of a source file's bytes that its tiles' names carry (:func:`tile_filename`); "" when it cannot
+    be read as a file (a map inside a package)."""
+    from seamless_usd.fileio import file_sha256
+
+    try:
+        return file_sha256(path)
+    except OSError:
+        return ""
 
 
 def override_layer_path(stage_path: Path) -> Path:

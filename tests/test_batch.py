@@ -359,3 +359,22 @@ def test_materials_patterns_select_by_path_or_name(tmp_path, cache, capsys):
     assert [s["material"] for s in by_path["stacks"]] == ["</World/Looks/Brick>"]
     _, both = _run(layer, "--dry-run", "--materials", "Wood", "--materials", "Brick", capsys=capsys)
     assert len(both["stacks"]) == 2
+
+
+def test_two_stages_whose_materials_share_a_path_and_a_file_name_get_tiles_of_their_own(tmp_path, capsys):
+    """a.usda reads x/albedo.png, b.usda y/albedo.png, both as </World/Looks/Brick>, both writing into one
+    tileable/ folder: the tiles' names carry their source's digest, so neither overwrites the other's."""
+    for name, texture in (("a", "brick_albedo.png"), ("b", "wood_color.png")):
+        (tmp_path / "tex" / name).mkdir(parents=True)
+        shutil.copy(SAMPLES / "textures" / texture, tmp_path / "tex" / name / "albedo.png")
+        text = (SAMPLES / "brick" / "scene.usda").read_text()
+        text = text.replace("@../textures/brick_albedo.png@", f"@./tex/{name}/albedo.png@")
+        (tmp_path / f"{name}.usda").write_text(text.replace("@../textures/", "@./tex/a/../../textures/"))
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    outputs = {}
+    for name in ("a", "b"):
+        assert main(["process", str(tmp_path / f"{name}.usda"), "--dry-run", "--json"]) in (0, 1)
+        [stack] = json.loads(capsys.readouterr().out)["stacks"]
+        outputs[name] = {m["asset"]: m["output"] for m in stack["maps"]}
+    assert outputs["a"]["./tex/a/albedo.png"] != outputs["b"]["./tex/b/albedo.png"]
+    assert Path(outputs["a"]["./tex/a/albedo.png"]).parent == Path(outputs["b"]["./tex/b/albedo.png"]).parent

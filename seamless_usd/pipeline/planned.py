@@ -6,7 +6,7 @@ from pathlib import Path
 
 from seamless_usd.version import __version__
 from seamless_usd.textures import TextureStack
-from seamless_usd.naming import tile_filename
+from seamless_usd.naming import source_digest, tile_filename
 from seamless_usd.pipeline.options import Options
 
 __all__ = ["planned_result", "wrap_only_result"]
@@ -38,7 +38,8 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options):
     else:
         uv, crop = uv_scale_for(working, working), working
     maps = [
-        MapResult(map=m, output_path=out_dir / tile_filename(m.asset, stack.id, output_extension(m.image)))
+        MapResult(map=m, output_path=out_dir / tile_filename(m.asset, stack.id, output_extension(m.image),
+                                                            source_digest(m.resolved)))
         for m in stack.maps
         if m.image is not None
     ]

@@ -21,7 +21,7 @@ from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straighten, uv_turn_of
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
-from seamless_usd.naming import tile_filename
+from seamless_usd.naming import source_digest, tile_filename
 from seamless_usd.pipeline.rerun import load_judged, save_judged
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import Reading, Reference, judge_reading
@@ -185,7 +185,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     written_values = []
     for name, m, source, encoding, info in zip(names, stack.maps, sources, pixels.encodings, pixels.infos):
         values = tiles[name]
-        filename = tile_filename(m.asset, stack.id, imaging.output_extension(info))
+        filename = tile_filename(m.asset, stack.id, imaging.output_extension(info), source_digest(m.resolved))
         target = confine(out_dir / filename, out_dir)
         written = imaging.write_map(target, values, encoding, like=info)
         back = imaging.decode_map(imaging.read_image(written, max_pixels=None)[0], encoding)  # what is on disk
