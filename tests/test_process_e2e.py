@@ -210,6 +210,20 @@ def test_in_place_keeps_backups_equal_to_the_originals(assets, model_cache, caps
         assert path.is_file() and path.parent.name == "tileable"
 
 
+def test_in_place_leaves_a_layer_marked_read_only_alone(assets, model_cache, capsys):
+    """A layer with no write permission is read-only on purpose, also to a super-user who could replace it."""
+    scene = assets / "brick" / "scene.usda"
+    original = scene.read_bytes()
+    scene.chmod(0o444)
+    try:
+        code = _process(str(scene), "--in-place", "--json", cache=model_cache)
+    finally:
+        scene.chmod(0o644)
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 1 and scene.read_bytes() == original and not scene.with_name("scene.usda.bak").exists()
+    assert any(f["code"] == "read-only-layer" for f in payload["findings"])
+
+
 def test_dry_run_writes_nothing(assets, model_cache, capsys):
     before = _hashes(assets)
     code = _process(str(assets / "brick" / "scene.usda"), "--dry-run", "--json", cache=model_cache)

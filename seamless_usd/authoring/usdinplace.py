@@ -22,13 +22,23 @@ def _is_packaged(layer: Sdf.Layer) -> bool:
     return Ar.IsPackageRelativePath(layer.identifier) or layer.GetFileFormat().IsPackage()
 
 
+def _writable(path: str) -> bool:
+    """Whether the file may be edited in place: writable by this process, and marked writable at all (a file with
+    no write permission is read-only on purpose, also to a super-user, who could replace it)."""
+    try:
+        marked = bool(os.stat(path).st_mode & 0o222)
+    except OSError:
+        return False
+    return marked and os.access(path, os.W_OK)
+
+
 def _editable(layer: Sdf.Layer) -> Finding | None:
     where = asset_ref(layer.identifier)
     if _is_packaged(layer):
         return Finding(Severity.SKIPPED, Codes.IN_PACKAGE, where,
                        "opinion is inside a package; in-place edits skipped (use the default "
                        "new-layer mode)")
-    if layer.anonymous or not layer.realPath or not os.access(layer.realPath, os.W_OK):
+    if layer.anonymous or not layer.realPath or not _writable(layer.realPath):
         return Finding(Severity.SKIPPED, Codes.READ_ONLY, where,
                        "layer is not a writable file; in-place edits skipped")
     return None
