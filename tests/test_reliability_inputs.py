@@ -434,6 +434,24 @@ def test_read_only_output_folder(tmp_path, capsys, shared_cache):
     assert leftovers(tmp_path / "lib") == []
 
 
+def test_a_scene_on_a_read_only_file_system_fails_each_stack_with_why(tmp_path, capsys, shared_cache):
+    """The default tiles' folder beside the stage cannot be made: each stack fails naming it, before any work
+    (it was an internal error on every stack after the work)."""
+    made = tmp_path / "made"
+    _three_materials(made)
+    with small_filesystem(tmp_path / "ro", "4m") as mounted:
+        if mounted is None:
+            pytest.skip("cannot mount a tmpfs here")
+        shutil.copytree(made, mounted / "lib")
+        if subprocess.run(["mount", "-o", "remount,ro", str(mounted)], capture_output=True).returncode:
+            pytest.skip("cannot remount read-only here")
+        code, report, _ = run_cli(capsys, str(mounted / "lib" / "scene.usda"), "--cache-dir", str(shared_cache))
+        failures = _write_failures(report)
+        assert code == 1 and len(failures) == 3, report["stacks"]
+        assert all("its tiles cannot be written" in m and "tileable" in m and "internal error" not in m
+                   for m in failures), failures
+
+
 def test_full_disk_real_small_filesystem(tmp_path, capsys, shared_cache):
     scene = _three_materials(tmp_path / "lib")
     with small_filesystem(tmp_path / "full", "90k") as out:

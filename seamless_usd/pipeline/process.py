@@ -229,6 +229,11 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
             run.report.unreadable.append(str(path))
             run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", asset_ref(path), str(exc)))
     if run.options.mode != authoring_module().WriteMode.DRY_RUN:
+        for src in sources:  # a source whose tiles' folder cannot be made: its stacks fail with why, before any work
+            problem = folder_problem(_output_dir(run.options, src.path))
+            if problem:
+                run.blocked.update({(str(src.path), s.id): f"its tiles cannot be written: {problem}"
+                                    for s in src.stacks if (str(src.path), s.id) not in run.left_alone})
         _run_jobs(run, [(str(src.path), src.stacks, _output_dir(run.options, src.path)) for src in sources])
     for src in sources:
         _author_source(run, src)
