@@ -7,6 +7,8 @@ from pathlib import Path
 __all__ = ["tile_filename", "source_digest", "override_layer_path", "slug"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
+#: What :func:`tile_filename` adds after a stem: the stack id, the source's digest, ``.tile``.
+_OWN_TILE = re.compile(r"\.[A-Za-z0-9_.-]+-[0-9a-f]{10}(\.[0-9a-f]{8})?\.tile$")
 
 
 def slug(text: str, limit: int = 48) -> str:
@@ -27,8 +29,10 @@ def tile_filename(source_asset: str, stack_id: str, extension: str, source_diges
 
     >>> tile_filename("tex/albedo.png", "Looks_M-1a", ".png", "5d41402abc4b2a76")
     'albedo.Looks_M-1a.5d41402a.tile.png'
+    >>> tile_filename("tileable/albedo.Looks_M-0123456789.5d41402a.tile.png", "Looks_M-abcdef0123", ".png")
+    'albedo.Looks_M-abcdef0123.tile.png'
     """
-    stem = Path(source_asset.replace("\\", "/")).stem
+    stem = _OWN_TILE.sub("", Path(source_asset.replace("\\", "/")).stem)  # a tile of a tile: the first stem
     digest = f".{slug(source_digest[:8])}" if source_digest else ""
     return f"{slug(stem)}.{slug(stack_id, 64)}{digest}.tile{extension}"
 
