@@ -137,3 +137,15 @@ def test_resolve_order_skips_auto_labels():
         [Label("auto", "inputs:sourceColorSpace"), Label("srgb_texture", "MaterialX colorspace")], info
     )
     assert cs is ColorSpace.SRGB and reason.startswith("MaterialX colorspace") and unknown == []
+
+
+def test_opacity_from_the_alpha_of_an_srgb_map_is_not_warned():
+    """The sRGB curve applies to red, green and blue only: opacity read from alpha is linear either way."""
+    from seamless_usd.discover.colorspace import mismatch_finding
+    from seamless_usd.textures import RoleUse
+
+    alpha = RoleUse("opacity", "a", "</M/S.inputs:opacity>")
+    colour = RoleUse("diffuseColor", "rgb", "</M/S.inputs:diffuseColor>")
+    assert mismatch_finding((colour, alpha), ColorSpace.SRGB, "inputs:sourceColorSpace", "</M/T>") is None
+    red = RoleUse("opacity", "r", "</M/S.inputs:opacity>")
+    assert mismatch_finding((red,), ColorSpace.SRGB, "inputs:sourceColorSpace", "</M/T>") is not None

@@ -80,10 +80,11 @@ def resolve_color_space(
 
 
 def mismatch_finding(roles: tuple[RoleUse, ...], cs: ColorSpace, reason: str, where: str) -> Finding | None:
-    """A warning when a data role reads a map that resolves to sRGB."""
+    """A warning when a data role reads a colour channel of a map that resolves to sRGB (the sRGB curve applies to
+    red, green and blue only: opacity read from alpha is not affected)."""
     if cs is not ColorSpace.SRGB:
         return None
-    data = [r.role for r in roles if not is_color_role(r.role)]
+    data = [r.role for r in roles if not is_color_role(r.role) and set(r.channels) - {"a"}]
     if not data:
         return None
     return Finding(
