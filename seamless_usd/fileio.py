@@ -27,7 +27,7 @@ from pathlib import Path
 from seamless_usd.errors import InputError
 from seamless_usd.findings import asset_ref
 
-__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine", "file_sha256", "folder_problem"]
+__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine", "file_sha256", "folder_problem", "marked_writable"]
 
 _UMASK = os.umask(0o022)  # read once at import (os.umask can only be read by setting it)
 os.umask(_UMASK)
@@ -283,3 +283,13 @@ def folder_problem(path: str | os.PathLike) -> str | None:
             with contextlib.suppress(OSError):
                 q.rmdir()
     return None
+
+
+def marked_writable(path: str | os.PathLike) -> bool:
+    """Whether the file may be edited in place: writable by this process, and marked writable at all (a file with
+    no write permission is read-only on purpose, also to a super-user, who could replace it)."""
+    try:
+        marked = bool(os.stat(path).st_mode & 0o222)
+    except OSError:
+        return False
+    return marked and os.access(path, os.W_OK)

@@ -221,7 +221,9 @@ def test_in_place_leaves_a_layer_marked_read_only_alone(assets, model_cache, cap
         scene.chmod(0o644)
     payload = json.loads(capsys.readouterr().out)
     assert code == 1 and scene.read_bytes() == original and not scene.with_name("scene.usda.bak").exists()
-    assert any(f["code"] == "read-only-layer" for f in payload["findings"])
+    [stack] = payload["stacks"]
+    assert stack["status"] == "failed" and "marked read-only" in stack["message"]
+    assert not (scene.parent / "tileable").exists()  # no tile that no layer would reference
 
 
 def test_dry_run_writes_nothing(assets, model_cache, capsys):

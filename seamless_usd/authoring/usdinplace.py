@@ -1,7 +1,6 @@
 """In-place authoring: edits land in the layers holding the opinions, after ``.bak`` copies."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Sequence
 
@@ -11,6 +10,7 @@ from seamless_usd.authoring.files import backup_once, check_layer, write_atomica
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult
 from seamless_usd.authoring.usdplan import _Author
 from seamless_usd.errors import InputError
+from seamless_usd.fileio import marked_writable
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = []
@@ -22,23 +22,13 @@ def _is_packaged(layer: Sdf.Layer) -> bool:
     return Ar.IsPackageRelativePath(layer.identifier) or layer.GetFileFormat().IsPackage()
 
 
-def _writable(path: str) -> bool:
-    """Whether the file may be edited in place: writable by this process, and marked writable at all (a file with
-    no write permission is read-only on purpose, also to a super-user, who could replace it)."""
-    try:
-        marked = bool(os.stat(path).st_mode & 0o222)
-    except OSError:
-        return False
-    return marked and os.access(path, os.W_OK)
-
-
 def _editable(layer: Sdf.Layer) -> Finding | None:
     where = asset_ref(layer.identifier)
     if _is_packaged(layer):
         return Finding(Severity.SKIPPED, Codes.IN_PACKAGE, where,
                        "opinion is inside a package; in-place edits skipped (use the default "
                        "new-layer mode)")
-    if layer.anonymous or not layer.realPath or not _writable(layer.realPath):
+    if layer.anonymous or not layer.realPath or not marked_writable(layer.realPath):
         return Finding(Severity.SKIPPED, Codes.READ_ONLY, where,
                        "layer is not a writable file; in-place edits skipped")
     return None

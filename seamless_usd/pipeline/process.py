@@ -19,7 +19,7 @@ from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
-from seamless_usd.fileio import folder_problem
+from seamless_usd.fileio import folder_problem, marked_writable
 from seamless_usd.findings import Finding, Severity, asset_ref
 from seamless_usd.pipeline.cache import JobIndex, StackCache, job_fingerprint
 from seamless_usd.pipeline.executors import InProcessExecutor, make_executor
@@ -228,6 +228,9 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
         except InputError as exc:
             run.report.unreadable.append(str(path))
             run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", asset_ref(path), str(exc)))
+    if run.options.mode is authoring_module().WriteMode.IN_PLACE:
+        for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
+            run.blocked.update(_locked_in_place(run, src))
     if run.options.mode != authoring_module().WriteMode.DRY_RUN:
         for src in sources:  # a source whose tiles' folder cannot be made: its stacks fail with why, before any work
             problem = folder_problem(_output_dir(run.options, src.path))
@@ -238,6 +241,20 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
     for src in sources:
         _author_source(run, src)
     return _finish(run, started)
+
+
+def _locked_in_place(run: Run, src: _Source) -> dict[tuple[str, str], str]:
+    """The stacks of ``src`` whose file values are authored in a layer or document marked read-only, with why:
+    edited in place they cannot be written, so their tiles are not made either."""
+    out = {}
+    for stack in src.stacks:
+        key = (str(src.path), stack.id)
+        locked = sorted({m.file_at.layer for m in stack.maps if m.file_at and m.file_at.layer
+                         and Path(m.file_at.layer).is_file() and not marked_writable(m.file_at.layer)})
+        if locked and key not in run.left_alone:
+            out[key] = (f"{asset_ref(locked[0])} is marked read-only, so its edits cannot be made in place and no tile "
+                        "is written; make it writable, or leave out --in-place for a new layer")
+    return out
 
 
 def process_stage(stage, options: Options | None = None) -> Report:
