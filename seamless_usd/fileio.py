@@ -27,7 +27,8 @@ from pathlib import Path
 from seamless_usd.errors import InputError
 from seamless_usd.findings import asset_ref
 
-__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine", "file_sha256", "folder_problem", "marked_writable"]
+__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "confine", "file_sha256", "folder_problem",
+           "marked_writable", "source_sha256"]
 
 _UMASK = os.umask(0o022)  # read once at import (os.umask can only be read by setting it)
 os.umask(_UMASK)
@@ -151,6 +152,23 @@ def file_sha256(path: str | os.PathLike) -> str:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+#: Source digests already read in this process, by the file's identity on disk (path, inode, size, modification
+#: time): a run hashes each source for its job's fingerprint and again for its tiles' names.
+_SOURCE_DIGESTS: dict[tuple, str] = {}
+
+
+def source_sha256(path: str | os.PathLike) -> str:
+    """:func:`file_sha256` of a source file (an input, read only), read once per process while it is unchanged on
+    disk. Not for checking a file this tool wrote: that is read again every time (:func:`file_sha256`)."""
+    st = os.stat(path)
+    key = (os.path.realpath(path), st.st_ino, st.st_size, st.st_mtime_ns)
+    if key not in _SOURCE_DIGESTS:
+        if len(_SOURCE_DIGESTS) >= 4096:
+            _SOURCE_DIGESTS.clear()
+        _SOURCE_DIGESTS[key] = file_sha256(path)
+    return _SOURCE_DIGESTS[key]
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:

@@ -40,10 +40,10 @@ def tile_filename(source_asset: str, stack_id: str, extension: str, source_diges
 def source_digest(path: str) -> str:
     """The digest of a source file's bytes that its tiles' names carry (:func:`tile_filename`); "" when it cannot
     be read as a file (a map inside a package)."""
-    from seamless_usd.fileio import file_sha256
+    from seamless_usd.fileio import source_sha256
 
     try:
-        return file_sha256(path)
+        return source_sha256(path)
     except OSError:
         return ""
 

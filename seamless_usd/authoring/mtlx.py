@@ -55,15 +55,17 @@ def author_mtlx(
     out = src if in_place else (
         Path(output_path).resolve() if output_path else default_output_document(src))
     result = AuthoringResult(dry_run=mode is WriteMode.DRY_RUN, output=None if in_place else out)
-    source_hash = file_sha256(src) if src.is_file() else ""
-    base, earlier = (src, []) if in_place else _earlier_output(src, out, source_hash)
-    doc = mx.createDocument()
-    try:
-        mx.readFromXmlFile(doc, str(base))
-    except Exception as exc:  # MaterialX raises its own ExceptionFileMissing / ExceptionParseError
-        raise InputError(f"{asset_ref(src)}: cannot be read as a MaterialX document ({exc})") from None
+    source_hash = "" if in_place or not src.is_file() else file_sha256(src)
+    doc, earlier = (None, []) if in_place else _earlier_output(src, out, source_hash)
+    from_source = doc is None
+    if from_source:
+        doc = mx.createDocument()
+        try:
+            mx.readFromXmlFile(doc, str(src))
+        except Exception as exc:  # MaterialX raises its own ExceptionFileMissing / ExceptionParseError
+            raise InputError(f"{asset_ref(src)}: cannot be read as a MaterialX document ({exc})") from None
     author = _MtlxAuthor(doc, src, out, result)
-    if base == src and out.parent != src.parent:
+    if from_source and out.parent != src.parent:
         author.rebase_files()
     if not in_place:  # what the new document was made from: a later run adds its edits to this one
         author.set_source_hash(source_hash)
@@ -103,21 +105,21 @@ def author_mtlx(
     return result
 
 
-def _earlier_output(src: Path, out: Path, source_hash: str) -> tuple[Path, list[str]]:
-    """The document the new one starts from, and the image nodes an earlier new document had edited that are
-    otherwise lost: the new document written before (``out``) when it was made from the source as it is now, so
-    that the edits of materials this run does not process (another stage's that uses the same document, an earlier
-    run's) are kept; else the source."""
+def _earlier_output(src: Path, out: Path, source_hash: str) -> tuple[mx.Document | None, list[str]]:
+    """The new document written before (``out``), read, when it was made from the source as it is now: the new one
+    starts from it, so that the edits of materials this run does not process (another stage's that uses the same
+    document, an earlier run's) are kept. Else None (start from the source), and the image nodes it had edited,
+    whose edits are then lost."""
     if not out.is_file() or out == src:
-        return src, []
+        return None, []
     earlier = mx.createDocument()
     try:
         mx.readFromXmlFile(earlier, str(out))
     except Exception:  # not a document any more: it is replaced
-        return src, []
+        return None, []
     if source_hash and earlier.getAttribute(MtlxNames.MADE_FROM) == source_hash:
-        return out, []
-    return src, [e.getNamePath() for e in earlier.traverseTree() if e.hasAttribute(MtlxNames.SOURCE_ASSET)]
+        return earlier, []
+    return None, [e.getNamePath() for e in earlier.traverseTree() if e.hasAttribute(MtlxNames.SOURCE_ASSET)]
 
 
 def read_mtlx_provenance(node: mx.Node) -> Provenance | None:

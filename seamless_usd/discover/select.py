@@ -10,7 +10,7 @@ from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.findings import Finding, Severity
 
 __all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "blocked_stacks", "left_alone_stacks",
-           "unread_findings", "unread_materials"]
+           "unread_findings", "unread_materials", "unread_files"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
 # the other maps tileable (and rescaling their UVs) would misalign them with the skipped one.
@@ -77,3 +77,8 @@ def unread_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[str
     have = {s.material for s in scan.stacks}
     return {m: found for m, found in unread_findings(scan).items()
             if m not in have and (not patterns or _matches(m, patterns))}
+
+
+def unread_files(skipped: Sequence[Finding]) -> str:
+    """The files of :func:`unread_findings`' findings, each with why, for a message: ``@a.png@ (missing-file), ...``."""
+    return ", ".join(f"{f.where.split(' ')[-1]} ({f.code})" for f in skipped)

@@ -24,7 +24,7 @@ from safetensors.numpy import load_file, save_file
 
 from seamless_usd.version import __version__
 from seamless_usd.errors import InputError
-from seamless_usd.fileio import atomic_write, atomic_write_text, file_sha256
+from seamless_usd.fileio import atomic_write, atomic_write_text, file_sha256, source_sha256
 from seamless_usd.findings import asset_ref
 
 __all__ = ["StackCache", "CacheEntry", "JobIndex", "stack_key", "job_fingerprint", "default_cache_dir"]
@@ -154,7 +154,7 @@ def job_fingerprint(stack, settings) -> str:
         roles = sorted(r.role for r in m.roles)
         h.update(json.dumps([m.channels_used, m.color_space.value, list(m.scale), list(m.bias), roles,
                              m.is_normal, m.normal_y_flip]).encode())
-        h.update(file_sha256(Path(m.resolved)).encode())
+        h.update(source_sha256(Path(m.resolved)).encode())
     return h.hexdigest()
 
 

@@ -222,7 +222,9 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
 
 
 def _unread_item(scene: Path, material: str, skipped: list, maps: list[str]) -> CheckItem:
-    files = ", ".join(f"{f.where.split(' ')[-1]} ({f.code})" for f in skipped)
+    from seamless_usd.discover.select import unread_files
+
+    files = unread_files(skipped)
     return CheckItem(material, str(scene), maps + [f.where.split(" ")[-1].strip("@") for f in skipped],
                      error=f"not judged: a texture of it cannot be read: {files}; fix or restore it and check again")
 

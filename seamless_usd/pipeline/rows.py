@@ -8,7 +8,7 @@ import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from seamless_usd.discover.select import unread_materials
+from seamless_usd.discover.select import unread_files, unread_materials
 from seamless_usd.errors import SeamlessUsdError
 from seamless_usd.findings import Finding, Severity, prim_ref
 from seamless_usd.pipeline.executors import Executor
@@ -132,7 +132,7 @@ def unread_rows(run: Run, scan: ScanResult, source_label: str) -> None:
     not left out of the table, the counts or the exit code."""
     for material, skipped in unread_materials(scan, run.options.materials).items():
         slug = material.strip("<>").strip("/").replace("/", "_") or "material"
-        files = ", ".join(f"{f.where.split(' ')[-1]} ({f.code})" for f in skipped)
+        files = unread_files(skipped)
         message = f"nothing processed: no texture of it can be read: {files}; fix or restore them and run again"
         run.report.stacks.append(StackReport(id=f"{slug}-unread", material=material, source=source_label,
                                              status=StackStatus.FAILED, message=message))
