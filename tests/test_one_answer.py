@@ -117,3 +117,55 @@ def test_a_processed_stage_gets_one_answer_from_process_scan_and_check(tmp_path,
     assert albedo.GetAttribute("seamless:passed").Get() == (stack["status"] == "passed")
     for name in ("seamless:qPassed", "seamless:qTau", "seamless:qBandMin", "seamless:modelHash"):
         assert not albedo.GetAttribute(name).HasAuthoredValue(), name
+
+
+def _process(tmp_path: Path, capsys, scene: str, names: tuple[str, ...]) -> tuple[Path, dict, int]:
+    import json
+    import shutil
+
+    from seamless_usd_cli.main import main
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in names:
+        shutil.copytree(samples / name, tmp_path / name)
+    code = main(["process", str(tmp_path / scene), "--preset", "tiny", "--seeds", "1", "--cache-dir",
+                 str(tmp_path / "cache"), "--json"])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    return tmp_path / scene, stack, code
+
+
+def test_the_tiles_named_alone_are_judged_against_their_sources_with_their_stack(tmp_path, capsys):
+    """A tile's file records its source and its stack's other tiles: ``check`` on the tiles alone (a folder of them,
+    or one named) gives the answer ``check`` gives on the stage, judged together against the sources; a tile whose
+    source has changed since is judged against itself, and says why."""
+    scene, stack, code = _process(tmp_path, capsys, "brick/scene.usda", ("brick", "textures"))
+    tiles = sorted(Path(m["output"]).resolve() for m in stack["maps"])
+    assert len(tiles) == 3
+    [on_stage] = check_paths([scene.with_name("scene.seamless.usda")]).items
+    [folder] = check_paths([tiles[0].parent]).items  # the three tiles: one stack, judged once
+    [named] = check_paths([tiles[1]]).items
+    for item in (folder, named):
+        assert item.verdict["reference"] == "source" and not item.error and not item.note
+        assert sorted(Path(p).resolve() for p in item.maps) == tiles
+        assert item.passed == on_stage.passed == (stack["status"] == "passed") == (code == 0)
+        assert item.verdict["seams"] == on_stage.verdict["seams"]
+        assert item.verdict["failing"] == on_stage.verdict["failing"]
+    assert named.name == str(tiles[1]) and "other tile(s) of its stack" in named.words()
+
+    (tmp_path / "textures" / "brick_roughness.png").write_bytes((tmp_path / "textures" / "brick_albedo.png")
+                                                               .read_bytes())  # the source changed since
+    roughness = next(t for t in tiles if t.name.startswith("brick_roughness"))
+    [changed] = check_paths([roughness]).items
+    assert changed.verdict["reference"] == "itself" and changed.maps == [str(roughness)]
+    assert "has changed since the tile was made" in changed.note and changed.note in changed.words()
+
+
+def test_a_processed_materialx_document_is_judged_against_its_recorded_sources(tmp_path, capsys):
+    """``check`` on the new MaterialX document a run wrote judges its tiles against the sources its nodes record,
+    as ``process`` did, not against themselves."""
+    scene, stack, code = _process(tmp_path, capsys, "mtlx/tiled.mtlx", ("mtlx", "textures"))
+    [checked] = check_paths([scene.with_name("tiled.seamless.mtlx")]).items
+    assert checked.verdict["reference"] == "source" and not checked.error
+    assert checked.passed == (stack["status"] == "passed") == (code == 0)
+    [original] = check_paths([scene]).items  # the sources themselves: nothing recorded, judged against themselves
+    assert original.verdict["reference"] == "itself"

@@ -276,8 +276,10 @@ def write_pixels(
     pixels: np.ndarray,
     like: ImageInfo,
     color_space: ColorSpace,
+    record: dict | None = None,
 ) -> Path:
-    """Write float file values atomically in the output family of ``like``.
+    """Write float file values atomically in the output family of ``like``; ``record``: what the file
+    records of how it was made (:mod:`.tag`).
 
     Parameters
     ----------
@@ -332,6 +334,11 @@ def write_pixels(
         spec.attribute("oiio:UnassociatedAlpha", 1)  # values are straight alpha, store as is
         if ext == ".tif":
             spec.attribute("compression", "zip")
+    if record is not None:
+        from seamless_usd.imaging.tag import tag_attributes
+
+        for name, text in tag_attributes(ext, record):
+            spec.attribute(name, text)
 
     def writer(tmp: Path) -> None:
         out = oiio.ImageOutput.create(str(tmp))

@@ -51,7 +51,7 @@ def output_path(path: str | os.PathLike, like: ImageInfo) -> Path:
 
 
 def write_map(
-    path: str | os.PathLike, values: np.ndarray, encoding: MapEncoding, like: ImageInfo
+    path: str | os.PathLike, values: np.ndarray, encoding: MapEncoding, like: ImageInfo, record: dict | None = None
 ) -> Path:
     """Encode network values and write them atomically in the source's format family.
 
@@ -67,6 +67,8 @@ def write_map(
         The map's encoding (from :class:`~seamless_usd.imaging.stack.StackPixels`).
     like
         The source's header: sample type, channel count and names.
+    record
+        What the tile records in its file of how it was made (:mod:`.tag`), or None.
 
     Returns
     -------
@@ -87,4 +89,4 @@ def write_map(
             f"the source has {like.channels}"
         )
     pixels = encode_map(values, encoding)
-    return write_pixels(target, pixels, like, encoding.color_space)
+    return write_pixels(target, pixels, like, encoding.color_space, record)

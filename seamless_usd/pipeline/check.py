@@ -3,8 +3,9 @@
 Each texture stack of a stage or MaterialX document that is meant to tile (intent ``tiling`` or
 ``already-tileable``), and each picture named alone, gets the verdict of :mod:`seamless_usd.verdict`:
 
-* a map this tool wrote (its texture prim carries ``SeamlessTileAPI`` with ``seamless:sourceAsset``) is
-  judged against that source, brought to the tile's texel grid with the recorded ``seamless:uvScale``;
+* a map this tool wrote is judged against the source recorded with it (:mod:`.recorded`: ``SeamlessTileAPI`` on
+  its USD texture prim, the ``seamless_*`` attributes of its MaterialX node, or, for a tile named alone, its own
+  file, with the other tiles of its stack), brought to the tile's texel grid with the recorded UV scale;
 * anything else has no separate source and is judged against itself: its own interior lines are the
   reference, and a seam is a line unlike them (no fidelity figure applies). Its files are read and judged by
   :func:`seamless_usd.verdict.alone.judge_alone`, exactly as the scan's triage reads and judges them, so a
@@ -12,7 +13,6 @@ Each texture stack of a stage or MaterialX document that is meant to tile (inten
 """
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -21,6 +21,7 @@ from pathlib import Path
 from seamless_usd.errors import InputError, SeamlessUsdError
 from seamless_usd.findings import asset_ref
 from seamless_usd.pipeline.inputs import SCENE_SUFFIXES, expand_inputs, is_own_output
+from seamless_usd.pipeline.recorded import keystone_of, recorded_source, stack_sources
 from seamless_usd.report.contact import SheetCard, thumbnail
 
 __all__ = ["IMAGE_SUFFIXES", "CheckItem", "CheckReport", "check_paths"]
@@ -38,6 +39,7 @@ class CheckItem:
     maps: list[str]  # asset paths as authored (or the picture's path)
     verdict: dict = field(default_factory=dict)  # Verdict.as_dict(); empty when unreadable
     error: str = ""
+    note: str = ""  # why a tile that records its source was judged against itself instead
     seconds: float = 0.0
     thumbnail: tuple = field(default=(), repr=False)  # (data URI, (w, h), texel scale) of the first map, 2 x 2
 
@@ -48,8 +50,11 @@ class CheckItem:
         if self.error:
             return self.error
         v = Verdict.from_dict(self.verdict)
-        return "; ".join(v.reasons()) or ("seamless and faithful" if v.reference == "source" else
+        said = "; ".join(v.reasons()) or ("seamless and faithful" if v.reference == "source" else
                                           "seamless (judged against itself)")
+        if self.name == self.source and len(self.maps) > 1:  # a tile judged with its stack's other tiles
+            said += f" (judged with the {len(self.maps) - 1} other tile(s) of its stack beside it)"
+        return f"{said} ({self.note})" if self.note else said
 
     def card(self) -> SheetCard:
         """The item as a card of the contact sheet (:mod:`seamless_usd.report.contact`): its seams brought to
@@ -70,7 +75,7 @@ class CheckItem:
 
     def to_dict(self) -> dict:
         return {"name": self.name, "source": self.source, "maps": list(self.maps), "passed": self.passed,
-                "verdict": self.verdict, "error": self.error, "seconds": round(self.seconds, 3)}
+                "verdict": self.verdict, "error": self.error, "note": self.note, "seconds": round(self.seconds, 3)}
 
 
 @dataclass
@@ -138,53 +143,77 @@ def _alone(item: CheckItem, files: list) -> None:
     item.thumbnail = (uri, size, scale * reading.shape[1] / verdict.size[1])  # thumbnail px per full-size texel
 
 
-def _judge_picture(path: Path) -> CheckItem:
+def _picture_groups(pictures: list[Path]) -> list[list[Path]]:
+    """The pictures as judged, each a list: a tile this tool wrote first, with the other tiles of its stack its file
+    names (:mod:`seamless_usd.imaging.tag`) when they all lie beside it (a stack is judged together, as ``process``
+    judged it, and once when several of its tiles are named); any other picture alone."""
+    from seamless_usd.imaging.tag import read_tag
+
+    groups, seen = [], set()
+    for p in pictures:
+        record = read_tag(p) if p.is_file() else None
+        stack = [p.parent / str(n) for n in (record or {}).get("stack", [])]
+        files = [p] + [q for q in stack if q.name != p.name] if p.name in {q.name for q in stack} else [p]
+        if not all(q.is_file() for q in files):
+            files = [p]
+        key = frozenset(q.resolve() for q in files)
+        if key not in seen:
+            seen.add(key)
+            groups.append(files)
+    return groups
+
+
+def _judge_picture(files: list[Path]) -> CheckItem:
+    """A picture judged (``files[0]``): a tile this tool wrote, whose file records its source, with the other tiles
+    of its stack (``files[1:]``) against their sources as ``process`` judged them; any other picture, or a tile
+    whose source is gone or has changed since, against itself."""
+    from seamless_usd.imaging.tag import read_tag
     from seamless_usd.verdict.alone import FileMap
 
-    item = CheckItem(str(path), str(path), [str(path)])
+    path = files[0]
+    item = CheckItem(str(path), str(path), [str(f) for f in files])
     t0 = time.perf_counter()
     try:
-        _alone(item, [FileMap(str(path), "rgb", False, path.name)])
+        made = []
+        for f in files:
+            record = read_tag(f)
+            made.append(None if record is None else recorded_source(f, record, item))
+        if all(made):
+            _against_source(item, [t for t, _, _ in made], [s for _, s, _ in made], made[0][2])
+        else:
+            item.maps = [str(path)]
+            _alone(item, [FileMap(str(path), "rgb", False, path.name)])
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
         item.error = str(exc) if asset_ref(path) in str(exc) else f"{asset_ref(path)}: cannot be judged: {exc}"
     item.seconds = time.perf_counter() - t0
     return item
 
 
-def _sources(stage, stack) -> tuple[list, object] | None:
-    """The maps' recorded sources and the provenance recorded with them (its UV scale, straightening turn, and
-    how far the source was levelled or evened before it was cut), when every map is a tile this tool wrote into
-    the USD ``stage`` (None for a MaterialX document)."""
-    if stage is None:
-        return None
-    from seamless_usd.authoring.schema import Schema, read_provenance
+def _against_source(item: CheckItem, tile_maps: list, src_maps: list, prov) -> None:
+    """``item`` judged as ``process`` judged it: the tiles ``tile_maps`` against their sources ``src_maps`` made as
+    the provenance ``prov`` records (straightened, levelled, evened) and brought to the tiles' texel grid."""
+    from seamless_usd.imaging import WorkingResolution, load_stack_pixels
+    from seamless_usd.pipeline.madefrom import made_values, on_tile_grid
+    from seamless_usd.verdict import judge
 
-    sources, prov = [], None
-    for m in stack.maps:
-        prim = stage.GetPrimAtPath(m.node.strip("<>"))
-        prov = read_provenance(prim) if prim else None
-        attr = prim.GetAttribute(Schema.SOURCE_ASSET) if prov is not None else None
-        resolved = attr.Get().resolvedPath if attr and attr.Get() is not None else ""
-        if not resolved:
-            return None
-        sources.append(dataclasses.replace(m, resolved=resolved, asset=prov.source_asset))
-    return sources, prov
-
-
-def keystone_of(prov):
-    """The rectification recorded in ``prov`` (``seamless:rectified``: the point and the leans' spread), or None."""
-    if not prov.rectified[2]:
-        return None
-    from seamless_usd.imaging.perspective import Keystone
-
-    return Keystone(*prov.rectified)
+    normals = [m.is_normal for m in tile_maps]
+    tiles = list(load_stack_pixels(tile_maps).values)
+    uv = prov.uv_scale
+    grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
+    # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
+    sources = list(load_stack_pixels(src_maps, WorkingResolution(max_size=max(grid))).values)
+    # made from the source straightened, levelled or evened as recorded: judged against it made so
+    h, w = sources[0].shape[:2]
+    sources = made_values(sources, normals, prov.straightened, bool(prov.levelled), bool(prov.evened),
+                          turn_vectors=not prov.uv_turn, rectified=keystone_of(prov))
+    uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
+    sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
+    item.verdict = judge(tiles, sources, normals, [m.asset for m in tile_maps]).as_dict()
+    item.thumbnail = thumbnail(tiles[0])
 
 
 def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
-    from seamless_usd.imaging import WorkingResolution, load_stack_pixels
-    from seamless_usd.pipeline.madefrom import made_values, on_tile_grid
     from seamless_usd.textures import describe_selection
-    from seamless_usd.verdict import judge
     from seamless_usd.verdict.alone import FileMap
 
     name = stack.material + (f" in {describe_selection(stack.selection)}" if stack.selection else "")
@@ -195,26 +224,11 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
         if packed:
             raise InputError(f"{asset_ref(packed[0].asset)} is inside a .usdz package: its pixels are not judged "
                              "there (unpack the package, or check the files it was made from)")
-        recorded = _sources(stage, stack)
+        recorded = stack_sources(stage, stack)
         if recorded is None:  # no separate source: judged against itself, as the scan's triage judges it
             _alone(item, [FileMap(m.resolved, m.channels_used, m.is_normal, m.asset) for m in stack.maps])
         else:
-            normals = [m.is_normal for m in stack.maps]
-            tiles = list(load_stack_pixels(list(stack.maps)).values)
-            src_maps, prov = recorded
-            uv = prov.uv_scale
-            grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
-            # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
-            policy = WorkingResolution(max_size=max(grid))
-            sources = list(load_stack_pixels(src_maps, policy).values)
-            # made from the source straightened, levelled or evened as recorded: judged against it made so
-            h, w = sources[0].shape[:2]
-            sources = made_values(sources, normals, prov.straightened, bool(prov.levelled), bool(prov.evened),
-                                  turn_vectors=not prov.uv_turn, rectified=keystone_of(prov))
-            uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
-            sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
-            item.verdict = judge(tiles, sources, normals, [m.asset for m in stack.maps]).as_dict()
-            item.thumbnail = thumbnail(tiles[0])
+            _against_source(item, list(stack.maps), *recorded)
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
         item.error = str(exc)
     item.seconds = time.perf_counter() - t0
@@ -229,9 +243,9 @@ def _unread_item(scene: Path, material: str, skipped: list, maps: list[str]) -> 
                      error=f"not judged: a texture of it cannot be read: {files}; fix or restore it and check again")
 
 
-def _judged_pictures(pictures: list[Path], jobs: int) -> Iterator[CheckItem]:
-    """Each picture's item, in order; ``jobs`` > 1 judges them in that many worker processes (a picture is
-    judged in numpy alone, one core each)."""
+def _judged_pictures(pictures: list[list[Path]], jobs: int) -> Iterator[CheckItem]:
+    """Each picture's item (:func:`_picture_groups`), in order; ``jobs`` > 1 judges them in that many worker
+    processes (a picture is judged in numpy alone, one core each)."""
     if jobs <= 1 or len(pictures) < 2 * jobs:
         yield from map(_judge_picture, pictures)
         return
@@ -300,9 +314,10 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
             done += 1
             gone = " (a link to a file that is gone)" if picture.is_symlink() else ""
             report.unreadable.append(f"{asset_ref(picture)}: no such file{gone}")
-    for item in _judged_pictures(found, jobs):
+    groups = _picture_groups(found)  # a stack's tiles are judged together
+    for files, item in zip(groups, _judged_pictures(groups, jobs)):
         emit(item.name)
-        done += 1
+        done += len(files)
         report.items.append(item)
     if progress is not None:
         progress("", done, total)

@@ -10,7 +10,8 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["straighten", "made_values", "as_made", "source_uv_scale", "on_tile_grid", "uv_turn_of"]
+__all__ = ["straighten", "made_values", "as_made", "source_uv_scale", "on_tile_grid", "uv_turn_of", "made_fields",
+           "tile_record", "recorded_maps"]
 
 
 def straighten(pixels, normals: list[bool], uv_turn: bool = False):
@@ -124,3 +125,76 @@ def on_tile_grid(sources: list[np.ndarray], normals: list[bool], tile_hw: tuple[
         return sources
     maps = [MapInput(f"m{i}", s, n) for i, (s, n) in enumerate(zip(sources, normals))]
     return [m.pixels for m in downsample_maps(maps, grid)]
+
+
+def rectified_of(straightened: dict | None) -> tuple[float, float, float]:
+    """(vx, vy, spread) of the source's rectification (:mod:`.imaging.perspective`); zeros when it was not."""
+    rectified = (straightened or {}).get("rectified")
+    if not rectified:
+        return (0.0, 0.0, 0.0)
+    return (*(float(v) for v in rectified["vanishing"]), float(rectified["spread"]))
+
+
+def made_fields(straightened: dict | None, levelled: dict | None, evened: dict | None) -> dict:
+    """The provenance fields (:class:`.authoring.Provenance`) that say how the source was made before the tile was
+    cut from it, from the facts recorded (the turn, the levelling, the evening)."""
+    return {"straightened": float((straightened or {}).get("degrees", 0.0)),
+            "levelled": float((levelled or {}).get("moved", 0.0)),
+            "evened": float((evened or {}).get("moved", 0.0)),
+            "rectified": rectified_of(straightened)}
+
+
+def tile_record(m, out_dir, uv_scale, facts: tuple, stack_files: list[str]) -> dict | None:
+    """What the tile of map ``m`` written into ``out_dir`` records in its file (:mod:`.imaging.tag`): its source
+    (the path from ``out_dir`` and its SHA-256), how the source's values are read, how it was made before the tile
+    was cut (``facts``: the straightened, levelled and evened facts; ``uv_scale`` read against the made maps, brought
+    back to the source's texel density), and the file names of its stack's tiles, in order (the stack is judged
+    together). None for a source that is no file of its own (inside a package)."""
+    import os
+
+    from seamless_usd.naming import source_digest
+
+    digest = source_digest(m.resolved)
+    if not digest:
+        return None
+    straightened, levelled, evened = facts
+    turned = uv_turn_of(straightened)
+    made = {**made_fields(straightened, levelled, evened), "uv_scale": list(source_uv_scale(uv_scale, straightened)),
+            "uv_turn": turned[0] if turned else 0.0}
+    made["rectified"] = list(made["rectified"])
+    return {"source": os.path.relpath(m.resolved, out_dir).replace(os.sep, "/"), "sha256": digest,
+            "map": {"color_space": m.color_space.value, "roles": [[r.role, r.channels] for r in m.roles],
+                    "scale": list(m.scale), "bias": list(m.bias), "normal_y_flip": m.normal_y_flip},
+            "made": made, "stack": list(stack_files)}
+
+
+def recorded_maps(tile_path, record: dict):
+    """(tile, source, provenance) from a tile's :func:`tile_record`: the tile and its source file as maps read the
+    way the tile's source was read, and the provenance that says how the source was made. Raises ``ValueError``
+    on a record that does not hold what :func:`tile_record` writes."""
+    from pathlib import Path
+
+    from seamless_usd.authoring.types import Provenance
+    from seamless_usd.textures import AuthoredAt, ColorSpace, Origin, RoleUse, TextureMap
+
+    try:
+        read, made = record["map"], record["made"]
+        source = (Path(tile_path).parent / record["source"]).resolve()
+
+        def texture(path: Path) -> TextureMap:
+            return TextureMap(
+                material="", node="", node_type="", origin=Origin.USD, asset=str(path), resolved=str(path),
+                file_at=AuthoredAt("", "", ""), roles=tuple(RoleUse(str(r), str(c), "") for r, c in read["roles"]),
+                color_space=ColorSpace(read["color_space"]), color_space_reason="recorded in the tile",
+                scale=tuple(float(v) for v in read["scale"]), bias=tuple(float(v) for v in read["bias"]),
+                normal_y_flip=bool(read.get("normal_y_flip", False)))
+
+        prov = Provenance(source_asset=record["source"], crop_size=(0, 0),
+                          uv_scale=tuple(float(v) for v in made["uv_scale"]), q_passed=None, q_tau=0.0,
+                          q_band_min=(0.0, 0.0), model_hash="", tool_version="",
+                          straightened=float(made["straightened"]), levelled=float(made["levelled"]),
+                          evened=float(made["evened"]), uv_turn=float(made["uv_turn"]),
+                          rectified=tuple(float(v) for v in made["rectified"]))
+        return texture(Path(tile_path)), texture(source), prov
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"its record of how it was made cannot be read ({exc})") from exc

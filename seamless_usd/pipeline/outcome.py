@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from seamless_usd.findings import Finding
-from seamless_usd.pipeline.madefrom import source_uv_scale, uv_turn_of
+from seamless_usd.pipeline.madefrom import made_fields, source_uv_scale, uv_turn_of
 from seamless_usd.report.model import MapReport, Previews, StackReport, StackStatus
 from seamless_usd.textures import TextureMap, TextureStack
 
@@ -113,10 +113,7 @@ class StackOutcome:
             tool_version=__version__,
             passed=self.passed,
             verdict="seamless and faithful" if self.passed else "; ".join(self.reasons()),
-            straightened=float((self.resampled.get("straightened") or {}).get("degrees", 0.0)),
-            levelled=float((self.resampled.get("levelled") or {}).get("moved", 0.0)),
-            evened=float((self.resampled.get("evened") or {}).get("moved", 0.0)),
-            rectified=_rectified(self.resampled.get("straightened")),
+            **made_fields(*(self.resampled.get(k) for k in ("straightened", "levelled", "evened"))),
         )
         maps = [MapResult(map=m, output_path=self.maps[map_identity(m)].output) for m in stack.maps]
         return StackResult(stack=stack, maps=maps, uv_scale=self.uv_scale, provenance=prov, uv_turn=self.uv_turn())
@@ -165,14 +162,6 @@ def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, p
         previews=previews,
         findings=list(pixels.findings) + _turn_refused(straightened),
     )
-
-
-def _rectified(straightened: dict | None) -> tuple[float, float, float]:
-    """(vx, vy, spread) of the source's rectification (:mod:`.imaging.perspective`); zeros when it was not."""
-    rectified = (straightened or {}).get("rectified")
-    if not rectified:
-        return (0.0, 0.0, 0.0)
-    return (*(float(v) for v in rectified["vanishing"]), float(rectified["spread"]))
 
 
 def _turn_refused(straightened: dict | None) -> list[Finding]:

@@ -19,7 +19,8 @@ from seamless_usd.textures import TextureStack
 from seamless_usd.fileio import confine
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
-from seamless_usd.pipeline.madefrom import as_made, on_tile_grid, source_uv_scale, straighten, uv_turn_of
+from seamless_usd.pipeline.madefrom import (as_made, on_tile_grid, source_uv_scale, straighten, tile_record,
+                                            uv_turn_of)
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
 from seamless_usd.naming import source_digest, tile_filename
 from seamless_usd.pipeline.rerun import load_judged, save_judged
@@ -183,11 +184,14 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     sources = on_tile_grid(list(pixels.values), [m.is_normal for m in stack.maps], tile_hw, uv_scale)
     outcomes: dict[tuple[str, str], MapOutcome] = {}
     written_values = []
-    for name, m, source, encoding, info in zip(names, stack.maps, sources, pixels.encodings, pixels.infos):
+    filenames = [tile_filename(m.asset, stack.id, imaging.output_extension(info), source_digest(m.resolved))
+                 for m, info in zip(stack.maps, pixels.infos)]
+    for name, m, source, encoding, info, filename in zip(names, stack.maps, sources, pixels.encodings, pixels.infos,
+                                                         filenames):
         values = tiles[name]
-        filename = tile_filename(m.asset, stack.id, imaging.output_extension(info), source_digest(m.resolved))
         target = confine(out_dir / filename, out_dir)
-        written = imaging.write_map(target, values, encoding, like=info)
+        record = tile_record(m, out_dir, uv_scale, (straightened, levelled, evened), filenames)  # read by check
+        written = imaging.write_map(target, values, encoding, like=info, record=record)
         back = imaging.decode_map(imaging.read_image(written, max_pixels=None)[0], encoding)  # what is on disk
         written_values.append(back)
         outcomes[map_identity(m)] = MapOutcome(
