@@ -133,9 +133,15 @@ def variant_edit_target(layer: Sdf.Layer, prim: Usd.Prim, attr: Usd.Attribute | 
     node = _opinion_node(prim, attr)
     if node is None:
         return Usd.EditTarget(layer)
+    chain = []  # the opinion's node and the nodes that brought it in: a payload or reference authored inside a
+    while node:  # variant is a child of that variant's node, whose path holds the selection
+        chain.append(node)
+        node = node.parent
     selections = []
-    for prefix in node.path.GetPrefixes():
-        if prefix.IsPrimVariantSelectionPath():
+    for node in reversed(chain):
+        for prefix in node.path.GetPrefixes():
+            if not prefix.IsPrimVariantSelectionPath():
+                continue
             vset, vsel = prefix.GetVariantSelection()
             site = node.mapToRoot.MapSourceToTarget(prefix.GetParentPath().StripAllVariantSelections())
             if site.isEmpty:
@@ -144,7 +150,8 @@ def variant_edit_target(layer: Sdf.Layer, prim: Usd.Prim, attr: Usd.Attribute | 
                     f"its value is authored inside variant {{{vset}={vsel}}} of {prim_ref(prefix.GetParentPath())}, "
                     "which cannot be reached from the stage's namespace; nothing written for it "
                     "(edit that variant's layer with --in-place)")
-            selections.append((site, vset, vsel))
+            if (site, vset, vsel) not in selections:
+                selections.append((site, vset, vsel))
     if not selections:
         return Usd.EditTarget(layer)
     path, previous = Sdf.Path.absoluteRootPath, Sdf.Path.absoluteRootPath

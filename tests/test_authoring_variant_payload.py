@@ -1,0 +1,113 @@
+"""A material brought in by a payload (or a reference) authored inside a variant: its edits go inside that
+variant, so the other selections keep their own look, and a stage referencing the asset gets the same."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+from pxr import Sdf, Usd, UsdShade
+
+from seamless_usd.authoring import MapResult, Provenance, StackResult, author_usd
+from seamless_usd.discover import scan_paths
+
+TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
+SCALE = (2.0, 2.0)
+
+
+def _material(stage: Usd.Stage, path: str, texture: str, transform: bool) -> None:
+    """A UsdPreviewSurface material reading ``texture`` through st (and a UsdTransform2d with ``transform``)."""
+    mat = UsdShade.Material.Define(stage, path)
+    surface = UsdShade.Shader.Define(stage, f"{path}/Surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    mat.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+    reader = UsdShade.Shader.Define(stage, f"{path}/St")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
+    st = reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+    if transform:
+        xf = UsdShade.Shader.Define(stage, f"{path}/Xf")
+        xf.CreateIdAttr("UsdTransform2d")
+        xf.CreateInput("in", Sdf.ValueTypeNames.Float2).ConnectToSource(st)
+        xf.CreateInput("scale", Sdf.ValueTypeNames.Float2).Set((2.0, 2.0))
+        st = xf.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+    tex = UsdShade.Shader.Define(stage, f"{path}/Color")
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(texture)
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(st)
+    surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
+        tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
+
+
+def _asset(root: Path) -> Path:
+    """asset.usda: variant set ``look``; ``brick`` payloads the material from mtl/payload.usda, ``plain`` defines
+    its own material at the same path."""
+    (root / "tex").mkdir()
+    for name in ("brick_albedo.png", "wood_color.png"):
+        shutil.copyfile(TEXTURES / name, root / "tex" / name)
+    (root / "asset" / "mtl").mkdir(parents=True)
+    payload = Usd.Stage.CreateNew(str(root / "asset" / "mtl" / "payload.usda"))
+    payload.DefinePrim("/Mtl", "Scope")
+    _material(payload, "/Mtl/Brick", "../../tex/brick_albedo.png", transform=True)
+    payload.GetRootLayer().Save()
+    stage = Usd.Stage.CreateNew(str(root / "asset" / "asset.usda"))
+    asset = stage.DefinePrim("/Asset", "Xform")
+    stage.SetDefaultPrim(asset)
+    looks = asset.GetVariantSets().AddVariantSet("look")
+    for name in ("brick", "plain"):
+        looks.AddVariant(name)
+        looks.SetVariantSelection(name)
+        with looks.GetVariantEditContext():
+            scope = stage.DefinePrim("/Asset/Looks", "Scope")
+            if name == "brick":
+                scope.GetPayloads().AddPayload("./mtl/payload.usda", "/Mtl")
+            else:
+                _material(stage, "/Asset/Looks/Brick", "../tex/wood_color.png", transform=False)
+    looks.SetVariantSelection("brick")
+    stage.GetRootLayer().Save()
+    return root / "asset" / "asset.usda"
+
+
+def _stand_ins(path: Path) -> list[StackResult]:
+    """Every stack found, each map's tile a copy of its source (authoring only places them)."""
+    results = []
+    for stack in scan_paths([path]).stacks:
+        maps = []
+        for tex in stack.maps:
+            out = path.parent / "tileable" / f"{Path(tex.resolved).stem}_tile.png"
+            out.parent.mkdir(exist_ok=True)
+            shutil.copyfile(tex.resolved, out)
+            maps.append(MapResult(tex, out))
+        prov = Provenance(stack.maps[0].asset, (64, 64), SCALE, None, 0.0, (0.0, 0.0), "", "0.1.0", passed=True)
+        results.append(StackResult(stack, maps, SCALE, prov))
+    return results
+
+
+def _composed(layer: Path, selection: str) -> tuple[str, bool, list]:
+    stage = Usd.Stage.Open(str(layer))
+    stage.GetPrimAtPath("/Asset").GetVariantSets().GetVariantSet("look").SetVariantSelection(selection)
+    color = stage.GetPrimAtPath("/Asset/Looks/Brick/Color")
+    st = color.GetAttribute("inputs:st").GetConnections()
+    transform = stage.GetPrimAtPath(st[0].GetPrimPath()) if st else None
+    upstream = transform.GetAttribute("inputs:in").GetConnections() if transform else []
+    valid = all(stage.GetPrimAtPath(p.GetPrimPath()).IsValid() for p in upstream)
+    return Path(color.GetAttribute("inputs:file").Get().path).name, valid, [str(p) for p in upstream]
+
+
+@pytest.mark.parametrize("referenced", [False, True])
+def test_a_payload_inside_a_variant_is_edited_inside_that_variant(tmp_path, referenced):
+    path = _asset(tmp_path)
+    if referenced:  # a shot stage referencing the asset: the same, one arc further
+        shot = Usd.Stage.CreateNew(str(tmp_path / "shot.usda"))
+        shot.DefinePrim("/Asset").GetReferences().AddReference("./asset/asset.usda")
+        shot.GetRootLayer().Save()
+        path = tmp_path / "shot.usda"
+    results = _stand_ins(path)
+    assert len(results) == 2  # one stack per selection
+    written = author_usd(path, results).output
+    brick, brick_linked, _ = _composed(written, "brick")
+    plain, plain_linked, upstream = _composed(written, "plain")
+    assert brick == "brick_albedo_tile.png" and plain == "wood_color_tile.png"
+    assert brick_linked and plain_linked and upstream == ["/Asset/Looks/Brick/St.outputs:result"]
+    layer = Sdf.Layer.FindOrOpen(str(written))
+    assert not layer.GetPrimAtPath("/Asset/Looks"), "an edit outside the variant changes every selection"
