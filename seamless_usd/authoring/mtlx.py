@@ -192,12 +192,40 @@ class _MtlxAuthor(_PlaceUV):
             self.result.findings.append(Finding(
                 Severity.WARNING, Codes.MTLX_INCLUDES_MOVED, asset_ref(self.out),
                 "the new document is in another folder; its XIncludes keep their relative hrefs"))
-        for elem in self.doc.traverseTree():
-            if isinstance(elem, mx.Input) and elem.getType() == MtlxNames.FILENAME and elem.getValueString():
-                value = elem.getResolvedValueString()
+        for child in self.doc.getChildren():
+            if not child.getSourceUri():  # an included document's elements are not written: left as they are
+                self._rebase(child, self.src.parent)
+
+    def _rebase(self, elem: mx.Element, base: Path) -> None:
+        """The relative file paths in ``elem``, read from the folder ``base``, made relative to the new document."""
+        for inner in elem.traverseTree():
+            if isinstance(inner, mx.Input) and inner.getType() == MtlxNames.FILENAME and inner.getValueString():
+                value = inner.getResolvedValueString()
                 if value and not os.path.isabs(value):
-                    new = relative_asset_path(self.src.parent / value, self.out.parent)
-                    self._set_file(elem, new)
+                    self._set_file(inner, relative_asset_path(base / value, self.out.parent))
+
+    def _adopt(self, node: mx.Node) -> None:
+        """Bring the document an ``xi:include`` reads, when it holds ``node``, into this one, so that the edits are
+        written (MaterialX writes an included element back as the include, without them): every element it holds
+        (an element of the same name, written beside the include, would lose to the included one when read), its
+        file paths made relative to the new document."""
+        top = node
+        while top.getParent() != self.doc:
+            top = top.getParent()
+        uri = top.getSourceUri()
+        if not uri:
+            return
+        included = Path(uri) if os.path.isabs(uri) else Path(self.doc.getSourceUri() or self.src).parent / uri
+        for child in self.doc.getChildren():
+            if child.getSourceUri() == uri:
+                child.setSourceUri("")
+                self._rebase(child, included.parent)
+        self._plan(f"write the elements of the included {asset_ref(uri)} into the document")
+        self.result.findings.append(Finding(
+            Severity.WARNING, Codes.MTLX_INCLUDE_INLINED, prim_ref(top.getNamePath()),
+            f"comes from {asset_ref(uri)}, which the document includes: that document's elements are written into "
+            f"{asset_ref(self.out.name)} in place of the include, with the edits, and the included file is left as "
+            "it is"))
 
     def _set_file(self, inp: mx.Input, rel: str) -> None:
         rel = rel[2:] if rel.startswith("./") else rel
@@ -218,15 +246,20 @@ class _MtlxAuthor(_PlaceUV):
                 return iface
         return inp if inp is not None else UnauthoredInput(node, name, type_name)
 
-    def _periodic(self, node: mx.Node) -> None:
-        """Address modes to periodic (``tiledimage`` always repeats)."""
+    def _periodic(self, node: mx.Node, dry: bool = False) -> bool:
+        """Address modes to periodic (``tiledimage`` always repeats); whether they already were. ``dry``: only
+        say whether they are."""
+        already = True
         if node.getCategory() == MtlxNames.TILED_IMAGE:
-            return
+            return already
         for name in (MtlxNames.U_ADDRESS, MtlxNames.V_ADDRESS):
             inp = self._authored(node, name, MtlxNames.STRING)
             if inp.getValueString() != MtlxNames.PERIODIC:
-                inp.setValueString(MtlxNames.PERIODIC)
-                self._plan(f"set {prim_ref(inp.getNamePath())} = {MtlxNames.PERIODIC}")
+                already = False
+                if not dry:
+                    inp.setValueString(MtlxNames.PERIODIC)
+                    self._plan(f"set {prim_ref(inp.getNamePath())} = {MtlxNames.PERIODIC}")
+        return already
 
     def edit_map(self, map_result, uv_scale, provenance: Provenance, wrap_only: bool = False,
                  turn: UVTurn | None = None) -> None:
@@ -241,8 +274,11 @@ class _MtlxAuthor(_PlaceUV):
             self.result.not_written.append((prim_ref(node_path), "MaterialX node not found in the document"))
             return
         if wrap_only:
-            self._periodic(node)
+            if not self._periodic(node, dry=True):
+                self._adopt(node)
+                self._periodic(node)
             return
+        self._adopt(node)
         out_file = Path(map_result.output_path).resolve()
         if not out_file.is_file() and not self.result.dry_run:  # a dry run plans unwritten tiles
             self.result.findings.append(Finding(

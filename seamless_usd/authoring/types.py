@@ -34,6 +34,7 @@ class Codes:
     NOTHING_TO_DO = "already-up-to-date"
     UNSUPPORTED_UV = "uv-not-composed"
     MTLX_INCLUDES_MOVED = "mtlx-includes-moved"
+    MTLX_INCLUDE_INLINED = "mtlx-include-inlined"
     SCHEMA_NOT_REGISTERED = "schema-not-registered"
     VARIANT_NOT_EDITABLE = "variant-not-editable"
     EDIT_NOT_COMPOSED = "edit-not-composed"  # an edit a stronger opinion hides

@@ -1,6 +1,8 @@
 """Small helpers over MaterialX documents: connections, interface values and node type names."""
 from __future__ import annotations
 
+import os
+
 from functools import lru_cache
 
 import MaterialX as mx
@@ -103,7 +105,12 @@ def value_source(inp: mx.Input | None) -> mx.Input | None:
 
 
 def authored_at(inp: mx.Input, document: str) -> AuthoredAt:
-    return AuthoredAt(prim=inp.getParent().getNamePath(), attribute=inp.getName(), layer=inp.getActiveSourceUri() or document)
+    """Where ``inp`` is authored: its element's path and the document that holds it (an ``xi:include``'s document,
+    whose href is relative to the including ``document``'s folder, or ``document`` itself)."""
+    layer = inp.getActiveSourceUri() or document
+    if not os.path.isabs(layer):
+        layer = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(document)), layer))
+    return AuthoredAt(prim=inp.getParent().getNamePath(), attribute=inp.getName(), layer=layer)
 
 
 def input_value(node: mx.Node, name: str, default, document: str):
