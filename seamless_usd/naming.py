@@ -4,11 +4,11 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-__all__ = ["tile_filename", "source_digest", "override_layer_path", "slug"]
+__all__ = ["tile_filename", "stack_tile_filenames", "source_digest", "override_layer_path", "slug"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 #: What :func:`tile_filename` adds after a stem: the stack id, the source's digest, ``.tile``.
-_OWN_TILE = re.compile(r"\.[A-Za-z0-9_.-]+-[0-9a-f]{10}(\.[0-9a-f]{8})?\.tile$")
+_OWN_TILE = re.compile(r"\.[A-Za-z0-9_.-]+-[0-9a-f]{10}(\.[0-9a-f]{8})?(\.[rgba]{1,4}[0-9]*)?\.tile$")
 
 
 def slug(text: str, limit: int = 48) -> str:
@@ -35,6 +35,27 @@ def tile_filename(source_asset: str, stack_id: str, extension: str, source_diges
     stem = _OWN_TILE.sub("", Path(source_asset.replace("\\", "/")).stem)  # a tile of a tile: the first stem
     digest = f".{slug(source_digest[:8])}" if source_digest else ""
     return f"{slug(stem)}.{slug(stack_id, 64)}{digest}.tile{extension}"
+
+
+def stack_tile_filenames(maps, stack_id: str, extensions: list[str]) -> list[str]:
+    """:func:`tile_filename` of each map of a stack (``TextureMap``), with its source's digest; maps of one file
+    (two texture nodes reading its colour and its alpha) also name the channels they read, and their place in the
+    stack when those are the same too, so that neither tile overwrites the other.
+
+    >>> from types import SimpleNamespace as M
+    >>> stack_tile_filenames([M(asset="rgba.png", resolved="", channels_used="rgb"),
+    ...                       M(asset="rgba.png", resolved="", channels_used="a")], "M-0123456789", [".png"] * 2)
+    ['rgba.M-0123456789.rgb.tile.png', 'rgba.M-0123456789.a.tile.png']
+    """
+    names = [tile_filename(m.asset, stack_id, ext, source_digest(m.resolved)) for m, ext in zip(maps, extensions)]
+    out = []
+    for i, (m, name) in enumerate(zip(maps, names)):
+        if names.count(name) > 1:
+            same = [k for k, (o, n) in enumerate(zip(maps, names)) if n == name and o.channels_used == m.channels_used]
+            mark = m.channels_used + (str(same.index(i) + 1) if len(same) > 1 else "")
+            name = name.replace(".tile", f".{mark}.tile", 1) if ".tile" in name else name
+        out.append(name)
+    return out
 
 
 def source_digest(path: str) -> str:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from seamless_usd.version import __version__
 from seamless_usd.textures import TextureStack
-from seamless_usd.naming import source_digest, tile_filename
+from seamless_usd.naming import stack_tile_filenames
 from seamless_usd.pipeline.options import Options
 
 __all__ = ["planned_result", "wrap_only_result"]
@@ -37,12 +37,9 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options):
         uv, crop = (1.0, 1.0), (working[0] // 2, working[1] // 2)
     else:
         uv, crop = uv_scale_for(working, working), working
-    maps = [
-        MapResult(map=m, output_path=out_dir / tile_filename(m.asset, stack.id, output_extension(m.image),
-                                                            source_digest(m.resolved)))
-        for m in stack.maps
-        if m.image is not None
-    ]
+    read = [m for m in stack.maps if m.image is not None]
+    names = stack_tile_filenames(read, stack.id, [output_extension(m.image) for m in read])
+    maps = [MapResult(map=m, output_path=out_dir / name) for m, name in zip(read, names)]
     prov = Provenance(
         source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=None,
         q_tau=0.0, q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__,

@@ -22,7 +22,7 @@ from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.pipeline.madefrom import (as_made, on_tile_grid, source_uv_scale, straighten, tile_record,
                                             uv_turn_of)
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
-from seamless_usd.naming import source_digest, tile_filename
+from seamless_usd.naming import stack_tile_filenames
 from seamless_usd.pipeline.rerun import load_judged, save_judged
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import Reading, Reference, judge_reading
@@ -184,8 +184,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     sources = on_tile_grid(list(pixels.values), [m.is_normal for m in stack.maps], tile_hw, uv_scale)
     outcomes: dict[tuple[str, str], MapOutcome] = {}
     written_values = []
-    filenames = [tile_filename(m.asset, stack.id, imaging.output_extension(info), source_digest(m.resolved))
-                 for m, info in zip(stack.maps, pixels.infos)]
+    filenames = stack_tile_filenames(stack.maps, stack.id, [imaging.output_extension(info) for info in pixels.infos])
     for name, m, source, encoding, info, filename in zip(names, stack.maps, sources, pixels.encodings, pixels.infos,
                                                          filenames):
         values = tiles[name]

@@ -1,0 +1,85 @@
+"""One RGBA file read by two texture nodes of one material, its colour (sRGB) by one and its alpha (raw) by the
+other: each node gets a tile of its own, the colour kept in one and the alpha in the other; neither overwrites the
+other, and what the run says is what ``check`` finds on disk."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+from pxr import Usd
+
+from seamless_usd.pipeline.check import check_paths
+from seamless_usd_cli.main import main
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
+SCENE = """#usda 1.0
+def Scope "Looks"
+{
+    def Material "M"
+    {
+        token outputs:surface.connect = </Looks/M/Surface.outputs:surface>
+        def Shader "Surface"
+        {
+            uniform token info:id = "UsdPreviewSurface"
+            color3f inputs:diffuseColor.connect = </Looks/M/Colour.outputs:rgb>
+            float inputs:opacity.connect = </Looks/M/Opacity.outputs:a>
+            token outputs:surface
+        }
+        def Shader "St"
+        {
+            uniform token info:id = "UsdPrimvarReader_float2"
+            string inputs:varname = "st"
+            float2 outputs:result
+        }
+        def Shader "Colour"
+        {
+            uniform token info:id = "UsdUVTexture"
+            asset inputs:file = @./tex/leaf.png@
+            token inputs:sourceColorSpace = "sRGB"
+            float2 inputs:st.connect = </Looks/M/St.outputs:result>
+            float3 outputs:rgb
+        }
+        def Shader "Opacity"
+        {
+            uniform token info:id = "UsdUVTexture"
+            asset inputs:file = @./tex/leaf.png@
+            token inputs:sourceColorSpace = "raw"
+            float2 inputs:st.connect = </Looks/M/St.outputs:result>
+            float outputs:a
+        }
+    }
+}
+"""
+
+
+def test_colour_and_alpha_of_one_file_read_by_two_nodes_get_a_tile_each(tmp_path, capsys):
+    wood = oiio.ImageBuf(str(SAMPLES / "wood_color.png")).get_pixels(oiio.FLOAT)[:160, :160, :3]
+    alpha = wood.mean(axis=2, keepdims=True) ** 0.5  # a mask that follows the grain
+    (tmp_path / "tex").mkdir()
+    out = oiio.ImageOutput.create(str(tmp_path / "tex" / "leaf.png"))
+    spec = oiio.ImageSpec(160, 160, 4, oiio.UINT8)
+    spec.attribute("oiio:UnassociatedAlpha", 1)
+    assert out.open(str(tmp_path / "tex" / "leaf.png"), spec)
+    assert out.write_image(np.concatenate([wood, alpha], axis=2).astype(np.float32))
+    out.close()
+    scene = tmp_path / "leaf.usda"
+    scene.write_text(SCENE)
+    code = main(["process", str(scene), "--preset", "tiny", "--seeds", "1", "--cache-dir", str(tmp_path / "cache"),
+                 "--json"])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    outputs = {m["roles"][0]: Path(m["output"]) for m in stack["maps"]}
+    assert len(set(outputs.values())) == 2, outputs  # one tile each
+    stage = Usd.Stage.Open(str(tmp_path / "leaf.seamless.usda"))
+    for node, role in (("Colour", "diffuseColor"), ("Opacity", "opacity")):
+        authored = stage.GetPrimAtPath(f"/Looks/M/{node}").GetAttribute("inputs:file").Get().resolvedPath
+        assert Path(authored).resolve() == outputs[role].resolve()
+    colour = oiio.ImageBuf(str(outputs["diffuseColor"]))
+    assert colour.spec().getattribute("oiio:ColorSpace").lower().startswith("srgb")
+    assert colour.get_pixels(oiio.FLOAT)[..., :3].std() > 0.02  # the colour is kept, not a constant
+    opacity = oiio.ImageBuf(str(outputs["opacity"]))
+    assert opacity.get_pixels(oiio.FLOAT)[..., 3].std() > 0.02
+    [checked] = check_paths([tmp_path / "leaf.seamless.usda"]).items
+    assert checked.verdict["reference"] == "source"
+    assert checked.passed == (stack["status"] == "passed") == (code == 0)
