@@ -83,3 +83,25 @@ def test_colour_and_alpha_of_one_file_read_by_two_nodes_get_a_tile_each(tmp_path
     [checked] = check_paths([tmp_path / "leaf.seamless.usda"]).items
     assert checked.verdict["reference"] == "source"
     assert checked.passed == (stack["status"] == "passed") == (code == 0)
+
+
+def test_two_stages_with_one_material_path_and_copies_of_one_file(tmp_path, capsys):
+    """Two stages in one folder, each with ``/Looks/M`` reading its own copy of the same bytes: both are processed
+    (the second from the cache), each layer points at its own tile, and neither run nor a rerun fails."""
+    import shutil
+
+    (tmp_path / "tex").mkdir()
+    for name in ("x.png", "y.png"):
+        shutil.copyfile(SAMPLES / "brick_albedo.png", tmp_path / "tex" / name)
+        (tmp_path / f"s_{name[0]}.usda").write_text(SCENE.replace("leaf.png", name).replace(
+            'float inputs:opacity.connect = </Looks/M/Opacity.outputs:a>', ""))
+    cache = str(tmp_path / "cache")
+    for args in ([str(tmp_path / "s_x.usda")], [str(tmp_path / "s_y.usda")], [str(tmp_path)]):
+        code = main(["process", *args, "--preset", "tiny", "--seeds", "1", "--cache-dir", cache, "--json"])
+        stacks = json.loads(capsys.readouterr().out)["stacks"]
+        assert all("internal error" not in s["message"] for s in stacks), stacks
+        assert code == (0 if all(s["status"] in ("passed", "reused") for s in stacks) else 1)
+    for name in ("x", "y"):
+        stage = Usd.Stage.Open(str(tmp_path / f"s_{name}.seamless.usda"))
+        tile = stage.GetPrimAtPath("/Looks/M/Colour").GetAttribute("inputs:file").Get().resolvedPath
+        assert Path(tile).name.startswith(f"{name}.") and Path(tile).is_file()

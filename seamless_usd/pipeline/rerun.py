@@ -23,14 +23,21 @@ from seamless_usd.fileio import atomic_write, atomic_write_text, file_sha256
 from seamless_usd.report.model import Previews
 from seamless_usd.version import __version__
 
-__all__ = ["JUDGED", "record_paths", "save_judged", "load_judged", "previews_to_arrays", "previews_from_arrays"]
+__all__ = ["JUDGED", "judged_key", "record_paths", "save_judged", "load_judged", "previews_to_arrays", "previews_from_arrays"]
 
 #: Folder of an entry that holds the judged records.
 JUDGED = "judged"
 
 
+def judged_key(stack) -> str:
+    """What a judged record is kept under, beside the folder it was written into: the stack's id and its content
+    (its files). Two stages whose materials share a path and whose files hold the same bytes share a cache entry;
+    each keeps its own record, whose outputs name its own files."""
+    return f"{stack.id}|{stack.content_key}"
+
+
 def record_paths(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[Path, Path]:
-    """The record's JSON and pictures for the stack ``stack_id`` written into ``out_dir``."""
+    """The record's JSON and pictures for the stack ``stack_id`` (:func:`judged_key`) written into ``out_dir``."""
     name = hashlib.sha256(f"{Path(out_dir).resolve()}|{stack_id}".encode()).hexdigest()[:32]
     folder = Path(entry_root) / JUDGED
     return folder / f"{name}.json", folder / f"{name}.safetensors"

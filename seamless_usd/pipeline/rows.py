@@ -102,19 +102,14 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
             results.append(planned)
         else:
             outcome = run.outcomes.get(stack.content_key)
-            if isinstance(outcome, StackOutcome) and outcome.output_dir != out_dir:
-                outcome = _place(run, stack, out_dir)
-            if isinstance(outcome, StackOutcome):
-                first = run.claimed.setdefault(stack.content_key, (source_label, stack.id))
-                reused = first != (source_label, stack.id)
-                outcome.fill_report(report, stack, reused=reused)
-                if not reused:
-                    run.report.findings += list(outcome.findings)
-                if reused:
-                    report.duplicate_of = first[1] if first[0] == source_label else f"{first[1]} in {first[0]}"
-                    report.message = reused_message(report.duplicate_of, outcome)
-                results.append(outcome.stack_result(stack))
-            else:
+            try:
+                if isinstance(outcome, StackOutcome) and outcome.output_dir != out_dir:
+                    outcome = _place(run, stack, out_dir)
+                if isinstance(outcome, StackOutcome):
+                    _outcome_row(run, report, stack, outcome, source_label, results)
+            except Exception as exc:  # noqa: BLE001 - this stack fails, named; the batch goes on
+                outcome, report.status = exc, StackStatus.FAILED
+            if not isinstance(outcome, StackOutcome):
                 message = error_message(outcome)
                 report.message = message
                 run.report.findings.append(Finding(Severity.ERROR, "stack-failed", where, message, stack.material))
@@ -125,6 +120,21 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
         first_of.setdefault(stack.content_key, stack.id)
         run.report.stacks.append(report)
     return results, handed
+
+
+def _outcome_row(run: Run, report: StackReport, stack: TextureStack, outcome: StackOutcome, source_label: str,
+                 results: list) -> None:
+    """``report`` filled from ``outcome`` (this stack's, or an identical one's it reuses), and its authoring input
+    added to ``results``."""
+    first = run.claimed.setdefault(stack.content_key, (source_label, stack.id))
+    reused = first != (source_label, stack.id)
+    outcome.fill_report(report, stack, reused=reused)
+    if not reused:
+        run.report.findings += list(outcome.findings)
+    if reused:
+        report.duplicate_of = first[1] if first[0] == source_label else f"{first[1]} in {first[0]}"
+        report.message = reused_message(report.duplicate_of, outcome)
+    results.append(outcome.stack_result(stack))
 
 
 def unread_rows(run: Run, scan: ScanResult, source_label: str) -> None:

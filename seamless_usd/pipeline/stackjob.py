@@ -23,7 +23,7 @@ from seamless_usd.pipeline.madefrom import (as_made, on_tile_grid, source_uv_sca
                                             uv_turn_of)
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
 from seamless_usd.naming import stack_tile_filenames
-from seamless_usd.pipeline.rerun import load_judged, save_judged
+from seamless_usd.pipeline.rerun import judged_key, load_judged, save_judged
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import Reading, Reference, judge_reading
 from seamless_usd.verdict.joins import inside_figures, join_stats
@@ -165,7 +165,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     out_dir = Path(job.output_dir)
     normals = [m.is_normal for m in stack.maps]
     if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
-        again = load_judged(entry.root, out_dir, stack.id)
+        again = load_judged(entry.root, out_dir, judged_key(stack))
         if again is not None:
             return outcome_from_record(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir)
         # the tile was cut from the maps turned by the turn found (made above when the tile was made)
@@ -226,7 +226,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     record = {"outputs": {json.dumps(list(k)): {"path": str(o.output), "metrics": o.metrics,
                                                 "source_metrics": o.source_metrics} for k, o in outcomes.items()},
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
-    save_judged(entry.root, out_dir, stack.id, record, previews)
+    save_judged(entry.root, out_dir, judged_key(stack), record, previews)
     return outcome_from_record(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
 
 
