@@ -9,7 +9,9 @@ from pathlib import Path
 
 import MaterialX as mx
 
-from seamless_usd.authoring import MapResult, Provenance, StackResult, WriteMode, author_mtlx
+from standins import stand_ins
+
+from seamless_usd.authoring import WriteMode, author_mtlx
 from seamless_usd.discover import scan_paths
 
 TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
@@ -58,20 +60,6 @@ def _library(root: Path) -> Path:
     return root / "look.mtlx"
 
 
-def _stand_ins(path: Path) -> list[StackResult]:
-    results = []
-    for stack in scan_paths([path]).stacks:
-        maps = []
-        for tex in stack.maps:
-            out = path.parent / "tileable" / f"{Path(tex.resolved).stem}_tile.png"
-            out.parent.mkdir(exist_ok=True)
-            shutil.copyfile(tex.resolved, out)
-            maps.append(MapResult(tex, out))
-        prov = Provenance(stack.maps[0].asset, (64, 64), (2.0, 2.0), None, 0.0, (0.0, 0.0), "", "0.1.0", passed=True)
-        results.append(StackResult(stack, maps, (2.0, 2.0), prov))
-    return results
-
-
 def _files(path: Path) -> dict[str, Path]:
     """Each image node's file as the written document resolves it (relative to its own folder)."""
     doc = mx.createDocument()
@@ -91,7 +79,7 @@ def test_the_included_texture_nodes_are_found_from_any_folder(tmp_path, monkeypa
 def test_the_edited_included_nodes_are_written_into_the_new_document(tmp_path):
     look = _library(tmp_path)
     included = (tmp_path / "lib" / "graphs.mtlx").read_bytes()
-    result = author_mtlx(look, _stand_ins(look))
+    result = author_mtlx(look, stand_ins(look))
     assert result.layers_written == [tmp_path / "look.seamless.mtlx"]
     assert any(f.code == "mtlx-include-inlined" and "NG_brick" in f.where for f in result.findings)
     files = _files(result.output)
@@ -104,12 +92,12 @@ def test_the_edited_included_nodes_are_written_into_the_new_document(tmp_path):
     assert "xi:include" not in result.output.read_text()  # the included elements are written in its place
     assert written.getDescendant("NG_brick/albedo").getAttribute("seamless_passed") == "true"
     assert (tmp_path / "lib" / "graphs.mtlx").read_bytes() == included  # left as it is
-    again = author_mtlx(look, _stand_ins(look))  # a second run: nothing to change
+    again = author_mtlx(look, stand_ins(look))  # a second run: nothing to change
     assert again.layers_written == [] and again.plan == []
 
 
 def test_in_place_the_edited_nodes_go_into_the_document_itself(tmp_path):
     look = _library(tmp_path)
-    result = author_mtlx(look, _stand_ins(look), mode=WriteMode.IN_PLACE)
+    result = author_mtlx(look, stand_ins(look), mode=WriteMode.IN_PLACE)
     assert result.layers_written == [look] and result.backups
     assert _files(look)["NG_brick/albedo"].resolve() == (tmp_path / "tileable" / "brick_albedo_tile.png").resolve()

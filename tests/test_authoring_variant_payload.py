@@ -8,11 +8,11 @@ from pathlib import Path
 import pytest
 from pxr import Sdf, Usd, UsdShade
 
-from seamless_usd.authoring import MapResult, Provenance, StackResult, author_usd
-from seamless_usd.discover import scan_paths
+from standins import stand_ins
+
+from seamless_usd.authoring import author_usd
 
 TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
-SCALE = (2.0, 2.0)
 
 
 def _material(stage: Usd.Stage, path: str, texture: str, transform: bool) -> None:
@@ -68,21 +68,6 @@ def _asset(root: Path) -> Path:
     return root / "asset" / "asset.usda"
 
 
-def _stand_ins(path: Path) -> list[StackResult]:
-    """Every stack found, each map's tile a copy of its source (authoring only places them)."""
-    results = []
-    for stack in scan_paths([path]).stacks:
-        maps = []
-        for tex in stack.maps:
-            out = path.parent / "tileable" / f"{Path(tex.resolved).stem}_tile.png"
-            out.parent.mkdir(exist_ok=True)
-            shutil.copyfile(tex.resolved, out)
-            maps.append(MapResult(tex, out))
-        prov = Provenance(stack.maps[0].asset, (64, 64), SCALE, None, 0.0, (0.0, 0.0), "", "0.1.0", passed=True)
-        results.append(StackResult(stack, maps, SCALE, prov))
-    return results
-
-
 def _composed(layer: Path, selection: str) -> tuple[str, bool, list]:
     stage = Usd.Stage.Open(str(layer))
     stage.GetPrimAtPath("/Asset").GetVariantSets().GetVariantSet("look").SetVariantSelection(selection)
@@ -102,7 +87,7 @@ def test_a_payload_inside_a_variant_is_edited_inside_that_variant(tmp_path, refe
         shot.DefinePrim("/Asset").GetReferences().AddReference("./asset/asset.usda")
         shot.GetRootLayer().Save()
         path = tmp_path / "shot.usda"
-    results = _stand_ins(path)
+    results = stand_ins(path)
     assert len(results) == 2  # one stack per selection
     written = author_usd(path, results).output
     brick, brick_linked, _ = _composed(written, "brick")

@@ -166,6 +166,7 @@ class _MtlxAuthor(_PlaceUV):
         self._uv_nodes: dict[tuple, str] = {}
         self._uv_updates: dict[str, tuple] = {}  # a place2d a run before inserted -> (total scale, turn): once a run
         self._done: dict[str, tuple] = {}
+        self._tiling_set: dict[str, tuple] = {}  # a tiledimage's uvtiling / uvoffset input -> (its value, the new)
 
     def _plan(self, line: str) -> None:
         self.result.plan.append(f"{line} in {asset_ref(self.out.name)}")
@@ -317,9 +318,18 @@ class _MtlxAuthor(_PlaceUV):
             undo = prior or (1.0, 1.0)
             for name in (MtlxNames.UV_TILING, MtlxNames.UV_OFFSET):
                 inp = self._authored(node, name, MtlxNames.VECTOR2)
+                where = inp.getNamePath()
                 value = vector2(inp.getValueString()) if inp.getValueString() else (
                     (1.0, 1.0) if name == MtlxNames.UV_TILING else (0.0, 0.0))
+                value = self._tiling_set.get(where, (value,))[0]  # an input nodes share is scaled once a run
                 new = (value[0] / undo[0] * total[0], value[1] / undo[1] * total[1])
+                if where in self._tiling_set:
+                    if any(abs(new[i] - self._tiling_set[where][1][i]) > 1e-9 for i in range(2)):
+                        self.result.findings.append(Finding(
+                            Severity.WARNING, Codes.SHARED_CONFLICT, prim_ref(where),
+                            f"{name} shared by texture nodes of different UV scales; kept the first one's"))
+                    continue
+                self._tiling_set[where] = (value, new)
                 if any(abs(new[i] - value[i]) > 1e-9 for i in range(2)):
                     set_vector2(inp, new)
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {fmt(new)}")
