@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path, PurePath
 
@@ -71,8 +72,10 @@ def _size_text(m: TextureMap) -> str:
     return f"{m.image.width}x{m.image.height} {m.image.channels}ch {m.image.dtype} {m.image.file_format}"
 
 
-def _stack_table(stack: TextureStack) -> Table:
+def _stack_table(stack: TextureStack, common: str | None = None) -> Table:
     title = escape(f"{stack.material}  stack {stack.id}")
+    if common is not None and stack.source:  # several stages scanned: which one it is in
+        title += escape(f"  of {os.path.relpath(stack.source, common)}")
     if stack.selection:
         title += escape(f"  in {describe_selection(stack.selection)}")
     if stack.duplicate_of:
@@ -113,8 +116,10 @@ def render(result: ScanResult, console: Console) -> None:
     """Print a scan as tables: one per stack, then materials without stacks, then findings."""
     console.print(f"[bold]scanned[/bold] {escape(', '.join(result.sources))}")
     with_stacks = {s.material for s in result.stacks}
+    scanned = sorted({s.source for s in result.stacks if s.source})
+    common = os.path.commonpath([os.path.dirname(s) for s in scanned]) if len(scanned) > 1 else None
     for stack in result.stacks:
-        console.print(_stack_table(stack))
+        console.print(_stack_table(stack, common))
     bare = [m for m in result.materials if m not in with_stacks]
     if bare:
         console.print(escape(f"materials without texture stacks: {', '.join(bare)}"))

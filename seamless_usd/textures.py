@@ -243,6 +243,7 @@ class TextureStack:
     duplicate_of: str | None = None  # id of an identical stack found earlier (processed once)
     intent: str = ""  # tiling intent (discover.intent.Intent): tiling, uv-atlas, already-tileable, other
     intent_reason: str = ""  # the measured reason ("UVs 0.11-0.89 x 0.11-0.89, 37 islands on <...>")
+    source: str = ""  # the stage or document scanned that it was found through
 
     @property
     def selection(self) -> Selection:

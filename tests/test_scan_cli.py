@@ -109,3 +109,26 @@ def test_scan_starts_without_torch():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip().splitlines()[-1] == "False PASSIVE"
+
+
+def test_two_stages_whose_materials_share_a_path_are_scanned_apart(tmp_path, capsys):
+    """``scan a/scene.usda b/scene.usda``: each stage's /World/Looks/Brick is a material and a stack of its own,
+    named with its stage, as ``process`` takes them; neither stage's maps are lost or mixed into the other's."""
+    import shutil
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    shutil.copytree(samples / "textures", tmp_path / "textures")
+    scene = (samples / "brick" / "scene.usda").read_text()
+    for name, text in (("a", scene), ("b", scene.replace("brick_albedo.png", "wood_color.png"))):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "scene.usda").write_text(text)
+    paths = [str(tmp_path / "a" / "scene.usda"), str(tmp_path / "b" / "scene.usda")]
+    assert main(["scan", *paths, "--json"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert [s["source"] for s in found["stacks"]] == [str(Path(p).resolve()) for p in paths]
+    albedo = [Path(s["maps"][0]["asset"]).name for s in found["stacks"]]
+    assert albedo == ["brick_albedo.png", "wood_color.png"] and all(len(s["maps"]) == 3 for s in found["stacks"])
+    assert len(found["materials"]) == 2
+    assert main(["scan", *paths]) == 0
+    out = capsys.readouterr().out
+    assert "of a/scene.usda" in out and "of b/scene.usda" in out

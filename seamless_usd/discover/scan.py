@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import contextlib
 import re
+from dataclasses import replace
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -188,6 +189,8 @@ class _Scan:
         maps, findings = build_maps(self.uses, self.cache)
         self.result.findings.extend(findings)
         stacks = build_stacks(maps)
+        if self.result.sources:  # the stage or document scanned (a document it references is listed after it)
+            stacks = [replace(s, source=self.result.sources[0]) for s in stacks]
         with quiet_mtlx():  # composing each selection again
             self.geometry.measure(stacks)
         self.result.stacks = classify_stacks(stacks, self.geometry, explored=self.geometry.explored_for,
@@ -221,11 +224,22 @@ def scan_paths(paths: Sequence[str | Path]) -> ScanResult:
 
     Raises InputError (naming the file) for a stage or document that cannot be opened.
     """
-    scan = _Scan()
-    for path in paths:
+    merged = ScanResult()
+    first_by_content: dict[str, str] = {}
+    for path in paths:  # each on its own: materials of two stages that share a prim path are two materials
+        scan = _Scan()
         if str(path).lower().endswith(MTLX_SUFFIX):
             scan.add_document(path)
         else:
             stage = open_stage(path)
             scan.add_stage(stage, str(Path(path).resolve()))
-    return scan.finish()
+        found = scan.finish()
+        for stack in found.stacks:
+            earlier = first_by_content.setdefault(stack.content_key, stack.id)
+            duplicate = stack.duplicate_of or (earlier if earlier != stack.id else None)
+            merged.stacks.append(replace(stack, duplicate_of=duplicate))
+        merged.sources += [s for s in found.sources if s not in merged.sources]
+        merged.materials += found.materials
+        merged.findings += found.findings
+        merged.variants += found.variants
+    return merged
