@@ -86,6 +86,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     pixels = imaging.load_stack_pixels(list(stack.maps), policy, max_pixels=settings.max_pixels)
     authored = pixels.values[0]  # the first map as the asset shows it today (the report's view of a UV turn)
     timings["load"] = time.perf_counter() - t0
+    _check_size(pixels, settings.max_size)
 
     names = [f"m{i}" for i in range(len(stack.maps))]
     inputs = [
@@ -228,6 +229,38 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
     save_judged(entry.root, out_dir, judged_key(stack), record, previews)
     return outcome_from_record(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
+
+
+#: The shortest side (px) of the working grid a tile is made from: below it the cuts and the verdict's patch figures
+#: have too few texels (a 24 px stack failed inside the cut; 32 px is the smallest that gets a tile and a verdict).
+MIN_WORKING_SIDE = 32
+
+
+def _check_size(pixels, max_size: int | None) -> None:
+    """A clear error for a stack whose working grid is too small to make a tile from (naming ``--max-size`` when
+    that is what made it so)."""
+    import math
+
+    from seamless_usd.synthesis.candidates import SCORE_SIDE
+
+    w, h = pixels.working_size
+    halve = 2 ** max(0, math.ceil(math.log2(max(w, h) / SCORE_SIDE)))  # as the candidates are weighed
+    if min(w, h) // halve >= MIN_WORKING_SIDE:
+        return
+    from seamless_usd.errors import SeamlessUsdError
+
+    sizes = ", ".join(dict.fromkeys(f"{i.width} x {i.height}" for i in pixels.infos))
+    reduced = max(i.width for i in pixels.infos) > w or max(i.height for i in pixels.infos) > h
+    if min(w, h) >= MIN_WORKING_SIDE:
+        cause = (f"its maps ({sizes} px) are so long and thin that the figures that weigh a tile, read at most "
+                 f"{SCORE_SIDE} px across, keep {min(w, h) // halve} px of the short side (at least "
+                 f"{MIN_WORKING_SIDE}); a strip this thin is not made tileable")
+    elif reduced:
+        cause = (f"--max-size {max_size} reduces its maps ({sizes} px) to {w} x {h} px; raise --max-size to keep "
+                 f"at least {MIN_WORKING_SIDE} px on the short side")
+    else:
+        cause = f"its maps are {sizes} px; a tile is made from at least {MIN_WORKING_SIDE} px on each side"
+    raise SeamlessUsdError(f"too small to make a tile from: {cause}")
 
 
 def _drop_unusable_checkpoint(checkpoint_dir: Path, seeds: int) -> None:
