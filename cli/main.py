@@ -58,6 +58,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
         return int(exc.code or 0)
+    interrupted: list[int] = []
+
+    def on_interrupt(signum, frame):  # noted: an interrupt some code turns into another error is still one
+        interrupted.append(signum)
+        raise KeyboardInterrupt
+
+    previous = _handle_interrupt(on_interrupt)
     try:
         return int(args._run(args))
     except SeamlessUsdError as exc:
@@ -67,6 +74,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("seamless-usd: interrupted", file=sys.stderr)
         return 130
     except Exception:  # noqa: BLE001 - the one place unexpected errors are turned into a log file
+        if interrupted:  # Ctrl-C inside an extension module's import surfaces as ImportError
+            print("seamless-usd: interrupted", file=sys.stderr)
+            return 130
         with tempfile.NamedTemporaryFile(
             "w", prefix="seamless-usd-crash-", suffix=".log", delete=False
         ) as log:
@@ -76,6 +86,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return EXIT_INTERNAL
+    finally:
+        if previous is not None:
+            import signal
+
+            signal.signal(signal.SIGINT, previous)
 
 
 def run() -> None:
@@ -94,3 +109,16 @@ def run() -> None:
 
 if __name__ == "__main__":
     run()
+
+
+def _handle_interrupt(handler):
+    """Install ``handler`` for Ctrl-C where the default one is installed (the main thread; a host application's
+    own handler is left alone); returns the previous handler to put back, or None."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        return None
+    return signal.signal(signal.SIGINT, handler)

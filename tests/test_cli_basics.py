@@ -36,3 +36,34 @@ def test_an_output_folder_that_cannot_be_made_is_refused_before_any_work(tmp_pat
     err = capsys.readouterr().err
     assert "--output-dir" in err and "afile@ is a file" in err and "internal error" not in err
     assert sorted(p.name for p in (tmp_path / "brick").iterdir()) == ["scene.usda"]  # nothing done
+
+
+def test_ctrl_c_that_an_import_reports_as_import_error_ends_the_run_as_interrupted(monkeypatch, capsys):
+    """An extension module whose initialisation Ctrl-C breaks raises ImportError("initialization failed"): the run
+    still ends as interrupted (exit 130), not as an internal error; an ImportError with no Ctrl-C is one (exit 3)."""
+    import os
+    import signal
+    import time
+
+    import seamless_usd_cli.scan as scan_command
+    from seamless_usd_cli.main import main
+
+    def interrupted_import(args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        except KeyboardInterrupt:
+            raise ImportError("initialization failed") from None
+        return 0
+
+    monkeypatch.setattr(scan_command, "run", interrupted_import)
+    assert main(["scan", "x.usda"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # put back
+
+    def broken(args):
+        raise ImportError("initialization failed")
+
+    monkeypatch.setattr(scan_command, "run", broken)
+    assert main(["scan", "x.usda"]) == 3
+    assert "internal error" in capsys.readouterr().err

@@ -56,6 +56,8 @@ class InProcessExecutor:
             progress(job, "stack-start", None)
             try:
                 result: Result = run_stack(job, lambda kind, detail, job=job: progress(job, kind, detail))
+            except ImportError:  # not this stack's: every stack would fail alike (a broken install, or an import
+                raise  # that Ctrl-C broke, which an extension's initialisation reports as an ImportError)
             except Exception as exc:  # noqa: BLE001 - reported per stack, the batch goes on
                 result = exc
             yield job, result
