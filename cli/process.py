@@ -39,7 +39,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--dry-run", action="store_true",
                    help="show what would be done, write nothing (with --in-place: the in-place edits)")
     p.add_argument("--in-place", action="store_true", help="edit the source layers (keeps .bak copies)")
-    p.add_argument("-o", "--output-layer", type=Path, help="override layer to write (default <scene>.seamless.usda)")
+    p.add_argument("-o", "--output-layer", type=Path, help="override layer (or, for a .mtlx input, new MaterialX document) to write "
+                   "(default <scene>.seamless.usda, <doc>.seamless.mtlx)")
     p.add_argument("--output-dir", type=Path, help="folder for tileable maps (default <stage dir>/tileable)")
     p.add_argument("--device", help="cpu, cuda, cuda:N (default: CUDA when present)")
     p.add_argument("--seed", type=int, default=0)

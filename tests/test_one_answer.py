@@ -169,3 +169,34 @@ def test_a_processed_materialx_document_is_judged_against_its_recorded_sources(t
     assert checked.passed == (stack["status"] == "passed") == (code == 0)
     [original] = check_paths([scene]).items  # the sources themselves: nothing recorded, judged against themselves
     assert original.verdict["reference"] == "itself"
+
+
+def test_output_layer_names_the_new_materialx_document(tmp_path, capsys):
+    """-o for a .mtlx input writes the new document there (its paths made relative to it), not beside the source;
+    a USD name for it, or one name for several inputs, is refused before any work."""
+    import json
+    import shutil
+
+    import MaterialX as mx
+
+    from seamless_usd_cli.main import main
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("mtlx", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    source = tmp_path / "mtlx" / "tiled.mtlx"
+    assert main(["process", str(source), "-o", str(tmp_path / "out" / "new.usda")]) == 2
+    assert main(["process", str(source), str(tmp_path / "mtlx" / "prefixed.mtlx"), "-o", str(tmp_path / "n.mtlx")]) == 2
+    capsys.readouterr()
+    new = tmp_path / "out" / "new.mtlx"
+    code = main(["process", str(source), "-o", str(new), "--preset", "tiny", "--seeds", "1", "--cache-dir",
+                 str(tmp_path / "cache"), "--json"])
+    report = json.loads(capsys.readouterr().out)
+    assert report["layers_written"] == [str(new)] and not source.with_name("tiled.seamless.mtlx").exists()
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(new))
+    files = [n.getInput("file").getResolvedValueString() for n in doc.traverseTree()
+             if isinstance(n, mx.Node) and n.getInput("file") is not None]
+    assert files and all((new.parent / f).is_file() for f in files)
+    [checked] = check_paths([new]).items
+    assert checked.verdict["reference"] == "source" and checked.passed == (code == 0)

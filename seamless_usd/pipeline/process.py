@@ -119,7 +119,8 @@ def _author_source(run: Run, src: _Source) -> None:
     plan = run.options.plan_mode or authoring.WriteMode.NEW_LAYER
     try:
         if src.kind == "mtlx":
-            edit = authoring.author_mtlx(src.path, results, mode=run.options.mode, plan_mode=plan)
+            edit = authoring.author_mtlx(src.path, results, mode=run.options.mode, plan_mode=plan,
+                                         output_path=run.options.output_layer)
         else:
             edit = authoring.author_usd(
                 src.path, results, mode=run.options.mode, output_layer=run.options.output_layer, plan_mode=plan
@@ -204,6 +205,16 @@ def _triage_dir(options: Options) -> Path:
     return StackCache(options.cache_dir).root / "triage"
 
 
+def _check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
+    """-o/--output-layer names the one layer or document written: one input, of its kind."""
+    if len(inputs) > 1:
+        raise UsageError("-o/--output-layer names one layer or document, but several inputs were given; leave it out "
+                         "(each stage then gets its own <name>.seamless.usda, each document <name>.seamless.mtlx)")
+    if inputs and (inputs[0].suffix.lower() in MTLX_SUFFIXES) != (output.suffix.lower() in MTLX_SUFFIXES):
+        kind = "a MaterialX document (.mtlx)" if inputs[0].suffix.lower() in MTLX_SUFFIXES else "a USD layer"
+        raise UsageError(f"-o/--output-layer {output}: the input {inputs[0].name} is edited in {kind}; name one")
+
+
 def process_paths(paths: Sequence[str | Path], options: Options | None = None) -> Report:
     """Process stages and MaterialX documents (files, folders, glob patterns); the report owns the exit code.
 
@@ -214,9 +225,8 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
     run = _new_run(options or Options())
     sources = []
     inputs = expand_inputs(paths)
-    if run.options.output_layer is not None and sum(p.suffix.lower() in USD_SUFFIXES for p in inputs) > 1:
-        raise UsageError("-o/--output-layer names one layer, but several USD inputs were given; leave it out "
-                         "(each stage then gets its own <name>.seamless.usda)")
+    if run.options.output_layer is not None:
+        _check_output_layer(Path(run.options.output_layer), inputs)
     for path in inputs:
         run.report.sources.append(str(path))
         try:
