@@ -149,3 +149,30 @@ def test_missing_referenced_document_is_skipped(tmp_path):
     result = scan_paths([tmp_path / "scene.usda"])
     (f,) = result.findings
     assert f.code == "missing-file" and "</M>" in f.where and "@./gone.mtlx@" in f.where
+
+
+def test_a_colour_space_stated_on_the_interface_input_that_holds_the_file(tmp_path):
+    """The document says linear, the node graph's interface input holding the file name says sRGB: the map is
+    sRGB (the inherited colour space does not hide the one stated where the value is)."""
+    import shutil
+
+    shutil.copyfile(TEXTURES / "brick_albedo.png", tmp_path / "brick_albedo.png")
+    (tmp_path / "look.mtlx").write_text("""<?xml version="1.0"?>
+<materialx version="1.39" colorspace="lin_rec709">
+  <nodegraph name="NG">
+    <input name="albedo_file" type="filename" value="brick_albedo.png" colorspace="srgb_texture" />
+    <image name="albedo" type="color3">
+      <input name="file" type="filename" interfacename="albedo_file" />
+    </image>
+    <output name="c" type="color3" nodename="albedo" />
+  </nodegraph>
+  <standard_surface name="SR" type="surfaceshader">
+    <input name="base_color" type="color3" nodegraph="NG" output="c" />
+  </standard_surface>
+  <surfacematerial name="M" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="SR" />
+  </surfacematerial>
+</materialx>
+""")
+    [stack] = scan_mtlx(tmp_path / "look.mtlx").stacks
+    assert stack.maps[0].color_space is ColorSpace.SRGB and "srgb_texture" in stack.maps[0].color_space_reason

@@ -154,10 +154,12 @@ def _texture_use(material: str, tex: mx.Node, role: RoleUse, flip: bool, documen
             udim = expected
         elif candidate.is_file():
             resolved = str(candidate.resolve())
-    for holder in (file_inp, src):
-        if holder is not None and holder.getActiveColorSpace():
-            labels.append(Label(holder.getActiveColorSpace(), "MaterialX colorspace"))
-            break
+    # the colour space stated on the file input, else on the interface input its value comes from, else the one
+    # they inherit (node graph, document)
+    holders = [h for h in (file_inp, src) if h is not None]
+    stated = [h.getColorSpace() for h in holders if h.hasColorSpace()] + [h.getActiveColorSpace() for h in holders]
+    if any(stated):
+        labels.append(Label(next(c for c in stated if c), "MaterialX colorspace"))
     tiled = tex.getCategory() == MtlxCategories.TILEDIMAGE
     wrap_s = Wrap.MTLX_DEFAULT if tiled else mtlxgraph.input_value(tex, MtlxInputs.UADDRESSMODE, Wrap.MTLX_DEFAULT, document)[0]
     wrap_t = Wrap.MTLX_DEFAULT if tiled else mtlxgraph.input_value(tex, MtlxInputs.VADDRESSMODE, Wrap.MTLX_DEFAULT, document)[0]
