@@ -51,6 +51,19 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _handle_interrupt(handler):
+    """Install ``handler`` for Ctrl-C where the default one is installed (the main thread; a host application's
+    own handler is left alone); returns the previous handler to put back, or None."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        return None
+    return signal.signal(signal.SIGINT, handler)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
@@ -109,16 +122,3 @@ def run() -> None:
 
 if __name__ == "__main__":
     run()
-
-
-def _handle_interrupt(handler):
-    """Install ``handler`` for Ctrl-C where the default one is installed (the main thread; a host application's
-    own handler is left alone); returns the previous handler to put back, or None."""
-    import signal
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        return None
-    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        return None
-    return signal.signal(signal.SIGINT, handler)
