@@ -68,6 +68,43 @@ def test_udim_is_skipped_listing_tiles_found(tmp_path):
     assert f.code == "udim" and "1001, 1002, 1011" in f.message
 
 
+def test_other_tile_set_tokens_are_tile_sets_not_missing_files(tmp_path):
+    """``<UDIMSET>`` and Mari's ``<UVTILE>`` name tile sets too: skipped as such, their tiles listed."""
+    (tmp_path / "tex").mkdir()
+    for name in ("body.1001.png", "body.1002.png", "arm.u1_v1.png", "arm.u2_v1.png"):
+        write_image(tmp_path / "tex" / name)
+    for asset, tiles in (("tex/body.<UDIMSET>.png", "1001, 1002"), ("tex/arm.<UVTILE>.png", "u1_v1, u2_v1")):
+        f = _only_finding(scan_paths([texture_scene(tmp_path / "s.usda", asset)]))
+        assert f.code == "udim" and tiles in f.message, f.message
+
+
+def test_a_material_with_a_udim_map_is_left_alone_not_failed(tmp_path, capsys):
+    """Its other maps are not tiled (they would no longer line up with the UDIM set), and nothing failed: the
+    stack is left alone, exit 0."""
+    import json
+
+    from seamless_usd_cli.main import main
+
+    (tmp_path / "tex").mkdir()
+    for tile in (1001, 1002):
+        write_image(tmp_path / "tex" / f"body.{tile}.png")
+    shutil.copyfile(TEXTURES / "brick_roughness.png", tmp_path / "tex" / "rough.png")
+    path = texture_scene(tmp_path / "s.usda", "tex/body.<UDIM>.png")
+    stage = Usd.Stage.Open(str(path))
+    rough = UsdShade.Shader.Define(stage, "/Looks/M/Rough")
+    rough.CreateIdAttr("UsdUVTexture")
+    rough.CreateInput("file", Sdf.ValueTypeNames.Asset).Set("tex/rough.png")
+    rough.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
+        UsdShade.Shader.Get(stage, "/Looks/M/St").ConnectableAPI(), "result")
+    UsdShade.Shader.Get(stage, "/Looks/M/Surface").CreateInput("roughness", Sdf.ValueTypeNames.Float).ConnectToSource(
+        rough.ConnectableAPI(), "r")
+    stage.Save()
+    code = main(["process", str(path), "--dry-run", "--json"])
+    report = json.loads(capsys.readouterr().out)
+    [stack] = report["stacks"]
+    assert code == 0 == report["exit_code"] and stack["status"] == "left-alone" and "(udim)" in stack["message"]
+
+
 def test_texture_without_file_is_skipped(tmp_path):
     f = _only_finding(scan_paths([texture_scene(tmp_path / "s.usda", None)]))
     assert f.code == "no-file"

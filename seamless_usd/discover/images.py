@@ -15,7 +15,7 @@ from pathlib import Path
 import OpenImageIO as oiio
 from pxr import Ar
 
-from seamless_usd.discover.tokens import UDIM_TOKEN
+from seamless_usd.discover.tokens import TILE_TOKENS, tile_token
 from seamless_usd.textures import ImageInfo
 from seamless_usd.pngchunks import png_stated_color_space
 
@@ -86,11 +86,13 @@ def _read_header(path: str, raw) -> ImageInfo:
 
 
 def udim_tiles(absolute_pattern: str) -> list[str]:
-    """Tiles on disk matching a ``<UDIM>`` path, as tile numbers (``["1001", "1002"]``)."""
+    """Tiles on disk matching a ``<UDIM>`` path (or another of :data:`.tokens.TILE_TOKENS`), as their numbers
+    (``["1001", "1002"]``, ``["u1_v1"]``)."""
     pattern = Path(absolute_pattern)
     folder = pattern.parent
-    if not folder.is_dir():
+    token = tile_token(pattern.name)
+    if not folder.is_dir() or token is None:
         return []
-    head, _, tail = pattern.name.partition(UDIM_TOKEN)
-    rx = re.compile(re.escape(head) + r"(1\d{3})" + re.escape(tail) + "$")
+    head, _, tail = pattern.name.partition(token)
+    rx = re.compile(re.escape(head) + f"({TILE_TOKENS[token]})" + re.escape(tail) + "$")
     return sorted(m.group(1) for p in folder.iterdir() if (m := rx.match(p.name)))

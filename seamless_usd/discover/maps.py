@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 from seamless_usd.discover.colorspace import Label, mismatch_finding, resolve_color_space
 from seamless_usd.discover.images import ImageReadError, is_package_path, read_image_info, udim_tiles
-from seamless_usd.discover.tokens import MIN_IMAGE_SIZE, UDIM_TOKEN, Codes, ShaderIds
+from seamless_usd.discover.tokens import MIN_IMAGE_SIZE, Codes, ShaderIds, tile_token
 from seamless_usd.textures import AuthoredAt, ImageInfo, Origin, RoleUse, TextureMap, UVChain
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
@@ -99,10 +99,11 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         return None, [_skip(first, Codes.NO_FILE, "texture node has no file")]
     if first.uv is None:
         return None, [_skip(first, Codes.NO_UV, "texture has no texture-coordinate input (a swatch texture)")]
-    if UDIM_TOKEN in first.asset:
+    if tile_token(first.asset):
         tiles = udim_tiles(first.udim_pattern) if first.udim_pattern else []
         listed = ", ".join(tiles) if tiles else "none found"
-        return None, [_skip(first, Codes.UDIM, f"UDIM textures are not supported; tiles: {listed}")]
+        return None, [_skip(first, Codes.UDIM, f"texture tile sets ({tile_token(first.asset)}) are not made "
+                                                f"tileable (UDIM); tiles: {listed}")]
     if not first.resolved:
         looked = f" at {first.expected}" if first.expected and first.expected != first.asset else ""
         return None, [_skip(first, Codes.MISSING_FILE, f"texture file not found{looked}")]

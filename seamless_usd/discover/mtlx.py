@@ -15,7 +15,7 @@ from seamless_usd.discover.colorspace import Label
 from seamless_usd.discover.maps import TextureUse
 from seamless_usd.discover.tokens import (
     SEPARATE_OUTPUTS,
-    UDIM_TOKEN,
+    tile_token,
     Codes,
     MtlxCategories,
     MtlxInputs,
@@ -150,7 +150,7 @@ def _texture_use(material: str, tex: mx.Node, role: RoleUse, flip: bool, documen
         base = Path(file_at.layer).parent
         candidate = Path(prefixed) if Path(prefixed).is_absolute() else base / prefixed
         expected = str(candidate)
-        if UDIM_TOKEN in prefixed:
+        if tile_token(prefixed):
             udim = expected
         elif candidate.is_file():
             resolved = str(candidate.resolve())

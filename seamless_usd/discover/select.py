@@ -9,7 +9,7 @@ from seamless_usd.discover.intent import Intent
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.findings import Finding, Severity
 
-__all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "blocked_stacks", "left_alone_stacks",
+__all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "blocked_stacks", "set_aside_stacks", "left_alone_stacks",
            "unread_findings", "unread_materials", "unread_files"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
@@ -44,20 +44,36 @@ def left_alone_stacks(stacks: Sequence[TextureStack], source: str, force: bool =
     }
 
 
+def _skipped(scan: ScanResult, stack: TextureStack, codes) -> list[str]:
+    return [f"{f.where} ({f.code})" for f in scan.findings
+            if f.severity is Severity.SKIPPED and f.code in codes and f.material == stack.material]
+
+
 def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
-    """Stacks left alone because a texture of their material was skipped (see BLOCKING_SKIPS)."""
+    """Stacks that fail because a texture of their material is missing or unreadable (:data:`UNREAD_SKIPS`): a
+    broken asset, named."""
     out = {}
     for stack in stacks:
-        reasons = [
-            f"{f.where} ({f.code})"
-            for f in scan.findings
-            if f.severity is Severity.SKIPPED and f.code in BLOCKING_SKIPS and f.material == stack.material
-        ]
+        reasons = _skipped(scan, stack, UNREAD_SKIPS)
         if reasons:
             out[(source, stack.id)] = (
                 f"left alone: {', '.join(reasons)} of this material cannot be processed, and tiling the other "
                 "maps would misalign them; fix or remove that texture and run again"
             )
+    return out
+
+
+def set_aside_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
+    """Stacks left alone because a texture of their material is one this tool does not make tileable (a UDIM
+    set, a picture too small): tiling the other maps would misalign them. Not a failure; a broken texture of the
+    same material (:func:`blocked_stacks`) comes first."""
+    out = {}
+    for stack in stacks:
+        reasons = _skipped(scan, stack, BLOCKING_SKIPS - UNREAD_SKIPS)
+        if reasons and not _skipped(scan, stack, UNREAD_SKIPS):
+            out[(source, stack.id)] = (
+                f"left alone: {', '.join(reasons)} of this material is not made tileable, and tiling the other "
+                "maps would misalign them")
     return out
 
 

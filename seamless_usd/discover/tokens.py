@@ -22,6 +22,8 @@ __all__ = [
     "MIN_CROP",
     "MIN_IMAGE_SIZE",
     "UDIM_TOKEN",
+    "TILE_TOKENS",
+    "tile_token",
     "MTLX_SUFFIX",
 ]
 
@@ -176,6 +178,14 @@ class Codes:
 MIN_CROP = 100  # px: the smallest crop SeamlessGAN samples (DESIGN: c_min); a smaller stack gets a cut tile only
 MIN_IMAGE_SIZE = 16  # px: below this no tile can be cut from a map either: skipped as too-small
 UDIM_TOKEN = "<UDIM>"
+#: Tokens that name a set of texture tiles (UDIM numbers, or Mari's u/v tiles), with what each stands for on disk.
+TILE_TOKENS = {"<UDIM>": r"1\d{3}", "<UDIMSET>": r"1\d{3}", "<UVTILE>": r"u\d+_v\d+", "<UVTILE0>": r"u\d+_v\d+",
+               "<UVTILE1>": r"u\d+_v\d+"}
+
+
+def tile_token(path: str) -> str | None:
+    """The texture-tile token in ``path`` (``<UDIM>``, ``<UDIMSET>``, ``<UVTILE>``...), or None."""
+    return next((t for t in TILE_TOKENS if t in path), None)
 MTLX_SUFFIX = ".mtlx"
 
 

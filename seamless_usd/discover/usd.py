@@ -19,7 +19,7 @@ from seamless_usd.discover.mtlxgraph import channels_of
 from seamless_usd.discover.tokens import (
     MTLX_SUFFIX,
     SEPARATE_OUTPUTS,
-    UDIM_TOKEN,
+    tile_token,
     Inputs,
     MtlxInputs,
     Codes,
@@ -188,7 +188,7 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
         asset, resolved = usdgraph.asset_text(file_attr.Get())
         file_at = usdgraph.authored_at(file_attr)
         expected = _anchor(file_attr, asset) if asset else ""
-        if UDIM_TOKEN in asset:
+        if tile_token(asset):
             udim = expected
     if is_preview:
         source_cs, _ = usdgraph.input_value(tex, Inputs.SOURCE_COLOR_SPACE, "auto")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
-from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_stacks
+from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_stacks, set_aside_stacks
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
@@ -52,7 +52,8 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
     settings = run.settings
     for label, stacks, out_dir in sources:
         for stack in stacks:
-            if ((label, stack.id) in run.blocked or (label, stack.id) in run.left_alone
+            key = (label, stack.id)
+            if (key in run.blocked or key in run.set_aside or key in run.left_alone
                     or stack.content_key in seen or stack.content_key in run.outcomes):
                 continue
             seen.add(stack.content_key)
@@ -232,6 +233,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
         try:
             src = _scan_source(path, run.options.materials, _triage_dir(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
+            run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
             unread_rows(run, src.scan, str(src.path))
             run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
             sources.append(src)
@@ -290,6 +292,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.report.findings += [variant_not_composed(s) for s in stacks if s.selection]
     stacks = [s for s in stacks if not s.selection]
     run.blocked.update(blocked_stacks(scan, stacks, label))
+    run.set_aside.update(set_aside_stacks(scan, stacks, label))
     unread_rows(run, scan, label)
     run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))
     out_dir = _output_dir(run.options, source)

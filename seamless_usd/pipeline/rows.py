@@ -39,7 +39,8 @@ class Run:
     executor: Executor
     report: Report = field(default_factory=Report)
     outcomes: dict[str, StackOutcome | Exception] = field(default_factory=dict)  # content key -> result
-    blocked: dict[tuple[str, str], str] = field(default_factory=dict)  # (source, stack id) -> why it is left alone
+    blocked: dict[tuple[str, str], str] = field(default_factory=dict)  # (source, stack id) -> why it fails
+    set_aside: dict[tuple[str, str], str] = field(default_factory=dict)  # (source, stack id) -> why it is left alone
     left_alone: set[tuple[str, str]] = field(default_factory=set)  # (source, stack id) not meant to tile, not forced
     placed: dict[tuple[str, Path], StackOutcome | Exception] = field(default_factory=dict)  # (key, dir) -> tiles there
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
@@ -83,6 +84,12 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
                 report.message = f"already tileable, kept as is (wrap set to repeat): {stack.intent_reason}"
                 results.append(wrap_only_result(stack))
             run.report.findings.append(Finding(Severity.SKIPPED, stack.intent, where, report.message, stack.material))
+        elif (source_label, stack.id) in run.set_aside:
+            report.status = StackStatus.LEFT_ALONE
+            report.maps = [MapReport.for_map(m) for m in stack.maps]
+            report.message = run.set_aside[(source_label, stack.id)]
+            run.report.findings.append(Finding(Severity.SKIPPED, "stack-set-aside", where, report.message,
+                                               stack.material))
         elif (source_label, stack.id) in run.blocked:
             report.message = run.blocked[(source_label, stack.id)]
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
