@@ -216,6 +216,8 @@ def test_in_place_leaves_a_layer_marked_read_only_alone(assets, model_cache, cap
     original = scene.read_bytes()
     scene.chmod(0o444)
     try:
+        planned = _process(str(scene), "--in-place", "--dry-run", "--json", cache=model_cache)  # says so too
+        [plan] = json.loads(capsys.readouterr().out)["stacks"]
         code = _process(str(scene), "--in-place", "--json", cache=model_cache)
     finally:
         scene.chmod(0o644)
@@ -223,6 +225,7 @@ def test_in_place_leaves_a_layer_marked_read_only_alone(assets, model_cache, cap
     assert code == 1 and scene.read_bytes() == original and not scene.with_name("scene.usda.bak").exists()
     [stack] = payload["stacks"]
     assert stack["status"] == "failed" and "marked read-only" in stack["message"]
+    assert planned == 1 and plan["status"] == "failed" and plan["message"] == stack["message"]
     assert not (scene.parent / "tileable").exists()  # no tile that no layer would reference
 
 

@@ -240,7 +240,8 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
         except InputError as exc:
             run.report.unreadable.append(str(path))
             run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", asset_ref(path), str(exc)))
-    if run.options.mode is authoring_module().WriteMode.IN_PLACE:
+    modes = authoring_module().WriteMode
+    if modes.IN_PLACE in (run.options.mode, run.options.plan_mode if run.options.mode is modes.DRY_RUN else None):
         for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
             run.blocked.update(_locked_in_place(run, src))
     if run.options.mode != authoring_module().WriteMode.DRY_RUN:
