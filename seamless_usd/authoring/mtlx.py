@@ -19,7 +19,8 @@ import MaterialX as mx
 from seamless_usd.authoring.mtlxinputs import MtlxNames, UnauthoredInput, fmt, gltf_identity, set_vector2, vector2
 from seamless_usd.authoring.mtlxuv import _PlaceUV
 from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset_path, write_atomically
-from seamless_usd.authoring.types import TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn, WriteMode
+from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn,
+                                          WriteMode, shared_with)
 from seamless_usd.textures import Origin
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import file_sha256
@@ -294,6 +295,8 @@ class _MtlxAuthor(_PlaceUV):
                     Severity.WARNING, Codes.SHARED_CONFLICT, prim_ref(node_path),
                     f"node shared by {self._done[node_path][2]} and {tex_map.material} with "
                     f"different results; kept {self._done[node_path][2]}'s"))
+                self.result.not_written_for.append((tex_map.material, prim_ref(node_path),
+                                                    shared_with(self._done[node_path][2])))
             return
         self._done[node_path] = (out_file, scale, tex_map.material)
         before = len(self.result.plan)

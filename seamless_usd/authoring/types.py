@@ -17,6 +17,7 @@ __all__ = [
     "UVTurn",
     "AuthoringResult",
     "uv_scale_for",
+    "shared_with",
 ]
 
 
@@ -119,10 +120,13 @@ class AuthoringResult:
     dry_run: bool = False
     output: Path | None = None  # the new layer / document (NEW_LAYER mode), if written or planned
     not_written: list[tuple[str, str]] = field(default_factory=list)  # ("<texture node>", why) left unedited
+    # (material, "<texture node>", why): a node another material shares, which keeps that material's tile
+    not_written_for: list[tuple[str, str, str]] = field(default_factory=list)
 
-    def unwritten_nodes(self) -> dict[str, str]:
-        """``"<node>"`` -> why, for every texture node whose edits were not made."""
-        return dict(self.not_written)
+    def unwritten_nodes(self, material: str | None = None) -> dict[str, str]:
+        """``"<node>"`` -> why, for every texture node whose edits were not made (for ``material``: also those
+        that show another material's tile)."""
+        return {**{n: why for m, n, why in self.not_written_for if m == material}, **dict(self.not_written)}
 
     def to_dict(self) -> dict:
         return {
@@ -150,3 +154,9 @@ def uv_scale_for(working_size: tuple[int, int], crop: tuple[int, int]) -> tuple[
     if min(w, h, cw, ch) <= 0:
         raise ValueError(f"working size {working_size} and crop {crop} must be positive")
     return (w / (2.0 * cw), h / (2.0 * ch))
+
+
+def shared_with(material: str) -> str:
+    """Why a texture node's edits for one material were not made: another material shares it and keeps its tile."""
+    return (f"the texture node is shared with {material}, which keeps its own tile there (this material's tile is "
+            "written but not used); give each material its own texture node")

@@ -9,7 +9,8 @@ from pxr import Gf, Sdf, Usd, UsdShade
 
 from seamless_usd.authoring.files import relative_asset_path
 from seamless_usd.authoring.schema import PROPERTIES, Q_PROPERTIES, Schema, has_applied, read_provenance, schemas_known
-from seamless_usd.authoring.types import TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult
+from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult,
+                                          shared_with)
 from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target, variant_not_composed
 from seamless_usd.authoring.usduv import _UVPlanner
 from seamless_usd.authoring.usdnodes import (
@@ -150,6 +151,7 @@ class _Author(_UVPlanner):
                     f"results; kept {done[2]}'s. Give each material its own texture node to "
                     "process them separately",
                 )
+                self.result.not_written_for.append((tex_map.material, prim_ref(node_path), shared_with(done[2])))
             return None
         self._done[done_key] = (out, scale, tex_map.material)
         first_edit = len(self.edits)

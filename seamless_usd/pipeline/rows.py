@@ -159,8 +159,8 @@ def unread_rows(run: Run, scan: ScanResult, source_label: str) -> None:
 
 def check_written(run: Run, handed, edit, failure: str | None = None) -> None:
     """The report agrees with the disk: a stack whose edits were not written is failed."""
-    unwritten = edit.unwritten_nodes() if edit is not None else {}
     for report, stack in handed:
+        unwritten = edit.unwritten_nodes(stack.material) if edit is not None else {}
         if failure is not None:
             why = failure
         else:

@@ -1,5 +1,6 @@
-"""A material brought in by a payload (or a reference) authored inside a variant: its edits go inside that
-variant, so the other selections keep their own look, and a stage referencing the asset gets the same."""
+"""Where a material's edits go when its texture node is reached another way: brought in by a payload (or a
+reference) authored inside a variant, the edits go inside that variant, so the other selections keep their own
+look; a node two materials share keeps the first one's tile, and the other is told so."""
 from __future__ import annotations
 
 import shutil
@@ -96,3 +97,29 @@ def test_a_payload_inside_a_variant_is_edited_inside_that_variant(tmp_path, refe
     assert brick_linked and plain_linked and upstream == ["/Asset/Looks/Brick/St.outputs:result"]
     layer = Sdf.Layer.FindOrOpen(str(written))
     assert not layer.GetPrimAtPath("/Asset/Looks"), "an edit outside the variant changes every selection"
+
+
+def test_a_texture_node_two_materials_share_keeps_the_first_ones_tile_and_names_the_other(tmp_path):
+    """M2's diffuse colour reads M1's texture node: each material's stack gets its tile, but the node can show one;
+    the second material is told its tile is not used (process then fails its row instead of passing it)."""
+    from dataclasses import replace
+
+    from seamless_usd.authoring import StackResult
+
+    (tmp_path / "tex").mkdir()
+    shutil.copyfile(TEXTURES / "brick_albedo.png", tmp_path / "tex" / "brick_albedo.png")
+    stage = Usd.Stage.CreateNew(str(tmp_path / "scene.usda"))
+    _material(stage, "/Looks/M1", "./tex/brick_albedo.png", transform=False)
+    m2 = UsdShade.Material.Define(stage, "/Looks/M2")
+    surface = UsdShade.Shader.Define(stage, "/Looks/M2/Surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    m2.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+    surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
+        UsdShade.Shader.Get(stage, "/Looks/M1/Color").ConnectableAPI(), "rgb")
+    stage.GetRootLayer().Save()
+    first, second = stand_ins(tmp_path / "scene.usda")
+    assert (first.stack.material, second.stack.material) == ("</Looks/M1>", "</Looks/M2>")
+    second = StackResult(second.stack, second.maps, (3.0, 3.0), replace(second.provenance, uv_scale=(3.0, 3.0)))
+    result = author_usd(tmp_path / "scene.usda", [first, second])
+    assert "</Looks/M1/Color>" not in result.unwritten_nodes("</Looks/M1>")
+    assert "shared with </Looks/M1>" in result.unwritten_nodes("</Looks/M2>")["</Looks/M1/Color>"]
