@@ -173,15 +173,20 @@ class _MtlxAuthor(_PlaceUV):
         self.result.plan.append(f"{line} in {asset_ref(self.out.name)}")
         self.changed = True
 
-    def _set(self, elem: mx.Element, name: str, value: str | None, label: str) -> None:
-        if value is None:  # not recorded (Q never ran): an older run's value goes
-            if elem.hasAttribute(name):
-                elem.removeAttribute(name)
-                self._plan(f"remove {prim_ref(elem.getNamePath())}.{label}")
-            return
-        if elem.getAttribute(name) != value:
-            elem.setAttribute(name, value)
-            self._plan(f"set {prim_ref(elem.getNamePath())}.{label} = {value}")
+    def _record(self, elem: mx.Element, values: list[tuple[str, str | None]]) -> None:
+        """Set the provenance attributes ``values`` on ``elem`` (None: not recorded, an older run's value goes), with
+        one plan line for them all: a dry run's values are not yet those of the run."""
+        changed = False
+        for name, value in values:
+            if value is None:
+                if elem.hasAttribute(name):
+                    elem.removeAttribute(name)
+                    changed = True
+            elif elem.getAttribute(name) != value:
+                elem.setAttribute(name, value)
+                changed = True
+        if changed:
+            self._plan(f"record the tile's provenance (seamless_* attributes) on {prim_ref(elem.getNamePath())}")
 
     def set_source_hash(self, source_hash: str) -> None:
         """Record on the new document what it was made from (:data:`MtlxNames.MADE_FROM`)."""
@@ -355,7 +360,7 @@ class _MtlxAuthor(_PlaceUV):
         else:
             source = provenance.source_asset
         p = provenance
-        for name, value in (
+        self._record(node, [
             (MtlxNames.SOURCE_ASSET, source),
             (MtlxNames.CROP_SIZE, fmt(p.crop_size)),
             (MtlxNames.UV_SCALE, fmt(total)),
@@ -371,7 +376,6 @@ class _MtlxAuthor(_PlaceUV):
             (MtlxNames.EVENED, fmt([float(p.evened)]) if p.evened else None),
             (MtlxNames.UV_TURN, fmt([float(degrees)]) if degrees else None),
             (MtlxNames.RECTIFIED, fmt([float(v) for v in p.rectified]) if p.rectified[2] else None),
-        ):
-            self._set(node, name, value, name)
+        ])
         if len(self.result.plan) > before and prim_ref(node_path) not in self.result.edited_prims:
             self.result.edited_prims.append(prim_ref(node_path))
