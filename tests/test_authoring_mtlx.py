@@ -184,7 +184,7 @@ def test_in_place_keeps_backup_and_dry_run_writes_nothing(document: Path):
     dry = author_mtlx(document, results(document), mode=WriteMode.DRY_RUN)
     assert dry.dry_run and dry.plan and dry.layers_written == []
     # the provenance is one line per node, not values a dry run has not measured yet
-    assert not [line for line in dry.plan if "seamless_" in line and "=" in line]
+    assert not [line for line in dry.plan if ".seamless_" in line]
     assert any(line.startswith("record the tile's provenance") for line in dry.plan)
     assert sorted(p.name for p in document.parent.iterdir()) == ["brick.mtlx", "textures", "tileable"]
     result = author_mtlx(document, results(document), mode=WriteMode.IN_PLACE)
