@@ -125,6 +125,16 @@ def test_unknown_colour_space_name_is_passed_over_with_a_warning(tmp_path):
     assert [f.code for f in result.findings] == ["unknown-colorspace"]
 
 
+def test_a_source_colour_space_the_texture_node_does_not_take_is_named_and_read_as_auto(tmp_path):
+    """UsdUVTexture's sourceColorSpace takes raw, sRGB or auto: "linear" is passed over as a renderer passes it over
+    (the file decides), with a warning naming it, not silently."""
+    path = scene(tmp_path, str(TEXTURES / "brick_roughness.png"), "roughness", source_cs="linear", output="r")
+    result = scan_paths([path])
+    assert _one(result).color_space_reason.startswith("auto")
+    [finding] = result.findings
+    assert finding.code == "unknown-colorspace" and "'linear'" in finding.message
+
+
 def test_classify_names():
     assert classify("sRGB") is ColorSpace.SRGB and classify("srgb_texture") is ColorSpace.SRGB
     assert classify("raw") is ColorSpace.RAW and classify("lin_rec709") is ColorSpace.RAW

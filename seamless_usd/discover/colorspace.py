@@ -30,6 +30,7 @@ class Label:
 
     name: str
     source: str  # "inputs:sourceColorSpace", "colorSpace metadata", "MaterialX colorspace"
+    understood: bool = True  # False: a value its input does not take (a renderer passes it over too)
 
 
 def classify(name: str | None) -> ColorSpace | None:
@@ -64,7 +65,7 @@ def resolve_color_space(
     for label in labels:
         if not label.name or label.name.lower() == "auto":
             continue
-        cs = classify(label.name)
+        cs = classify(label.name) if label.understood else None
         if cs is None:
             unknown.append(label.name)
             continue

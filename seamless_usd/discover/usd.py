@@ -194,6 +194,8 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
         source_cs, _ = usdgraph.input_value(tex, Inputs.SOURCE_COLOR_SPACE, "auto")
         if str(source_cs) in (ColorSpace.SRGB.value, ColorSpace.RAW.value):
             labels.append(Label(str(source_cs), "inputs:sourceColorSpace"))
+        elif str(source_cs) not in ("auto", ""):  # not a UsdUVTexture token: read as auto, and said so
+            labels.append(Label(str(source_cs), "inputs:sourceColorSpace", understood=False))
     node_file = UsdShade.Shader(tex).GetInput(Inputs.FILE)
     holders = [node_file.GetAttr()] if node_file else []
     if file_attr is not None and file_attr.GetPath() not in [a.GetPath() for a in holders]:
