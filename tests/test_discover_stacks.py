@@ -149,3 +149,22 @@ def test_stack_to_dict_has_id_and_content_key(samples_dir):
     (stack,) = scan_paths([samples_dir / "orm" / "scene.usda"]).stacks
     d = stack.to_dict()
     assert d["id"] == stack.id and d["content_key"] == stack.content_key and len(d["maps"]) == 2
+
+
+def test_stacks_inside_instances_fail_before_any_tile_is_made(tmp_path, capsys):
+    """A material an instanceable reference brings in cannot be edited over the stage: process says so for each
+    instance and makes no tile for it (the asset itself, processed on its own, is edited as usual)."""
+    import json
+
+    from seamless_usd_cli.main import main
+
+    write(tmp_path / "asset.usda", f'(defaultPrim = "Asset")\ndef Xform "Asset" {{{material("/Asset", "Mat")}\n}}')
+    body = "".join(f'def Xform "Inst{i}" (\n    instanceable = true\n    references = @./asset.usda@\n) {{}}\n'
+                   for i in (1, 2))
+    scene = write(tmp_path / "s.usda", body)
+    code = main(["process", str(scene), "--dry-run", "--json"])
+    stacks = json.loads(capsys.readouterr().out)["stacks"]
+    assert code == 1 and [s["status"] for s in stacks] == ["failed", "failed"]
+    assert all("is inside an instance" in s["message"] and "</Inst" in s["message"] for s in stacks)
+    code = main(["process", str(scene), "--preset", "tiny", "--json", "--cache-dir", str(tmp_path / "cache")])
+    assert code == 1 and not (tmp_path / "tileable").exists()

@@ -7,9 +7,9 @@ from collections.abc import Sequence
 
 from seamless_usd.discover.intent import Intent
 from seamless_usd.textures import ScanResult, TextureStack
-from seamless_usd.findings import Finding, Severity
+from seamless_usd.findings import Finding, Severity, prim_ref
 
-__all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "blocked_stacks", "set_aside_stacks", "left_alone_stacks",
+__all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "blocked_stacks", "set_aside_stacks", "instanced_stacks", "left_alone_stacks",
            "unread_findings", "unread_materials", "unread_files"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
@@ -74,6 +74,20 @@ def set_aside_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: s
             out[(source, stack.id)] = (
                 f"left alone: {', '.join(reasons)} of this material is not made tileable, and tiling the other "
                 "maps would misalign them")
+    return out
+
+
+def instanced_stacks(stage, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
+    """Stacks of the open USD ``stage`` with a texture node inside an instance (an instance proxy, which no layer
+    over the stage can edit), with why: they fail before any tile is made for them."""
+    out = {}
+    for stack in stacks:
+        nodes = [m.node for m in stack.maps if m.origin.value == "usd" and not stack.selection]
+        inside = [n for n in nodes if (prim := stage.GetPrimAtPath(n.strip("<>"))) and prim.IsInstanceProxy()]
+        if inside:
+            node = prim_ref(inside[0].strip("<>"))
+            out[(source, stack.id)] = (f"its texture node {node} is inside an instance, which an edit over the stage "
+                                       "cannot change: edit its prototype's source, or make it non-instanceable")
     return out
 
 

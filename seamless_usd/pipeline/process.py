@@ -10,12 +10,13 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
-from seamless_usd.discover.select import BLOCKING_SKIPS, blocked_stacks, select_stacks, set_aside_stacks
+from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, instanced_stacks, select_stacks,
+                                          set_aside_stacks)
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
@@ -91,6 +92,7 @@ class _Source:
     kind: str  # "usd" or "mtlx"
     scan: ScanResult
     stacks: list[TextureStack]
+    instanced: dict[tuple[str, str], str] = field(default_factory=dict)  # stacks inside instances, with why
 
 
 def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = None) -> _Source:
@@ -107,7 +109,9 @@ def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = 
         scan, kind = scan_stage(stage, triage_dir), "usd"
     else:
         raise InputError(f"{asset_ref(path)} is neither a USD stage (.usd/.usda/.usdc/.usdz) nor a .mtlx document")
-    return _Source(path, kind, scan, select_stacks(scan, patterns))
+    stacks = select_stacks(scan, patterns)
+    instanced = instanced_stacks(stage, stacks, str(path)) if kind == "usd" else {}
+    return _Source(path, kind, scan, stacks, instanced)
 
 
 def _author_source(run: Run, src: _Source) -> None:
@@ -233,6 +237,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
         try:
             src = _scan_source(path, run.options.materials, _triage_dir(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
+            run.blocked.update(src.instanced)
             run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
             unread_rows(run, src.scan, str(src.path))
             run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
