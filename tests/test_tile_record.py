@@ -6,7 +6,7 @@ import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-from seamless_usd.imaging.io import write_pixels
+from seamless_usd.imaging.write import write_pixels
 from seamless_usd.imaging.tag import read_tag
 from seamless_usd.textures import ColorSpace, ImageInfo
 

@@ -25,12 +25,11 @@ from seamless_usd.imaging.io import (
     output_extension,
     read_image,
     read_info,
-    write_pixels,
 )
 from seamless_usd.imaging.normals import decode_normals, encode_normals, normal_scale_bias, renormalise
 from seamless_usd.imaging.resample import FILTERS, WorkingResolution, resample
 from seamless_usd.imaging.stack import StackPixels, load_stack_pixels
-from seamless_usd.imaging.write import output_path, write_map
+from seamless_usd.imaging.write import output_path, write_map, write_pixels
 
 __all__ = [
     "DEFAULT_MAX_PIXELS",

@@ -1,4 +1,5 @@
-"""Reading and writing image files with OpenImageIO: file values in, file values out.
+"""Reading image files with OpenImageIO (file values in; :mod:`.write` writes them out), and the output family
+a source's tile is written in.
 
 Pixels are handled as float32 arrays of *file values*, shape ``(H, W, C)``: integer files are
 normalised to [0, 1] (``code / 255`` or ``code / 65535``), half and float files are returned as
@@ -16,9 +17,8 @@ from pathlib import Path
 import numpy as np
 import OpenImageIO as oiio
 
-from seamless_usd.textures import ColorSpace, ImageInfo
+from seamless_usd.textures import ImageInfo
 from seamless_usd.errors import InputError
-from seamless_usd.fileio import atomic_write
 from seamless_usd.findings import asset_ref
 from seamless_usd.pngchunks import png_stated_color_space
 
@@ -27,12 +27,12 @@ __all__ = [
     "OUTPUT_FAMILIES",
     "read_info",
     "read_image",
-    "write_pixels",
     "output_extension",
     "output_dtype",
     "alpha_channel",
     "norm_ext",
     "oiio_name",
+    "reader_config",
 ]
 
 DEFAULT_MAX_PIXELS = 1 << 28  # 268 Mpx (16k x 16k): larger headers are refused before decoding
@@ -52,12 +52,9 @@ OUTPUT_FAMILIES: dict[str, tuple[str, str]] = {
     "double": (".exr", "float"),
 }
 
-_OIIO_TYPES = {"uint8": oiio.UINT8, "uint16": oiio.UINT16, "half": oiio.HALF, "float": oiio.FLOAT}
-_NUMPY_TYPES = {"uint8": np.uint8, "uint16": np.uint16, "half": np.float16, "float": np.float32}
-_COLORSPACE_NAMES = {ColorSpace.SRGB: "srgb_rec709_scene", ColorSpace.RAW: "lin_rec709_scene"}
 
 
-def _input_config() -> oiio.ImageSpec:
+def reader_config() -> oiio.ImageSpec:
     config = oiio.ImageSpec()
     config.attribute("oiio:UnassociatedAlpha", 1)  # keep straight alpha as stored
     return config
@@ -80,7 +77,7 @@ def _open(path: Path) -> oiio.ImageInput:
         raise InputError(
             f"{asset_ref(path)}: image file not found; check the asset path or restore the file"
         )
-    inp = oiio.ImageInput.open(oiio_name(path), _input_config())
+    inp = oiio.ImageInput.open(oiio_name(path), reader_config())
     if inp is None:
         reason = " ".join((oiio.geterror() or "unknown format").split())
         raise InputError(
@@ -271,116 +268,6 @@ def output_extension(info: ImageInfo) -> str:
     return ext
 
 
-def write_pixels(
-    path: str | os.PathLike,
-    pixels: np.ndarray,
-    like: ImageInfo,
-    color_space: ColorSpace,
-    record: dict | None = None,
-) -> Path:
-    """Write float file values atomically in the output family of ``like``; ``record``: what the file
-    records of how it was made (:mod:`.tag`).
-
-    Parameters
-    ----------
-    path
-        Target file; its extension must be :func:`output_extension` of ``like`` (``.tiff`` and
-        ``.tif`` are the same).
-    pixels
-        ``(H, W, C)`` or ``(H, W)`` float file values, ``C == like.channels``. Integer outputs are
-        clipped to [0, 1] and rounded to the nearest code; half outputs are clipped to the half
-        range (+-65504).
-    like
-        The source header: sample type, channel count and names are copied.
-    color_space
-        The encoding the values are in, recorded as ``oiio:ColorSpace`` (sRGB -> an sRGB chunk
-        in PNG; raw -> linear).
-
-    Returns
-    -------
-    Path
-        ``path``.
-
-    Raises
-    ------
-    ValueError
-        Wrong extension or channel count.
-    InputError
-        The file cannot be written (folder missing or read-only, disk full).
-    """
-    target = Path(path)
-    ext = output_extension(like)
-    if norm_ext(target.suffix) != norm_ext(ext):
-        raise ValueError(f"{asset_ref(target)}: a {like.dtype} {like.file_format} source is written as {ext}")
-    pixels = np.asarray(pixels)
-    if pixels.ndim == 2:
-        pixels = pixels[..., None]
-    if pixels.ndim != 3 or pixels.shape[2] != like.channels:
-        raise ValueError(f"expected (H, W, {like.channels}) pixels for {asset_ref(target)}, got {pixels.shape}")
-    dtype = output_dtype(like)
-    data = _quantise(pixels, dtype)
-    h, w, c = data.shape
-    spec = oiio.ImageSpec(w, h, c, _OIIO_TYPES[dtype])
-    if len(like.channel_names) == c:
-        spec.channelnames = tuple(like.channel_names)
-    named = any(n.lower() in ("a", "alpha") for n in like.channel_names)
-    alpha = alpha_channel(like) if named or len(like.channel_names) != c else None
-    if alpha is not None:
-        spec.alpha_channel = alpha
-    spec.attribute("oiio:ColorSpace", _COLORSPACE_NAMES[ColorSpace(color_space)])
-    if ext == ".exr":
-        spec.attribute("compression", "zip")
-    else:
-        spec.attribute("oiio:UnassociatedAlpha", 1)  # values are straight alpha, store as is
-        if ext == ".tif":
-            spec.attribute("compression", "zip")
-    if record is not None:
-        from seamless_usd.imaging.tag import tag_attributes
-
-        for name, text in tag_attributes(ext, record):
-            spec.attribute(name, text)
-
-    def writer(tmp: Path) -> None:
-        out = oiio.ImageOutput.create(str(tmp))
-        if out is None:
-            raise InputError(f"{asset_ref(target)}: no image writer for {ext} ({oiio.geterror()})")
-        try:
-            if not out.open(str(tmp), spec) or not out.write_image(data):
-                raise InputError(
-                    f"{asset_ref(target)}: writing failed ({' '.join(out.geterror().split())}); "
-                    "check free disk space and permissions"
-                )
-        finally:
-            out.close()
-        _check_written(tmp, target, data.shape)
-
-    return atomic_write(target, writer)
-
-
-def _check_written(tmp: Path, target: Path, shape: tuple[int, ...]) -> None:
-    """Read the new file back before it replaces anything.
-
-    Some writers (OpenImageIO's PNG writer among them) report success on a full disk and leave
-    a short or empty file; decoding it is the one check that catches every such case.
-    """
-    inp = oiio.ImageInput.open(str(tmp), _input_config())
-    error = "" if inp is not None else " ".join((oiio.geterror() or "unreadable").split())
-    if inp is not None:
-        try:
-            spec = inp.spec()
-            pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
-            error = " ".join(inp.geterror().split())
-            if not error and (pixels is None or (spec.height, spec.width, spec.nchannels) != tuple(shape)):
-                error = "incomplete image"
-        finally:
-            inp.close()
-    if error:
-        raise InputError(
-            f"{asset_ref(target)}: the written file does not read back ({error}); "
-            "check free disk space and permissions"
-        )
-
-
 def alpha_channel(info: ImageInfo) -> int | None:
     """Index of the alpha channel: one named A/alpha, else the 2nd of 2 or the 4th of 4."""
     for i, name in enumerate(info.channel_names):
@@ -393,13 +280,3 @@ def norm_ext(ext: str) -> str:
     """Lower-case extension with `.tiff` spelled `.tif`, for comparing extensions."""
     ext = ext.lower()
     return {".tiff": ".tif"}.get(ext, ext)
-
-
-def _quantise(pixels: np.ndarray, dtype: str) -> np.ndarray:
-    values = pixels.astype(np.float64, copy=False)
-    if dtype in ("uint8", "uint16"):
-        top = float(np.iinfo(_NUMPY_TYPES[dtype]).max)
-        return np.rint(np.clip(values, 0.0, 1.0) * top).astype(_NUMPY_TYPES[dtype])
-    if dtype == "half":
-        return np.clip(values, -65504.0, 65504.0).astype(np.float16)
-    return values.astype(np.float32)

@@ -12,13 +12,20 @@ import os
 from pathlib import Path
 
 import numpy as np
+import OpenImageIO as oiio
 
-from seamless_usd.textures import ImageInfo
+from seamless_usd.errors import InputError
+from seamless_usd.fileio import atomic_write
 from seamless_usd.findings import asset_ref
+from seamless_usd.textures import ColorSpace, ImageInfo
 from seamless_usd.imaging.encoding import MapEncoding, encode_map
-from seamless_usd.imaging.io import norm_ext, output_extension, write_pixels
+from seamless_usd.imaging.io import alpha_channel, norm_ext, output_dtype, output_extension, reader_config
 
-__all__ = ["write_map", "output_path"]
+__all__ = ["write_map", "write_pixels", "output_path"]
+
+_OIIO_TYPES = {"uint8": oiio.UINT8, "uint16": oiio.UINT16, "half": oiio.HALF, "float": oiio.FLOAT}
+_NUMPY_TYPES = {"uint8": np.uint8, "uint16": np.uint16, "half": np.float16, "float": np.float32}
+_COLORSPACE_NAMES = {ColorSpace.SRGB: "srgb_rec709_scene", ColorSpace.RAW: "lin_rec709_scene"}
 
 
 def output_path(path: str | os.PathLike, like: ImageInfo) -> Path:
@@ -90,3 +97,123 @@ def write_map(
         )
     pixels = encode_map(values, encoding)
     return write_pixels(target, pixels, like, encoding.color_space, record)
+
+
+def write_pixels(
+    path: str | os.PathLike,
+    pixels: np.ndarray,
+    like: ImageInfo,
+    color_space: ColorSpace,
+    record: dict | None = None,
+) -> Path:
+    """Write float file values atomically in the output family of ``like``; ``record``: what the file
+    records of how it was made (:mod:`.tag`).
+
+    Parameters
+    ----------
+    path
+        Target file; its extension must be :func:`output_extension` of ``like`` (``.tiff`` and
+        ``.tif`` are the same).
+    pixels
+        ``(H, W, C)`` or ``(H, W)`` float file values, ``C == like.channels``. Integer outputs are
+        clipped to [0, 1] and rounded to the nearest code; half outputs are clipped to the half
+        range (+-65504).
+    like
+        The source header: sample type, channel count and names are copied.
+    color_space
+        The encoding the values are in, recorded as ``oiio:ColorSpace`` (sRGB -> an sRGB chunk
+        in PNG; raw -> linear).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        Wrong extension or channel count.
+    InputError
+        The file cannot be written (folder missing or read-only, disk full).
+    """
+    target = Path(path)
+    ext = output_extension(like)
+    if norm_ext(target.suffix) != norm_ext(ext):
+        raise ValueError(f"{asset_ref(target)}: a {like.dtype} {like.file_format} source is written as {ext}")
+    pixels = np.asarray(pixels)
+    if pixels.ndim == 2:
+        pixels = pixels[..., None]
+    if pixels.ndim != 3 or pixels.shape[2] != like.channels:
+        raise ValueError(f"expected (H, W, {like.channels}) pixels for {asset_ref(target)}, got {pixels.shape}")
+    dtype = output_dtype(like)
+    data = _quantise(pixels, dtype)
+    h, w, c = data.shape
+    spec = oiio.ImageSpec(w, h, c, _OIIO_TYPES[dtype])
+    if len(like.channel_names) == c:
+        spec.channelnames = tuple(like.channel_names)
+    named = any(n.lower() in ("a", "alpha") for n in like.channel_names)
+    alpha = alpha_channel(like) if named or len(like.channel_names) != c else None
+    if alpha is not None:
+        spec.alpha_channel = alpha
+    spec.attribute("oiio:ColorSpace", _COLORSPACE_NAMES[ColorSpace(color_space)])
+    if ext == ".exr":
+        spec.attribute("compression", "zip")
+    else:
+        spec.attribute("oiio:UnassociatedAlpha", 1)  # values are straight alpha, store as is
+        if ext == ".tif":
+            spec.attribute("compression", "zip")
+    if record is not None:
+        from seamless_usd.imaging.tag import tag_attributes
+
+        for name, text in tag_attributes(ext, record):
+            spec.attribute(name, text)
+
+    def writer(tmp: Path) -> None:
+        out = oiio.ImageOutput.create(str(tmp))
+        if out is None:
+            raise InputError(f"{asset_ref(target)}: no image writer for {ext} ({oiio.geterror()})")
+        try:
+            if not out.open(str(tmp), spec) or not out.write_image(data):
+                raise InputError(
+                    f"{asset_ref(target)}: writing failed ({' '.join(out.geterror().split())}); "
+                    "check free disk space and permissions"
+                )
+        finally:
+            out.close()
+        _check_written(tmp, target, data.shape)
+
+    return atomic_write(target, writer)
+
+
+def _check_written(tmp: Path, target: Path, shape: tuple[int, ...]) -> None:
+    """Read the new file back before it replaces anything.
+
+    Some writers (OpenImageIO's PNG writer among them) report success on a full disk and leave
+    a short or empty file; decoding it is the one check that catches every such case.
+    """
+    inp = oiio.ImageInput.open(str(tmp), reader_config())
+    error = "" if inp is not None else " ".join((oiio.geterror() or "unreadable").split())
+    if inp is not None:
+        try:
+            spec = inp.spec()
+            pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+            error = " ".join(inp.geterror().split())
+            if not error and (pixels is None or (spec.height, spec.width, spec.nchannels) != tuple(shape)):
+                error = "incomplete image"
+        finally:
+            inp.close()
+    if error:
+        raise InputError(
+            f"{asset_ref(target)}: the written file does not read back ({error}); "
+            "check free disk space and permissions"
+        )
+
+
+def _quantise(pixels: np.ndarray, dtype: str) -> np.ndarray:
+    values = pixels.astype(np.float64, copy=False)
+    if dtype in ("uint8", "uint16"):
+        top = float(np.iinfo(_NUMPY_TYPES[dtype]).max)
+        return np.rint(np.clip(values, 0.0, 1.0) * top).astype(_NUMPY_TYPES[dtype])
+    if dtype == "half":
+        return np.clip(values, -65504.0, 65504.0).astype(np.float16)
+    return values.astype(np.float32)
