@@ -175,6 +175,7 @@ class ImageInfo:
     file_format: str  # OpenImageIO format name: "png", "jpeg", "openexr", "tiff", ...
     channel_names: tuple[str, ...] = ()
     color_space: str | None = None  # "oiio:ColorSpace" or equivalent header metadata, if any
+    texture: bool = False  # a tiled, MIP-mapped texture file (maketx's .tx: "textureformat" in its header)
 
 
 @dataclass(frozen=True)

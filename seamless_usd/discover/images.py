@@ -79,6 +79,7 @@ def _read_header(path: str, raw) -> ImageInfo:
             dtype=str(spec.format),
             file_format=fmt,
             channel_names=tuple(spec.channelnames),
+            texture=bool(spec.get_string_attribute("textureformat")) and spec.tile_width > 0,
             color_space=stated,
         )
     finally:

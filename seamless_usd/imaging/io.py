@@ -104,6 +104,7 @@ def _info_from(inp: oiio.ImageInput, path: Path) -> ImageInfo:
         dtype=str(spec.format),
         file_format=fmt,
         channel_names=tuple(spec.channelnames),
+        texture=bool(spec.get_string_attribute("textureformat")) and spec.tile_width > 0,
         color_space=color_space,
     )
 
@@ -249,7 +250,7 @@ def output_extension(info: ImageInfo) -> str:
     """File extension of the output family for a source like ``info``.
 
     8-bit sources give ``.png``, 16-bit ``.png`` (``.tif`` when the source is TIFF or has more
-    than 4 channels), half and float give ``.exr``.
+    than 4 channels), half and float give ``.exr``; a ``.tx`` texture (a tiled, MIP-mapped TIFF) gives ``.tx``.
 
     Examples
     --------
@@ -260,8 +261,12 @@ def output_extension(info: ImageInfo) -> str:
     '.tif'
     >>> output_extension(ImageInfo(8, 8, 3, "half", "openexr"))
     '.exr'
+    >>> output_extension(ImageInfo(8, 8, 3, "uint8", "tiff", texture=True))
+    '.tx'
     """
     output_dtype(info)  # validates
+    if info.texture and info.file_format == "tiff":  # a .tx texture stays one (tiled, MIP-mapped)
+        return ".tx"
     ext = OUTPUT_FAMILIES[info.dtype][0]
     if ext == ".png" and (info.channels > 4 or (info.file_format == "tiff" and info.dtype != "uint8")):
         return ".tif"

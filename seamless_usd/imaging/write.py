@@ -160,7 +160,7 @@ def write_pixels(
         spec.attribute("compression", "zip")
     else:
         spec.attribute("oiio:UnassociatedAlpha", 1)  # values are straight alpha, store as is
-        if ext == ".tif":
+        if ext in (".tif", ".tx"):
             spec.attribute("compression", "zip")
     if record is not None:
         from seamless_usd.imaging.tag import tag_attributes
@@ -169,6 +169,9 @@ def write_pixels(
             spec.attribute(name, text)
 
     def writer(tmp: Path) -> None:
+        if ext == ".tx":
+            _write_texture(tmp, target, data, spec)
+            return
         out = oiio.ImageOutput.create(str(tmp))
         if out is None:
             raise InputError(f"{asset_ref(target)}: no image writer for {ext} ({oiio.geterror()})")
@@ -183,6 +186,20 @@ def write_pixels(
         _check_written(tmp, target, data.shape)
 
     return atomic_write(target, writer)
+
+
+def _write_texture(tmp: Path, target: Path, data: np.ndarray, spec: oiio.ImageSpec) -> None:
+    """``data`` written to ``tmp`` as a tiled, MIP-mapped texture (what ``maketx`` makes), its header (colour space,
+    record) kept; its first level holds ``data`` exactly."""
+    buf = oiio.ImageBuf(spec)
+    if not buf.set_pixels(oiio.ROI(0, spec.width, 0, spec.height, 0, 1, 0, spec.nchannels), data):
+        raise InputError(f"{asset_ref(target)}: the tile's pixels cannot be set ({buf.geterror()})")
+    config = oiio.ImageSpec()
+    config.attribute("maketx:filtername", "lanczos3")
+    if not oiio.ImageBufAlgo.make_texture(oiio.MakeTxTexture, buf, str(tmp), config):
+        raise InputError(f"{asset_ref(target)}: writing the texture failed ({' '.join(oiio.geterror().split())}); "
+                         "check free disk space and permissions")
+    _check_written(tmp, target, data.shape)
 
 
 def _check_written(tmp: Path, target: Path, shape: tuple[int, ...]) -> None:
