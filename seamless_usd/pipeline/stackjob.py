@@ -239,12 +239,10 @@ MIN_WORKING_SIDE = 32
 def _check_size(pixels, max_size: int | None) -> None:
     """A clear error for a stack whose working grid is too small to make a tile from (naming ``--max-size`` when
     that is what made it so)."""
-    import math
-
-    from seamless_usd.synthesis.candidates import SCORE_SIDE
+    from seamless_usd.synthesis.types import SCORE_SIDE, score_halving  # no torch: an unchanged rerun needs none
 
     w, h = pixels.working_size
-    halve = 2 ** max(0, math.ceil(math.log2(max(w, h) / SCORE_SIDE)))  # as the candidates are weighed
+    halve = score_halving(h, w)  # as the candidates are weighed
     if min(w, h) // halve >= MIN_WORKING_SIDE:
         return
     from seamless_usd.errors import SeamlessUsdError

@@ -24,7 +24,7 @@ from .lattice.mend import best_mend
 from .lattice.quilt import best_quilt, line_mask, line_sigma
 from .advice import QUILT_MAX_DIFFERENCE, WINDOW_MAX_DIFFERENCE, joins_hide
 from .lattice.window import continues_itself, window_tile_size
-from .types import MapInput
+from .types import SCORE_SIDE, MapInput, score_halving
 
 __all__ = ["GAN_MIN_SIDE", "QUILT_CELLS", "QUILT_TRIES", "QUILT_MAX_DIFFERENCE", "SCORE_SIDE", "CutCheck", "check_cut", "judged",
            "cut_candidates", "joins_hide", "gated", "MEND_TRIES", "check_levelled", "check_evened",
@@ -43,8 +43,6 @@ QUILT_TRIES = 3
 #: Mends tried (seeds) for a stack; the one whose worst join costs least is weighed.
 MEND_TRIES = 3
 
-#: Layout candidates are compared on the source's grid, halved until its longest side is at most this (px).
-SCORE_SIDE = 1024
 
 
 def judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice, reference: Reference
@@ -179,7 +177,7 @@ def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
     H, W = maps[0].pixels.shape[:2]
     lattice = find_lattice([m.pixels for m in maps])
     notes = lattice.as_dict()
-    halve = 2 ** max(0, math.ceil(math.log2(max(H, W) / SCORE_SIDE)))
+    halve = score_halving(H, W)
     # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
     half = (max(8, round(H / halve)), max(8, round(W / halve)))
     grid = [MapInput(m.name, resized(m.pixels, half, m.is_normal, periodic=True), m.is_normal)

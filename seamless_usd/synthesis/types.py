@@ -1,11 +1,21 @@
 """Plain values passed in and out of the synthesis engine."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["MapInput", "QResult", "Candidate", "TileResult", "TrainingProgress", "stack_shape"]
+__all__ = ["MapInput", "QResult", "Candidate", "TileResult", "TrainingProgress", "stack_shape", "SCORE_SIDE",
+           "score_halving"]
+
+#: Layout candidates are compared on the source's grid, halved until its longest side is at most this (px).
+SCORE_SIDE = 1024
+
+
+def score_halving(height: int, width: int) -> int:
+    """By how much a stack of ``height`` x ``width`` px is halved to compare its candidates (a power of two)."""
+    return 2 ** max(0, math.ceil(math.log2(max(height, width) / SCORE_SIDE)))
 
 
 @dataclass
