@@ -184,3 +184,16 @@ def test_stacks_of_two_stages_are_told_apart_and_a_broken_link_is_named(tmp_path
     os.symlink(pictures / "gone.png", pictures / "link.png")
     assert main(["check", str(pictures)]) == 2
     assert "link.png@: no such file (a link to a file that is gone)" in " ".join(capsys.readouterr().out.split())
+
+
+def test_links_that_loop_are_named_and_the_rest_judged(tmp_path, capsys):
+    """Two links that lead to each other are each named unreadable; the picture beside them is judged; no crash."""
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    _write(lib / "wood.png", _wood())
+    (lib / "x.png").symlink_to("y.png")
+    (lib / "y.png").symlink_to("x.png")
+    report = check_paths([lib])
+    assert [Path(i.name).name for i in report.items] == ["wood.png"]
+    assert len(report.unreadable) == 2 and all("loop of links" in u for u in report.unreadable)
+    assert main(["check", str(lib / "x.png")]) == 2 and "loop of links" in capsys.readouterr().out

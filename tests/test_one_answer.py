@@ -158,6 +158,16 @@ def test_the_tiles_named_alone_are_judged_against_their_sources_with_their_stack
     [changed] = check_paths([roughness]).items
     assert changed.verdict["reference"] == "itself" and changed.maps == [str(roughness)]
     assert "has changed since the tile was made" in changed.note and changed.note in changed.words()
+    # the folder: the other two still against their sources (saying which tile they were judged without), the
+    # changed one against itself; the stage says the same
+    by_reference = {i.verdict["reference"]: i for i in check_paths([tiles[0].parent]).items}
+    assert sorted(by_reference) == ["itself", "source"] and len(by_reference["source"].maps) == 2
+    assert roughness.name in by_reference["source"].note and by_reference["itself"].name == str(roughness)
+    [layer] = check_paths([scene.with_name("scene.seamless.usda")]).items
+    assert layer.verdict["reference"] == "itself" and "has changed since the tile was made" in layer.note
+    (tmp_path / "textures" / "brick_roughness.png").unlink()  # gone: said so on the stage too
+    [layer] = check_paths([scene.with_name("scene.seamless.usda")]).items
+    assert "is not there" in layer.note and layer.verdict["reference"] == "itself"
 
 
 def test_a_processed_materialx_document_is_judged_against_its_recorded_sources(tmp_path, capsys):

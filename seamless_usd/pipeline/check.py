@@ -13,6 +13,9 @@ Each texture stack of a stage or MaterialX document that is meant to tile (inten
 """
 from __future__ import annotations
 
+import errno
+import functools
+import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -105,6 +108,23 @@ def _folder_pictures(folder: Path) -> list[Path]:
                   and not is_own_output(q.relative_to(folder)))
 
 
+def _real(path) -> Path:
+    """The file ``path`` names, links followed; a link that loops is its own (it is reported, not followed)."""
+    return Path(os.path.realpath(path))
+
+
+def _missing(picture: Path) -> str:
+    """Why a picture named or found is not a file to judge."""
+    if not picture.is_symlink():
+        return "no such file"
+    try:
+        os.stat(picture)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a link that leads back to itself (a loop of links); fix or remove it"
+    return "no such file (a link to a file that is gone)"
+
+
 def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path], list[Path], list[str]]:
     """(scenes, pictures, loose, problems): the scenes and the pictures named or found in folders that hold no
     scene; ``loose``: the pictures of folders that hold scenes (a texture there is judged with its stack, the
@@ -144,8 +164,8 @@ def _alone(item: CheckItem, files: list) -> None:
 
 
 def _picture_groups(pictures: list[Path]) -> list[list[Path]]:
-    """The pictures as judged, each a list: a tile this tool wrote first, with the other tiles of its stack its file
-    names (:mod:`seamless_usd.imaging.tag`) when they all lie beside it (a stack is judged together, as ``process``
+    """The pictures as judged, each a list: a tile this tool wrote first, with the other tiles of its stack that its
+    file names (:mod:`seamless_usd.imaging.tag`) and that lie beside it (a stack is judged together, as ``process``
     judged it, and once when several of its tiles are named); any other picture alone."""
     from seamless_usd.imaging.tag import read_tag
 
@@ -153,40 +173,65 @@ def _picture_groups(pictures: list[Path]) -> list[list[Path]]:
     for p in pictures:
         record = read_tag(p) if p.is_file() else None
         stack = [p.parent / str(n) for n in (record or {}).get("stack", [])]
-        files = [p] + [q for q in stack if q.name != p.name] if p.name in {q.name for q in stack} else [p]
-        if not all(q.is_file() for q in files):
-            files = [p]
-        key = frozenset(q.resolve() for q in files)
+        files = [p] + [q for q in stack if q.name != p.name and q.is_file()]
+        key = frozenset(_real(q) for q in files)
         if key not in seen:
             seen.add(key)
             groups.append(files)
     return groups
 
 
-def _judge_picture(files: list[Path]) -> CheckItem:
-    """A picture judged (``files[0]``): a tile this tool wrote, whose file records its source, with the other tiles
-    of its stack (``files[1:]``) against their sources as ``process`` judged them; any other picture, or a tile
-    whose source is gone or has changed since, against itself."""
+def _judge_picture(files: list[Path], named: frozenset = frozenset()) -> list[CheckItem]:
+    """Pictures judged: tiles this tool wrote whose files record their sources (``files``: a tile, then the other
+    tiles of its stack beside it) together against those sources, as ``process`` judged them; a picture that
+    records nothing, or a tile whose source is gone or has changed since, against itself, saying why. Of a stack's
+    tiles, those named or found (``named``, as :func:`_real` paths) have items, the first file always."""
     from seamless_usd.imaging.tag import read_tag
+
+    records = [read_tag(f) for f in files]
+    made, notes = zip(*(recorded_source(f, r) if r else (None, "") for f, r in zip(files, records)))
+    wanted = [k == 0 or _real(f) in named for k, f in enumerate(files)]
+    together = [k for k, m in enumerate(made) if m]
+    items = []
+    if together and any(wanted[k] for k in together):
+        t0 = time.perf_counter()
+        first = files[together[0]]
+        item = CheckItem(str(first), str(first), [str(files[k]) for k in together])
+        recorded = {str(n) for n in records[together[0]].get("stack", [])}
+        without = sorted(recorded - {files[k].name for k in together})
+        if without:
+            item.note = f"judged without the other tile(s) of its stack: {', '.join(without)}"
+        tiles, sources, prov = [made[k][0] for k in together], [made[k][1] for k in together], made[together[0]][2]
+        _judged(item, lambda: _against_source(item, tiles, sources, prov))
+        item.seconds = time.perf_counter() - t0
+        items.append(item)
+    return items + [_picture_alone(files[k], records[k], notes[k]) for k in range(len(files))
+                    if not made[k] and wanted[k]]
+
+
+def _picture_alone(path: Path, record: dict | None, note: str) -> CheckItem:
+    """``path`` judged against itself (a tile whose record says how its source was read: its channels, and a
+    normal map as one); ``note``: why a tile is not judged against its source."""
+    from seamless_usd.textures import NORMAL_ROLES
     from seamless_usd.verdict.alone import FileMap
 
-    path = files[0]
-    item = CheckItem(str(path), str(path), [str(f) for f in files])
     t0 = time.perf_counter()
-    try:
-        made = []
-        for f in files:
-            record = read_tag(f)
-            made.append(None if record is None else recorded_source(f, record, item))
-        if all(made):
-            _against_source(item, [t for t, _, _ in made], [s for _, s, _ in made], made[0][2])
-        else:
-            item.maps = [str(path)]
-            _alone(item, [FileMap(str(path), "rgb", False, path.name)])
-    except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
-        item.error = str(exc) if asset_ref(path) in str(exc) else f"{asset_ref(path)}: cannot be judged: {exc}"
+    item = CheckItem(str(path), str(path), [str(path)], note=note)
+    roles = (record or {}).get("map", {}).get("roles", [])
+    channels = "".join(c for c in "rgba" if any(c in str(used) for _, used in roles)) or "rgb"
+    normal = any(role in NORMAL_ROLES for role, _ in roles)
+    _judged(item, lambda: _alone(item, [FileMap(str(path), channels, normal, path.name)]))
     item.seconds = time.perf_counter() - t0
     return item
+
+
+def _judged(item: CheckItem, judge) -> None:
+    """``judge()`` fills ``item``; an input that cannot be judged becomes its error, naming the file."""
+    try:
+        judge()
+    except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:
+        where = asset_ref(item.name)
+        item.error = str(exc) if where in str(exc) else f"{where}: cannot be judged: {exc}"
 
 
 def _against_source(item: CheckItem, tile_maps: list, src_maps: list, prov) -> None:
@@ -224,7 +269,7 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
         if packed:
             raise InputError(f"{asset_ref(packed[0].asset)} is inside a .usdz package: its pixels are not judged "
                              "there (unpack the package, or check the files it was made from)")
-        recorded = stack_sources(stage, stack)
+        recorded, item.note = stack_sources(stage, stack)
         if recorded is None:  # no separate source: judged against itself, as the scan's triage judges it
             _alone(item, [FileMap(m.resolved, m.channels_used, m.is_normal, m.asset) for m in stack.maps])
         else:
@@ -243,11 +288,13 @@ def _unread_item(scene: Path, material: str, skipped: list, maps: list[str]) -> 
                      error=f"not judged: a texture of it cannot be read: {files}; fix or restore it and check again")
 
 
-def _judged_pictures(pictures: list[list[Path]], jobs: int) -> Iterator[CheckItem]:
-    """Each picture's item (:func:`_picture_groups`), in order; ``jobs`` > 1 judges them in that many worker
-    processes (a picture is judged in numpy alone, one core each)."""
+def _judged_pictures(pictures: list[list[Path]], jobs: int, named: frozenset) -> Iterator[list[CheckItem]]:
+    """The items of each group of pictures (:func:`_picture_groups`; ``named``: the pictures named or found, as
+    :func:`_real` paths), in order; ``jobs`` > 1 judges them in that many worker processes (a picture is judged in
+    numpy alone, one core each)."""
+    judge = functools.partial(_judge_picture, named=named)
     if jobs <= 1 or len(pictures) < 2 * jobs:
-        yield from map(_judge_picture, pictures)
+        yield from map(judge, pictures)
         return
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
@@ -255,7 +302,7 @@ def _judged_pictures(pictures: list[list[Path]], jobs: int) -> Iterator[CheckIte
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
     with ProcessPoolExecutor(jobs, mp_context=context) as pool:
-        yield from pool.map(_judge_picture, pictures, chunksize=max(1, min(8, len(pictures) // (4 * jobs))))
+        yield from pool.map(judge, pictures, chunksize=max(1, min(8, len(pictures) // (4 * jobs))))
 
 
 def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int], None] | None = None,
@@ -288,7 +335,7 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
         except InputError as exc:
             report.unreadable.append(str(exc))
             continue
-        used.update(Path(m.resolved).resolve() for st in result.stacks for m in st.maps if m.resolved)
+        used.update(_real(m.resolved) for st in result.stacks for m in st.maps if m.resolved)
         judged, seen = [], set()
         for s in result.stacks:  # a stack the same as one judged is judged once (its twin may be one not judged)
             if s.intent in _JUDGED_INTENTS and s.content_key not in seen:
@@ -304,21 +351,20 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
                 report.items.append(_judge_stack(scene, stage, stack))
         for material, skipped in unread.items():  # no map of it could be read: it has no stack
             report.items.append(_unread_item(scene, material, skipped, []))
-    known = {p.resolve() for p in pictures}
-    report.not_judged = [str(p) for p in loose if p.resolve() not in used and p.resolve() not in known]
+    known = {_real(p) for p in pictures}
+    report.not_judged = [str(p) for p in loose if _real(p) not in used and _real(p) not in known]
     found = []
     for picture in pictures:
         if picture.is_file():
             found.append(picture)
         else:
             done += 1
-            gone = " (a link to a file that is gone)" if picture.is_symlink() else ""
-            report.unreadable.append(f"{asset_ref(picture)}: no such file{gone}")
+            report.unreadable.append(f"{asset_ref(picture)}: {_missing(picture)}")
     groups = _picture_groups(found)  # a stack's tiles are judged together
-    for files, item in zip(groups, _judged_pictures(groups, jobs)):
-        emit(item.name)
+    for files, items in zip(groups, _judged_pictures(groups, jobs, frozenset(map(_real, found)))):
+        emit(items[0].name)
         done += len(files)
-        report.items.append(item)
+        report.items += items
     if progress is not None:
         progress("", done, total)
     return report

@@ -1,6 +1,8 @@
 """Turn what the user named (files, folders, glob patterns) into the stages and documents to process."""
 from __future__ import annotations
 
+import os
+
 import glob
 from collections.abc import Sequence
 from pathlib import Path
@@ -86,7 +88,7 @@ def expand_inputs(items: Sequence[str | Path]) -> list[Path]:
     seen: set[Path] = set()
     unique = []
     for p in out:
-        key = p.resolve()
+        key = Path(os.path.realpath(p))  # a link that loops is kept as itself, and reported when it is opened
         if key not in seen:
             seen.add(key)
             unique.append(p)

@@ -12,61 +12,79 @@ from seamless_usd.findings import asset_ref
 __all__ = ["recorded_source", "stack_sources", "keystone_of"]
 
 
-def recorded_source(path: Path, record: dict, item):
-    """(tile, source, provenance) of a tile whose file records its source, when that source is still the file it
-    was made from; else None, with why in ``item.note`` (it is then judged against itself)."""
+def recorded_source(path: Path, record: dict) -> tuple[tuple | None, str]:
+    """((tile, source, provenance), "") of a tile whose file records its source, when that source is still the file
+    it was made from; else (None, why), and the tile is judged against itself."""
     from seamless_usd.fileio import source_sha256
     from seamless_usd.pipeline.madefrom import recorded_maps
 
     tile, source, prov = recorded_maps(path, record)
+    where = asset_ref(Path(source.resolved))
     try:
         same = source_sha256(source.resolved) == record.get("sha256")
     except OSError:
-        item.note = (f"its source {asset_ref(record['source'])} is not beside it as recorded: judged against itself "
-                     "(check the stage or document that uses it to judge it against its source)")
-        return None
+        return None, (f"its source {where} is not there: judged against itself (check the stage or document that "
+                      "uses it to judge it against its source)")
     if not same:
-        item.note = (f"its source {asset_ref(record['source'])} has changed since the tile was made: judged against "
-                     "itself (process the material again)")
-        return None
-    return tile, source, prov
+        return None, f"its source {where} has changed since the tile was made: judged against itself (process again)"
+    return (tile, source, prov), ""
 
 
-def stack_sources(stage, stack) -> tuple[list, object] | None:
-    """The maps' recorded sources and the provenance recorded with them (its UV scale, straightening turn, and
-    how far the source was levelled or evened before it was cut), when every map is a tile this tool wrote: into
-    the USD ``stage`` (``SeamlessTileAPI``) or into a MaterialX document (its ``seamless_*`` attributes)."""
+def stack_sources(stage, stack) -> tuple[tuple[list, object] | None, str]:
+    """((the maps' recorded sources, the provenance recorded with them: its UV scale, straightening turn, and how far
+    the source was levelled or evened before it was cut), "") when every map is a tile this tool wrote, into the USD
+    ``stage`` (``SeamlessTileAPI``) or into a MaterialX document (its ``seamless_*`` attributes), and its source is
+    still the file it was made from; else (None, why: "" for a map that is no tile of this tool's)."""
     from seamless_usd.textures import Origin
 
     sources, prov = [], None
     for m in stack.maps:
-        found = _mtlx_source(m) if m.origin is Origin.MTLX else _usd_source(stage, m)
-        if found is None:
-            return None
-        resolved, prov = found
+        resolved, prov = _mtlx_source(m) if m.origin is Origin.MTLX else _usd_source(stage, m)
+        if prov is None:
+            return None, ""
+        if not resolved:
+            return None, (f"the source recorded for {asset_ref(m.asset)}, {asset_ref(prov.source_asset)}, is not there: "
+                          "judged against itself")
+        if _changed_since(m.resolved, resolved):
+            return None, (f"its source {asset_ref(Path(resolved))} has changed since the tile was made: judged against "
+                          "itself (process again)")
         sources.append(dataclasses.replace(m, resolved=resolved, asset=prov.source_asset))
-    return sources, prov
+    return (sources, prov), ""
 
 
-def _usd_source(stage, m) -> tuple[str, object] | None:
-    """(resolved source path, provenance) recorded on the texture prim of ``m`` in ``stage``, or None."""
+def _changed_since(tile: str, source: str) -> bool:
+    """Whether ``source`` differs from the file the tile ``tile`` records it was made from (a tile that records
+    nothing, written before tiles recorded their sources, cannot say: False)."""
+    from seamless_usd.fileio import source_sha256
+    from seamless_usd.imaging.tag import read_tag
+
+    record = read_tag(tile) if tile else None
+    if not record or not record.get("sha256"):
+        return False
+    try:
+        return source_sha256(source) != record["sha256"]
+    except OSError:
+        return True
+
+
+def _usd_source(stage, m) -> tuple[str, object]:
+    """(resolved source path or "", provenance or None) recorded on the texture prim of ``m`` in ``stage``."""
     if stage is None:
-        return None
+        return "", None
     from seamless_usd.authoring.schema import Schema, read_provenance
 
     prim = stage.GetPrimAtPath(m.node.strip("<>"))
     prov = read_provenance(prim) if prim else None
     attr = prim.GetAttribute(Schema.SOURCE_ASSET) if prov is not None else None
-    resolved = attr.Get().resolvedPath if attr and attr.Get() is not None else ""
-    return (resolved, prov) if resolved else None
+    return (attr.Get().resolvedPath if attr and attr.Get() is not None else ""), prov
 
 
 _MTLX_DOCUMENTS: dict[str, object] = {}
 
 
-def _mtlx_source(m) -> tuple[str, object] | None:
-    """(resolved source path, provenance) recorded on the MaterialX node of ``m`` (its source asset relative to the
-    document it is written in), or None."""
+def _mtlx_source(m) -> tuple[str, object]:
+    """(resolved source path or "", provenance or None) recorded on the MaterialX node of ``m`` (its source asset
+    relative to the document it is written in)."""
     import MaterialX as mx
 
     from seamless_usd.authoring.mtlx import read_mtlx_provenance
@@ -74,7 +92,7 @@ def _mtlx_source(m) -> tuple[str, object] | None:
     try:
         st = os.stat(m.document or "")
     except OSError:
-        return None
+        return "", None
     key = f"{os.path.realpath(m.document)}|{st.st_size}|{st.st_mtime_ns}"  # the document as it is on disk now
     doc = _MTLX_DOCUMENTS.get(key)
     if doc is None:
@@ -82,15 +100,15 @@ def _mtlx_source(m) -> tuple[str, object] | None:
         try:
             mx.readFromXmlFile(doc, m.document)
         except (mx.Exception, OSError):  # it was read by the scan a moment ago: whoever reads it next says why
-            return None
+            return "", None
         _MTLX_DOCUMENTS.clear()  # one document at a time
         _MTLX_DOCUMENTS[key] = doc
     node = doc.getDescendant(m.node)
     prov = read_mtlx_provenance(node) if node is not None else None
     if prov is None or not prov.source_asset:
-        return None
+        return "", None
     resolved = Path(m.document).parent / prov.source_asset
-    return (str(resolved.resolve()), prov) if resolved.is_file() else None
+    return (str(resolved.resolve()) if resolved.is_file() else ""), prov
 
 
 def keystone_of(prov):
