@@ -162,9 +162,11 @@ def read_info(path: str | os.PathLike, *, max_pixels: int | None = DEFAULT_MAX_P
 
 
 def read_image(
-    path: str | os.PathLike, *, max_pixels: int | None = DEFAULT_MAX_PIXELS, min_side: int | None = None
+    path: str | os.PathLike, *, max_pixels: int | None = DEFAULT_MAX_PIXELS, min_side: int | None = None,
+    stored: bool = False,
 ) -> tuple[np.ndarray, ImageInfo]:
-    """Decode an image's first subimage into float32 file values.
+    """Decode an image's first subimage into float32 file values (``stored``: in the file's own sample type, an
+    8-bit picture a quarter of the memory, not normalised).
 
     The header is checked against ``max_pixels`` before any pixel is decoded. CMYK JPEGs come
     back as RGB (OpenImageIO converts them). Non-finite float values (NaN, inf) are returned as
@@ -202,7 +204,7 @@ def read_image(
                 max(inp.spec().width, inp.spec().height) >= min_side:
             level += 1  # a smaller MIP level still at least min_side: cheaper to decode
         inp.seek_subimage(0, level)
-        pixels = inp.read_image(0, 0, 0, info.channels, oiio.FLOAT)
+        pixels = inp.read_image(0, 0, 0, info.channels, oiio.UNKNOWN if stored else oiio.FLOAT)
         expected = (inp.spec().height, inp.spec().width, info.channels)
         # A truncated JPEG decodes "successfully" (the missing rows grey) with only an error
         # message left behind: any error recorded while decoding makes the pixels untrustworthy.
@@ -214,7 +216,7 @@ def read_image(
             f"{asset_ref(p)}: the image data cannot be decoded ({error or 'read failed'}); "
             "the file is truncated or corrupt: re-export or re-download it"
         )
-    pixels = np.asarray(pixels, dtype=np.float32)
+    pixels = np.asarray(pixels) if stored else np.asarray(pixels, dtype=np.float32)
     if pixels.ndim == 2:
         pixels = pixels[..., None]
     if pixels.ndim == 4:  # volume images: first slice

@@ -61,7 +61,14 @@ def reduce_bins(a: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
         counts = np.diff(edges)
         bins = [1] * a.ndim
         bins[axis] = -1
-        a = np.add.reduceat(a, edges[:-1], axis=axis) / counts.reshape(bins)
+        step = max(1, k * (1 << 22) // max(1, a.size))  # bins a part: summed in float64 without a float64 copy
+        parts = []
+        for i in range(0, k, step):
+            where = [slice(None)] * a.ndim
+            where[axis] = slice(edges[i], edges[min(k, i + step)])
+            parts.append(np.add.reduceat(a[tuple(where)], edges[i:min(k, i + step)] - edges[i], axis=axis,
+                                         dtype=np.float64))
+        a = np.concatenate(parts, axis=axis) / counts.reshape(bins)
     return a
 
 
@@ -77,7 +84,7 @@ def read_alone(m: FileMap) -> tuple[np.ndarray, tuple[int, int]]:
     from seamless_usd.imaging import read_image
     from seamless_usd.imaging.io import alpha_channel
 
-    pixels, info = read_image(m.path, min_side=READ_SIDE)
+    pixels, info = read_image(m.path, min_side=READ_SIDE, stored=True)  # a large picture is reduced as stored
     alpha = alpha_channel(info) if info.channels > 1 else None
     colour = [i for i in range(info.channels) if i != alpha]
     picks: list[int] = []
@@ -85,11 +92,14 @@ def read_alone(m: FileMap) -> tuple[np.ndarray, tuple[int, int]]:
         k = alpha if c == "a" else (colour["rgb".index(c)] if "rgb".index(c) < len(colour) else None)
         if k is not None and k not in picks:
             picks.append(k)
-    a = np.asarray(pixels[..., picks or colour[:1] or [0]], dtype=np.float64)
-    if not np.isfinite(a).all():
+    a = pixels[..., picks or colour[:1] or [0]]
+    if a.dtype.kind == "f" and not np.isfinite(a).all():
         raise InputError(f"{asset_ref(m.path)}: {int((~np.isfinite(a)).sum())} texels are NaN or infinite; it "
                          "cannot be judged until they are replaced (re-export the image)")
-    return 2.0 * reduce_bins(a, _reading_shape(*a.shape[:2])) - 1.0, (info.height, info.width)
+    reduced = reduce_bins(a, _reading_shape(*a.shape[:2]))  # summed in float64
+    if a.dtype.kind == "u":  # file values: an integer code over its largest
+        reduced = reduced / float(np.iinfo(a.dtype).max)
+    return 2.0 * reduced - 1.0, (info.height, info.width)
 
 
 def _scaled(v: Verdict, reduced: tuple[int, int], full: tuple[int, int]) -> Verdict:
