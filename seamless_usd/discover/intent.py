@@ -82,7 +82,7 @@ def judged_alone(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> di
     (:func:`seamless_usd.verdict.alone.judge_alone`): ``{"verdict": Verdict.as_dict()}``, or ``{"error": why}``
     when they are not judged (a file not on disk, too large to decode before processing, unreadable, too small)."""
     from seamless_usd.errors import InputError
-    from seamless_usd.verdict.alone import FileMap, judge_alone
+    from seamless_usd.verdict.alone import file_map, judge_alone, normal_doubts
 
     for m in stack.maps:
         if m.in_package:
@@ -94,10 +94,11 @@ def judged_alone(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> di
             return {"error": f"@{m.asset}@ is {m.image.width}x{m.image.height} px, too large to judge before "
                              "processing"}
     try:
-        verdict, _ = judge_alone([FileMap(m.resolved, m.channels_used, m.is_normal, m.asset) for m in stack.maps])
+        files = [file_map(m) for m in stack.maps]
+        verdict, _ = judge_alone(files)
     except (InputError, ValueError, RuntimeError, OSError) as exc:
         return {"error": str(exc)}
-    return {"verdict": verdict.as_dict()}
+    return {"verdict": verdict.as_dict(), "doubts": normal_doubts(files)}
 
 
 def _in(stats) -> str:
@@ -167,6 +168,8 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo,
     if "verdict" not in judged:
         return IntentDecision(Intent.TILING, f"{decision.reason}; its pixels were not judged ({judged['error']})")
     v = Verdict.from_dict(judged["verdict"])
+    if judged.get("doubts"):  # a normal map that does not read as one: said with the intent, as check says it
+        decision = IntentDecision(decision.intent, f"{decision.reason}; {'; '.join(judged['doubts'])}")
     if v.seamless:
         return IntentDecision(Intent.ALREADY_TILEABLE,
                               f"already seamless: the verdict, judging its maps against themselves, finds no seam "

@@ -155,10 +155,13 @@ def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path], list[P
 def _alone(item: CheckItem, files: list) -> None:
     """``item`` judged against itself from ``files`` (:func:`seamless_usd.verdict.alone.judge_alone`, the reading
     the scan's triage uses too), with its thumbnail."""
-    from seamless_usd.verdict.alone import judge_alone
+    from seamless_usd.verdict.alone import judge_alone, normal_doubts
 
     verdict, reading = judge_alone(files)
     item.verdict = verdict.as_dict()
+    doubts = normal_doubts(files)  # a normal map that does not read as one: said, as process says it
+    if doubts:
+        item.note = "; ".join(([item.note] if item.note else []) + doubts)
     uri, size, scale = thumbnail(reading)
     item.thumbnail = (uri, size, scale * reading.shape[1] / verdict.size[1])  # thumbnail px per full-size texel
 
@@ -217,10 +220,12 @@ def _picture_alone(path: Path, record: dict | None, note: str) -> CheckItem:
 
     t0 = time.perf_counter()
     item = CheckItem(str(path), str(path), [str(path)], note=note)
-    roles = (record or {}).get("map", {}).get("roles", [])
+    read = (record or {}).get("map", {})
+    roles = read.get("roles", [])
     channels = "".join(c for c in "rgba" if any(c in str(used) for _, used in roles)) or "rgb"
     normal = any(role in NORMAL_ROLES for role, _ in roles)
-    _judged(item, lambda: _alone(item, [FileMap(str(path), channels, normal, path.name)]))
+    scale, bias = (tuple(read.get("scale", ())), tuple(read.get("bias", ()))) if normal else ((), ())
+    _judged(item, lambda: _alone(item, [FileMap(str(path), channels, normal, path.name, scale, bias)]))
     item.seconds = time.perf_counter() - t0
     return item
 
@@ -259,7 +264,7 @@ def _against_source(item: CheckItem, tile_maps: list, src_maps: list, prov) -> N
 
 def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
     from seamless_usd.textures import describe_selection
-    from seamless_usd.verdict.alone import FileMap
+    from seamless_usd.verdict.alone import file_map
 
     name = stack.material + (f" in {describe_selection(stack.selection)}" if stack.selection else "")
     item = CheckItem(name, str(stage_path), [m.asset for m in stack.maps])
@@ -271,7 +276,7 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
                              "there (unpack the package, or check the files it was made from)")
         recorded, item.note = stack_sources(stage, stack)
         if recorded is None:  # no separate source: judged against itself, as the scan's triage judges it
-            _alone(item, [FileMap(m.resolved, m.channels_used, m.is_normal, m.asset) for m in stack.maps])
+            _alone(item, [file_map(m) for m in stack.maps])
         else:
             _against_source(item, list(stack.maps), *recorded)
     except (SeamlessUsdError, ValueError, OSError, RuntimeError) as exc:

@@ -25,7 +25,8 @@ from seamless_usd.memo import ContentMemo
 from .judge import Verdict, judge
 from .lines import Seam
 
-__all__ = ["READ_SIDE", "MIN_SIDE", "FileMap", "reduce_bins", "read_alone", "judge_alone"]
+__all__ = ["READ_SIDE", "MIN_SIDE", "FileMap", "reduce_bins", "read_alone", "judge_alone", "normal_doubts",
+           "file_map"]
 
 #: Longest side (px) a texture judged on its own is read at: the line breaks read lines at this size.
 READ_SIDE = 512
@@ -44,6 +45,8 @@ class FileMap:
     channels: str = "rgb"
     is_normal: bool = False
     name: str = ""
+    scale: tuple = ()  # a normal map's authored scale and bias (4 values each; none: the conventional 2 and -1),
+    bias: tuple = ()  # which bring its file values to vectors, as the shader and ``process`` read them
 
 
 def reduce_bins(a: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
@@ -72,6 +75,14 @@ def reduce_bins(a: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return a
 
 
+def file_map(m) -> FileMap:
+    """The :class:`FileMap` of a stack's map (a ``TextureMap``): its file, the channels its roles read, and a normal
+    map's scale and bias. ``check`` and the scan's triage judge a stack so."""
+    normal = m.is_normal
+    return FileMap(m.resolved, m.channels_used, normal, m.asset, tuple(m.scale) if normal else (),
+                   tuple(m.bias) if normal else ())
+
+
 def _reading_shape(h: int, w: int, side: int = READ_SIDE) -> tuple[int, int]:
     f = min(1.0, side / max(h, w))
     return max(1, round(h * f)), max(1, round(w * f))
@@ -97,9 +108,69 @@ def read_alone(m: FileMap) -> tuple[np.ndarray, tuple[int, int]]:
         raise InputError(f"{asset_ref(m.path)}: {int((~np.isfinite(a)).sum())} texels are NaN or infinite; it "
                          "cannot be judged until they are replaced (re-export the image)")
     reduced = reduce_bins(a, _reading_shape(*a.shape[:2]))  # summed in float64
-    if a.dtype.kind == "u":  # file values: an integer code over its largest
-        reduced = reduced / float(np.iinfo(a.dtype).max)
-    return 2.0 * reduced - 1.0, (info.height, info.width)
+    top = float(np.iinfo(a.dtype).max) if a.dtype.kind == "u" else 1.0  # file values: an integer code over its largest
+    reduced = reduced / top
+    vectors = _normal_decoding(m, info, a, top) if m.is_normal and a.shape[-1] >= 3 else None
+    if vectors is None:
+        return 2.0 * reduced - 1.0, (info.height, info.width)
+    scale, bias = vectors  # a normal map's xyz as the vectors it holds (the same as 2 v - 1 for the usual encoding)
+    reduced[..., :3] = reduced[..., :3] * np.asarray(scale) + np.asarray(bias)
+    reduced[..., 3:] = 2.0 * reduced[..., 3:] - 1.0
+    return reduced, (info.height, info.width)
+
+
+#: Why each normal map read does not read as one (None: it does), by its file and decoding: said by ``check`` and the
+#: scan's triage, which read the file once.
+_DOUBTS: dict[tuple, str | None] = {}
+
+
+def _normal_decoding(m: FileMap, info, a: np.ndarray, top: float):
+    """The xyz scale and bias of a normal map's file values (as ``process`` decodes them: the authored ones, the
+    conventional ones when none, a signed float file as stored), with why it does not read as a normal map kept
+    for :func:`normal_doubts`; None when they cannot be had (a zero scale: ``process`` says so)."""
+    from seamless_usd.imaging.normals import encoding_doubt, normal_scale_bias, signed_as_stored
+
+    scale4, bias4 = (m.scale or (1.0, 1.0, 1.0, 1.0)), (m.bias or (0.0, 0.0, 0.0, 0.0))
+    step = max(1, max(a.shape[:2]) // 64)
+    sample = np.asarray(a[::step, ::step, :3], np.float64) / top
+    try:
+        scale, bias = normal_scale_bias(scale4, bias4)
+    except ValueError:
+        return None
+    if signed_as_stored(scale4, bias4, info.dtype, sample):
+        scale, bias = (1.0, 1.0, 1.0), (0.0, 0.0, 0.0)
+    if len(_DOUBTS) > 4096:
+        _DOUBTS.clear()
+    _DOUBTS[_doubt_key(m)] = encoding_doubt(sample, scale, bias)
+    return scale, bias
+
+
+def _doubt_key(m: FileMap) -> tuple:
+    try:
+        st = os.stat(m.path)
+    except OSError:
+        return (m.path, m.scale, m.bias)
+    return (os.path.realpath(m.path), st.st_size, st.st_mtime_ns, m.scale, m.bias)
+
+
+def normal_doubts(maps: Sequence[FileMap]) -> list[str]:
+    """For each normal map of ``maps`` that does not read as a tangent-space normal map with its scale and bias (a
+    colour photo wired as a normal, a signed float map read as 0-1): why, naming it
+    (:func:`seamless_usd.imaging.normals.encoding_doubt`, which ``process`` warns with too)."""
+    out = []
+    for m in maps:
+        if not m.is_normal:
+            continue
+        key = _doubt_key(m)
+        if key not in _DOUBTS:
+            try:
+                read_alone(m)
+            except (InputError, ValueError, OSError, RuntimeError):
+                continue
+        doubt = _DOUBTS.get(key)
+        if doubt:
+            out.append(f"{asset_ref(m.name or m.path)} {doubt}")
+    return out
 
 
 def _scaled(v: Verdict, reduced: tuple[int, int], full: tuple[int, int]) -> Verdict:
@@ -127,8 +198,8 @@ def _stamp(maps: Sequence[FileMap]) -> tuple | None:
         stats = [os.stat(m.path) for m in maps]
     except OSError:
         return None
-    return tuple((os.path.realpath(m.path), st.st_size, st.st_mtime_ns, m.channels, m.is_normal, m.name)
-                 for m, st in zip(maps, stats))
+    return tuple((os.path.realpath(m.path), st.st_size, st.st_mtime_ns, m.channels, m.is_normal, m.name, m.scale,
+                  m.bias) for m, st in zip(maps, stats))
 
 
 def judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
