@@ -139,12 +139,12 @@ def test_a_mend_of_a_texture_with_long_lines_passes_only_where_its_joins_hide():
 def test_a_mend_scored_on_a_halved_grid_passes_or_not_as_its_full_resolution_verdict_says(monkeypatch):
     """A source larger than SCORE_SIDE is scored on its grid halved, where a mend's copies at odd offsets are no
     longer copies and read as seams; whether it passes is the full resolution's verdict, as the written tile's."""
-    import seamless_usd.synthesis.candidates as candidates
+    import seamless_usd.synthesis.types as types
 
     src = _photo("gravel.png", 384)
     field, _ = best_mend([src], 3)
     assert judge([src[field[..., 0], field[..., 1]]], [src], [False], ["gravel"]).passed
-    monkeypatch.setattr(candidates, "SCORE_SIDE", 192)  # a 384 px source is scored at 192 px, as a 2K one at 1024
+    monkeypatch.setattr(types, "SCORE_SIDE", 192)  # a 384 px source is scored at 192 px, as a 2K one at 1024
     check = check_cut([MapInput("gravel", src)], True, 0)
     assert check.halve == 2 and check.kind == "mend" and check.passes
     [tried] = check.notes["candidates"]
