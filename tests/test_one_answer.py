@@ -170,20 +170,10 @@ def test_the_tiles_named_alone_are_judged_against_their_sources_with_their_stack
     assert "is not there" in layer.note and layer.verdict["reference"] == "itself"
 
 
-def test_a_processed_materialx_document_is_judged_against_its_recorded_sources(tmp_path, capsys):
-    """``check`` on the new MaterialX document a run wrote judges its tiles against the sources its nodes record,
-    as ``process`` did, not against themselves."""
-    scene, stack, code = _process(tmp_path, capsys, "mtlx/tiled.mtlx", ("mtlx", "textures"))
-    [checked] = check_paths([scene.with_name("tiled.seamless.mtlx")]).items
-    assert checked.verdict["reference"] == "source" and not checked.error
-    assert checked.passed == (stack["status"] == "passed") == (code == 0)
-    [original] = check_paths([scene]).items  # the sources themselves: nothing recorded, judged against themselves
-    assert original.verdict["reference"] == "itself"
-
-
-def test_output_layer_names_the_new_materialx_document(tmp_path, capsys):
+def test_output_layer_names_the_new_materialx_document_judged_against_its_recorded_sources(tmp_path, capsys):
     """-o for a .mtlx input writes the new document there (its paths made relative to it), not beside the source;
-    a USD name for it, or one name for several inputs, is refused before any work."""
+    a USD name for it, or one name for several inputs, is refused before any work. ``check`` on the new document
+    judges its tiles against the sources its nodes record, as ``process`` did, not against themselves."""
     import json
     import shutil
 
@@ -209,4 +199,7 @@ def test_output_layer_names_the_new_materialx_document(tmp_path, capsys):
              if isinstance(n, mx.Node) and n.getInput("file") is not None]
     assert files and all((new.parent / f).is_file() for f in files)
     [checked] = check_paths([new]).items
-    assert checked.verdict["reference"] == "source" and checked.passed == (code == 0)
+    assert checked.verdict["reference"] == "source" and not checked.error and not checked.note
+    assert checked.passed == (report["stacks"][0]["status"] == "passed") == (code == 0)
+    [original] = check_paths([source]).items  # the sources themselves: nothing recorded, judged against themselves
+    assert original.verdict["reference"] == "itself"
