@@ -339,15 +339,3 @@ def test_write_map_replaces_atomically(samples_dir: Path, tmp_path: Path) -> Non
     write_map(target, stack.values[0], stack.encodings[0], like=stack.infos[0])
     assert read_info(target).width == 256
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.png", "rough.png"]
-
-
-@pytest.mark.parametrize("size", [(48, 36), (16, 12)])
-def test_a_tile_resampled_as_it_repeats(size):
-    """``periodic``: the tile is resized as its 3 x 3 repeat would be (no clamped edge at the wrap), up and down."""
-    from seamless_usd.imaging.resample import resample
-
-    tile = np.random.default_rng(0).random((24, 32, 2)).astype(np.float32)
-    w, h = size
-    repeat = resample(np.tile(tile, (3, 3, 1)), (3 * w, 3 * h), "lanczos3")[h:2 * h, w:2 * w]
-    assert np.abs(resample(tile, size, "lanczos3", periodic=True) - repeat).max() < 1e-4
-    assert np.abs(resample(tile, size, "lanczos3") - repeat)[:, :2].max() > 0.01  # clamped: its border differs

@@ -53,27 +53,3 @@ def test_too_small_or_too_thin_stacks_fail_saying_why(tmp_path, capsys):
         assert stack["message"].startswith("too small to make a tile from") and "internal" not in stack["message"]
         assert {"24": "24 x 24 px", "strip": "long and thin", "reduced": "raise --max-size"}[name] in stack["message"]
         assert not (tmp_path / "brick" / "tileable").exists()
-
-
-def test_a_smaller_map_of_a_stack_keeps_its_own_texel_density(tmp_path, capsys):
-    """A 256 px colour map beside a 128 px roughness map: the roughness tile is written at half the colour tile's
-    size (the same UV span at its own density, not upsampled), and check, reading it as it repeats, gives the
-    verdict process gave."""
-    from seamless_usd.pipeline.check import check_paths
-
-    shutil.copytree(SAMPLES / "brick", tmp_path / "brick")
-    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
-    src = oiio.ImageBuf(str(SAMPLES / "textures" / "brick_roughness.png"))
-    half = oiio.ImageBufAlgo.resize(src, roi=oiio.ROI(0, 128, 0, 128, 0, 1, 0, src.nchannels))
-    assert half.write(str(tmp_path / "textures" / "brick_roughness.png"))
-    code = main(["process", str(tmp_path / "brick" / "scene.usda"), "--preset", "tiny", "--seeds", "1",
-                 "--cache-dir", str(tmp_path / "cache"), "--json"])
-    [stack] = json.loads(capsys.readouterr().out)["stacks"]
-    sizes = {Path(m["asset"]).name: oiio.ImageInput.open(m["output"]).spec() for m in stack["maps"]}
-    colour, rough = sizes["brick_albedo.png"], sizes["brick_roughness.png"]
-    assert (colour.height, colour.width) == tuple(stack["tile_size"])
-    assert abs(rough.width - colour.width / 2) <= 1 and abs(rough.height - colour.height / 2) <= 1
-    [checked] = check_paths([tmp_path / "brick" / "scene.seamless.usda"]).items
-    assert checked.passed == (stack["status"] == "passed") == (code == 0)
-    assert checked.verdict["strongest"] == stack["verdict"]["strongest"]
-    assert [s["position"] for s in checked.verdict["seams"]] == [s["position"] for s in stack["verdict"]["seams"]]

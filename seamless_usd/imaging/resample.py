@@ -90,9 +90,8 @@ class WorkingResolution:
         return asdict(self)
 
 
-def resample(values: np.ndarray, size: tuple[int, int], filter: str = "auto", periodic: bool = False) -> np.ndarray:
-    """Resize ``(H, W, C)`` (or ``(H, W)``) float values to ``size = (W, H)``; ``periodic``: a tile, whose
-    borders see their wrapped neighbours (as the tile repeated and resized would be), not a clamped edge.
+def resample(values: np.ndarray, size: tuple[int, int], filter: str = "auto") -> np.ndarray:
+    """Resize ``(H, W, C)`` (or ``(H, W)``) float values to ``size = (W, H)``.
 
     Returns the input unchanged when it already has that size. Values may overshoot their
     range with ringing filters; callers clip or renormalise.
@@ -114,13 +113,8 @@ def resample(values: np.ndarray, size: tuple[int, int], filter: str = "auto", pe
         return a[..., 0] if flat else a
     if filter == "auto":
         filter = "lanczos3" if new_w * new_h > w * h else "blackman-harris"
-    pad = int(np.ceil(4 * max(1.0, w / new_w, h / new_h))) if periodic else 0  # the filter's reach, in texels
-    spec = oiio.ImageSpec(w + 2 * pad, h + 2 * pad, c, oiio.FLOAT)
-    spec.x, spec.y = -pad, -pad  # the wrapped border lies outside the image's full window, which is resized
-    spec.full_x, spec.full_y, spec.full_width, spec.full_height = 0, 0, w, h
-    src = oiio.ImageBuf(spec)
-    padded = np.pad(a, ((pad, pad), (pad, pad), (0, 0)), mode="wrap") if pad else a
-    src.set_pixels(oiio.ROI(-pad, w + pad, -pad, h + pad, 0, 1, 0, c), np.ascontiguousarray(padded))
+    src = oiio.ImageBuf(oiio.ImageSpec(w, h, c, oiio.FLOAT))
+    src.set_pixels(oiio.ROI(), np.ascontiguousarray(a))
     dst = oiio.ImageBufAlgo.resize(src, filter, roi=oiio.ROI(0, new_w, 0, new_h, 0, 1, 0, c))
     if dst.has_error:
         raise RuntimeError(f"resampling to {new_w}x{new_h} failed: {dst.geterror()}")

@@ -24,7 +24,7 @@ from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS, read_image
 from seamless_usd.imaging.normals import renormalise
 from seamless_usd.imaging.resample import WorkingResolution, resample
 
-__all__ = ["StackPixels", "load_stack_pixels", "on_working_grid"]
+__all__ = ["StackPixels", "load_stack_pixels"]
 
 
 @dataclass
@@ -89,25 +89,11 @@ class StackPixels:
         return d
 
 
-def on_working_grid(values: np.ndarray, encoding: MapEncoding, size: tuple[int, int], filter: str = "auto",
-                    periodic: bool = False) -> np.ndarray:
-    """Decoded network values brought to ``size`` (W, H): resampled (``periodic``: a tile, read as it repeats),
-    clipped, normals renormalised. How a stack's maps reach its working grid, and a smaller map's tile the stack's
-    tile grid, in ``process`` as in ``check``."""
-    if (values.shape[1], values.shape[0]) != tuple(size):
-        values = np.clip(resample(values, size, filter, periodic), -1.0, 1.0)
-        if encoding.normal is not None:
-            normals = encoding.channel_groups()[1]
-            values[..., normals] = renormalise(values[..., normals]).astype(np.float32)
-    return np.ascontiguousarray(values, dtype=np.float32)
-
-
 def load_stack_pixels(
     maps: Sequence[TextureMap],
     policy: WorkingResolution | None = None,
     *,
     max_pixels: int | None = DEFAULT_MAX_PIXELS,
-    periodic: bool = False,
 ) -> StackPixels:
     """Read, decode and resample the maps of one stack (see the module docstring).
 
@@ -119,8 +105,6 @@ def load_stack_pixels(
         The working-resolution policy; default :meth:`WorkingResolution.native`.
     max_pixels
         Per-file header limit, as in :func:`~seamless_usd.imaging.io.read_info`.
-    periodic
-        The maps are tiles: one brought to the working grid is resampled as it repeats (see :func:`resample`).
 
     Returns
     -------
@@ -167,7 +151,14 @@ def load_stack_pixels(
 
     sizes = tuple((i.width, i.height) for i in infos)
     working = policy.working_size(sizes)
-    values = [on_working_grid(val, enc, working, policy.filter, periodic) for enc, val in zip(encodings, decoded)]
+    values = []
+    for enc, val in zip(encodings, decoded):
+        if (val.shape[1], val.shape[0]) != working:
+            val = np.clip(resample(val, working, policy.filter), -1.0, 1.0)
+            if enc.normal is not None:
+                normals = enc.channel_groups()[1]
+                val[..., normals] = renormalise(val[..., normals]).astype(np.float32)
+        values.append(np.ascontiguousarray(val, dtype=np.float32))
     scales = tuple((working[0] / w, working[1] / h) for w, h in sizes)
     return StackPixels(
         maps=tuple(maps),

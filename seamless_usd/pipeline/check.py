@@ -247,7 +247,7 @@ def _against_source(item: CheckItem, tile_maps: list, src_maps: list, prov) -> N
     from seamless_usd.verdict import judge
 
     normals = [m.is_normal for m in tile_maps]
-    tiles = list(load_stack_pixels(tile_maps, periodic=True).values)  # a smaller map's tile read as it repeats
+    tiles = list(load_stack_pixels(tile_maps).values)
     uv = prov.uv_scale
     grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
     # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)

@@ -22,7 +22,6 @@ from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.pipeline.madefrom import (as_made, on_tile_grid, source_uv_scale, straighten, tile_record,
                                             uv_turn_of)
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
-from seamless_usd.imaging.stack import on_working_grid
 from seamless_usd.naming import stack_tile_filenames
 from seamless_usd.pipeline.rerun import judged_key, load_judged, save_judged
 from seamless_usd.report.previews import stack_previews
@@ -86,7 +85,6 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     policy = imaging.WorkingResolution(max_size=settings.max_size)
     pixels = imaging.load_stack_pixels(list(stack.maps), policy, max_pixels=settings.max_pixels)
     authored = pixels.values[0]  # the first map as the asset shows it today (the report's view of a UV turn)
-    loaded = pixels.working_size  # (w, h) the maps were brought to: a smaller map's tile is written at its density
     timings["load"] = time.perf_counter() - t0
     _check_size(pixels, settings.max_size)
 
@@ -191,17 +189,10 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     for name, m, source, encoding, info, filename in zip(names, stack.maps, sources, pixels.encodings, pixels.infos,
                                                          filenames):
         values = tiles[name]
-        own = own_density(tile_hw, (info.height, info.width), (loaded[1], loaded[0]))
-        if own != tile_hw:  # a map smaller than the stack's grid: its tile at its own texel density
-            from seamless_usd.synthesis.grid import resized
-
-            values = resized(values, own, m.is_normal, periodic=True)
         target = confine(out_dir / filename, out_dir)
         record = tile_record(m, out_dir, uv_scale, (straightened, levelled, evened), filenames)  # read by check
         written = imaging.write_map(target, values, encoding, like=info, record=record)
         back = imaging.decode_map(imaging.read_image(written, max_pixels=None)[0], encoding)  # what is on disk
-        if own != tile_hw:  # judged on the stack's grid, brought there as check brings it
-            back = on_working_grid(back, encoding, (tile_hw[1], tile_hw[0]), periodic=True)
         written_values.append(back)
         outcomes[map_identity(m)] = MapOutcome(
             output=Path(written),
@@ -238,18 +229,6 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
     save_judged(entry.root, out_dir, judged_key(stack), record, previews)
     return outcome_from_record(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
-
-
-def own_density(tile_hw: tuple[int, int], native_hw: tuple[int, int], grid_hw: tuple[int, int]) -> tuple[int, int]:
-    """The size (h, w) a map's tile is written at: the stack's tile ``tile_hw`` (on the grid ``grid_hw`` the maps were
-    brought to) at the map's own texel density when the map (``native_hw``) is smaller than that grid, so a 2K
-    roughness beside a 4K colour map keeps a 2K-class tile; else the tile's size.
-
-    >>> own_density((192, 173), (96, 128), (256, 256)), own_density((192, 173), (512, 512), (256, 256))
-    ((72, 86), (192, 173))
-    """
-    fy, fx = (min(1.0, n / g) for n, g in zip(native_hw, grid_hw))
-    return (max(1, round(tile_hw[0] * fy)), max(1, round(tile_hw[1] * fx)))
 
 
 #: The shortest side (px) of the working grid a tile is made from: below it the cuts and the verdict's patch figures
