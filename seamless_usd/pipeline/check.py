@@ -42,7 +42,8 @@ class CheckItem:
     maps: list[str]  # asset paths as authored (or the picture's path)
     verdict: dict = field(default_factory=dict)  # Verdict.as_dict(); empty when unreadable
     error: str = ""
-    note: str = ""  # why a tile that records its source was judged against itself instead
+    note: str = ""  # what to know of how it was judged: a recorded source gone or changed (judged against itself
+    #   instead), tiles of its stack not beside it, a normal map that does not read as one
     seconds: float = 0.0
     thumbnail: tuple = field(default=(), repr=False)  # (data URI, (w, h), texel scale) of the first map, 2 x 2
 
