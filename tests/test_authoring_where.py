@@ -123,3 +123,38 @@ def test_a_texture_node_two_materials_share_keeps_the_first_ones_tile_and_names_
     result = author_usd(tmp_path / "scene.usda", [first, second])
     assert "</Looks/M1/Color>" not in result.unwritten_nodes("</Looks/M1>")
     assert "shared with </Looks/M1>" in result.unwritten_nodes("</Looks/M2>")["</Looks/M1/Color>"]
+
+
+def test_a_run_over_other_materials_keeps_the_earlier_runs_edits_unless_the_stage_changed(tmp_path):
+    """Two runs with different material selections write one new layer holding both runs' edits; when the stage has
+    changed since, the layer is made again over it, and the edits it does not keep are named."""
+    from seamless_usd.authoring import StackResult
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "orm", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    (tmp_path / "combo").mkdir()
+    scene = tmp_path / "combo" / "combo.usda"
+    scene.write_text('#usda 1.0\n(\n    subLayers = [@../brick/scene.usda@, @../orm/scene.usda@]\n)\n')
+    results = {r.stack.material: r for r in stand_ins(scene)}
+    brick, orm = results["</World/Looks/Brick>"], results["</World/Looks/BrickOrm>"]
+    assert isinstance(brick, StackResult)
+
+    def files(layer: Path) -> dict[str, str]:
+        stage = Usd.Stage.Open(str(layer))
+        return {str(p.GetPath()): Path(p.GetAttribute("inputs:file").Get().path).name for p in stage.Traverse()
+                if p.GetAttribute("inputs:file") and "_tile" in str(p.GetAttribute("inputs:file").Get().path)}
+
+    first = author_usd(scene, [orm]).output
+    author_usd(scene, [brick])
+    both = files(first)
+    assert any("/BrickOrm/" in p for p in both) and any("/Brick/" in p for p in both)
+    again = author_usd(scene, [brick])  # nothing new: the layer is left as it is
+    assert again.layers_written == [] and files(first) == both
+    scene.write_text(scene.read_text() + "# edited\n")
+    changed = author_usd(scene, [brick])
+    assert changed.layers_written == [first]
+    kept = files(first)
+    assert not any("/BrickOrm/" in p for p in kept) and any("/Brick/" in p for p in kept)
+    [warning] = [f for f in changed.findings if f.code == "edits-replaced"]
+    assert "</World/Looks/BrickOrm/" in warning.message

@@ -46,7 +46,7 @@ def test_an_unchanged_rerun_takes_the_judged_result_back_and_a_changed_tile_is_j
     again = _run(tmp_path, capsys)
     assert _judged(again) == _judged(first) and again["stacks"][0]["origin"] == "cache"
     assert {p: Path(p).stat().st_mtime_ns for p in stamps} == stamps  # nothing written again, the layer neither
-    assert not again["layers_written"] and "not written again" in json.dumps(again["findings"])
+    assert not again["layers_written"] and "already has these edits; no layer written" in json.dumps(again["findings"])
     assert again["stacks"][0]["timings"] == first["stacks"][0]["timings"]  # not judged again: the same record
 
     # a tile changed by hand (a dark stripe across it) is written and judged again, and the run says so

@@ -40,6 +40,7 @@ class Codes:
     VARIANT_NOT_EDITABLE = "variant-not-editable"
     EDIT_NOT_COMPOSED = "edit-not-composed"  # an edit a stronger opinion hides
     MTLX_EDITS_REPLACED = "mtlx-edits-replaced"  # a new document made again from a changed source
+    EDITS_REPLACED = "edits-replaced"  # a new layer made again over a changed stage
 
 
 class WriteMode(str, Enum):

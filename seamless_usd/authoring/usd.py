@@ -16,12 +16,14 @@ once; if the materials' results disagree the first is kept and a finding explain
 from __future__ import annotations
 
 import contextlib
+import uuid
 from pathlib import Path
 from typing import Sequence
 
 from pxr import Sdf, Tf, Usd
 
 from seamless_usd.authoring.files import check_layer, layer_lock, relative_asset_path, write_atomically
+from seamless_usd.fileio import source_sha256
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode
 from seamless_usd.authoring.usdinplace import _author_in_place, _open_layer
 from seamless_usd.authoring.usdnodes import Names, uv_affine
@@ -66,7 +68,9 @@ def author_usd(
     MaterialX documents the stage references (``Origin.MTLX``) are written by
     :func:`author_mtlx` in the same mode; with a new layer, the stage's references to such a
     document are pointed at the new document in that layer. Maps whose output file is missing
-    are skipped with an error finding. An existing output layer is replaced.
+    are skipped with an error finding. An existing output layer made over the stage as it is now (its
+    ``seamlessMadeFrom``) is added to, so the edits of materials another run processed are kept; any other is
+    replaced, the edits it loses named.
 
     Raises :class:`~seamless_usd.errors.UsageError` when the output layer is the input stage and
     :class:`~seamless_usd.errors.InputError` when the stage cannot be opened or a layer to edit
@@ -111,8 +115,11 @@ def author_usd(
 def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Path, dry_run: bool,
                       retarget: dict[Path, Path]) -> AuthoringResult:
     source = _open_layer(stage_path)  # held while authoring: the sublayer below is this one
-    overrides = Sdf.Layer.CreateAnonymous(".usda")
-    overrides.subLayerPaths.append(str(stage_path))
+    made_from = source_sha256(stage_path)
+    overrides, earlier = _earlier_layer(out, stage_path, made_from)
+    data = dict(overrides.customLayerData)
+    data[Names.MADE_FROM] = made_from  # a later run over the same stage adds its edits to these
+    overrides.customLayerData = data
     # Payloads loaded: materials inside them are edited like any other (a new layer's overrides
     # reach into payloads, references and variants; a stack found under another variant
     # selection is planned under that selection, its edits inside that variant).
@@ -123,6 +130,13 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
                     selections=True)
     for document, new_document in retarget.items():
         author.plan_retarget(document, new_document, Usd.EditTarget(overrides))
+    done = {prim_ref(m.map.node.strip("<>")) for r in results for m in r.maps}
+    lost = [p for p in earlier if p not in done]
+    if lost:
+        result.findings.append(Finding(
+            Severity.WARNING, Codes.EDITS_REPLACED, asset_ref(out),
+            f"was made over another version of {asset_ref(stage_path)}, so it is made again over the stage as it is "
+            f"now and the earlier edits of {', '.join(lost)} are not kept: process those materials again"))
     if not author.edits:
         if author.planned_maps and not result.findings:
             result.findings.append(
@@ -177,6 +191,39 @@ def author_usd_stage(
     if not result.dry_run:
         _check_composed(stage, author.edits, results, result)
     return result
+
+
+def _earlier_layer(out: Path, stage_path: Path, made_from: str) -> tuple[Sdf.Layer, list[str]]:
+    """The layer to author into, over ``stage_path``: the new layer written before (``out``) when it was made over the
+    stage as it is now (its ``seamlessMadeFrom`` is ``made_from``), so the edits of materials this run does not
+    process (another ``--materials`` selection) are kept; else an empty one, and the texture nodes the earlier
+    layer had edited (``SeamlessTileAPI``), whose edits are then not kept."""
+    from seamless_usd.authoring.schema import Schema
+
+    # never saved under this name: a layer beside ``out``, so the asset paths it holds resolve as they will there
+    name = out.parent / f".{out.name}.{uuid.uuid4().hex}.usda"
+    fresh = Sdf.Layer.New(Sdf.FileFormat.FindByExtension("usda"), str(name))
+    fresh.subLayerPaths.append(str(stage_path))
+    earlier = Sdf.Layer.CreateAnonymous(".usda")
+    try:
+        if not out.is_file() or not earlier.ImportFromString(out.read_text(encoding="utf-8")):
+            return fresh, []
+    except (OSError, UnicodeDecodeError, Tf.ErrorException):  # not a layer (any more): it is replaced
+        return fresh, []
+    if earlier.customLayerData.get(Names.MADE_FROM) == made_from:
+        fresh.TransferContent(earlier)
+        fresh.subLayerPaths.clear()
+        fresh.subLayerPaths.append(str(stage_path))
+        return fresh, []
+    edited: list[str] = []
+
+    def visit(path: Sdf.Path) -> None:
+        spec = earlier.GetPrimAtPath(path) if path.IsPrimPath() else None
+        if spec is not None and Schema.TILE_API in list(spec.GetInfo("apiSchemas").GetAddedOrExplicitItems()):
+            edited.append(prim_ref(path.StripAllVariantSelections()))
+
+    earlier.Traverse(Sdf.Path.absoluteRootPath, visit)
+    return fresh, edited
 
 
 def _holds(path: Path, text: str) -> bool:

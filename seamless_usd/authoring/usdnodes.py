@@ -18,6 +18,7 @@ class Names:
     """Node ids, input names and values, named once."""
 
     OUTPUT_SUFFIX = ".seamless"  # scene.usda -> scene.seamless.usda
+    MADE_FROM = "seamlessMadeFrom"  # the new layer's customLayerData: the SHA-256 of the stage it was made over
     UV_NODE = "SeamlessUV"
     SHADER_TYPE = "Shader"
     INFO_ID = "info:id"
