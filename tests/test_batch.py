@@ -378,3 +378,16 @@ def test_two_stages_whose_materials_share_a_path_and_a_file_name_get_tiles_of_th
         outputs[name] = {m["asset"]: m["output"] for m in stack["maps"]}
     assert outputs["a"]["./tex/a/albedo.png"] != outputs["b"]["./tex/b/albedo.png"]
     assert Path(outputs["a"]["./tex/a/albedo.png"]).parent == Path(outputs["b"]["./tex/b/albedo.png"]).parent
+
+
+def test_a_scheduler_that_cannot_be_reached_is_a_usage_error(tmp_path, capsys, monkeypatch):
+    """A --scheduler address nothing answers at ends the run with exit 2 naming the address, not an internal
+    error; nothing is written. (A fresh cache: with every result cached no scheduler is contacted.)"""
+    import seamless_usd.pipeline.executors as executors
+
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 1)
+    lib = _library(tmp_path, copies=1)
+    code = main(["process", *RUN, str(lib / "brick0"), "--cache-dir", str(tmp_path / "fresh"), "--scheduler",
+                 "tcp://127.0.0.1:1"])
+    assert code == 2 and "cannot reach the Dask scheduler" in capsys.readouterr().err
+    assert not (lib / "brick0" / "scene.seamless.usda").exists()

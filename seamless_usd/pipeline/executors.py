@@ -136,7 +136,12 @@ class DaskExecutor:
             )
             client = Client(cluster)
         else:
-            client = Client(self.address)
+            try:
+                client = Client(self.address, timeout=CONNECT_TIMEOUT_S)
+            except Exception as exc:  # noqa: BLE001 - whatever the comm raises (a timeout, a refused or garbled line)
+                first = " ".join(str(exc).split())[:200] or type(exc).__name__
+                raise UsageError(f"--scheduler {self.address}: cannot reach the Dask scheduler ({first}); check the "
+                                 "address and that the scheduler is running") from None
         try:
             futures = {}
             for job in jobs:
@@ -154,6 +159,10 @@ class DaskExecutor:
             client.close()
             if cluster is not None:
                 cluster.close()
+
+
+#: Seconds to wait for a remote Dask scheduler to answer before the run is refused.
+CONNECT_TIMEOUT_S = 20
 
 
 def make_executor(scheduler: str | None, jobs: int | None = None) -> Executor:
