@@ -43,13 +43,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "(default <scene>.seamless.usda, <doc>.seamless.mtlx)")
     p.add_argument("--output-dir", type=Path, help="folder for tileable maps (default <stage dir>/tileable)")
     p.add_argument("--device", help="cpu, cuda, cuda:N (default: CUDA when present)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=_seed, default=0, help="random seed, 0 to 2**32 - 1 (default: %(default)s)")
     p.add_argument("--max-size", type=int, help="working-resolution cap in pixels (longest side); default native")
     p.add_argument("--iterations", type=_positive, help="override the preset's training iterations")
     p.add_argument("--seeds", type=_positive,
                    help="seeds trained, the tile whose fidelity figures are best kept (default: the preset's "
                         "that run side by side on a job's cores: one a job with --jobs 2 on two cores)")
-    p.add_argument("--max-pixels", type=int, default=1 << 28,
+    p.add_argument("--max-pixels", type=_positive, default=1 << 28,
                    help="refuse images whose header claims more pixels, before decoding (default: %(default)s)")
     p.add_argument("--cache-dir", type=Path, help="trained models and checkpoints (default: user cache dir)")
     p.add_argument("--jobs", "-j", type=int, help="stacks trained at once in local worker processes (default 1)")
@@ -77,6 +77,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="process these materials whatever their tiling intent (repeatable)")
     p.add_argument("--report", type=Path, help="HTML report path (the JSON report is written beside it)")
     p.add_argument("--json", action="store_true", help="print the JSON report on stdout")
+
+
+def _seed(text: str) -> int:
+    """An argparse type: a seed torch and numpy both take (0 to 2**32 - 1)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 0 <= value < 1 << 32:
+        raise argparse.ArgumentTypeError(f"must be from 0 to {(1 << 32) - 1}, got {value}")
+    return value
 
 
 def _positive(text: str) -> int:

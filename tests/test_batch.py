@@ -359,6 +359,12 @@ def test_materials_patterns_select_by_path_or_name(tmp_path, cache, capsys):
     assert [s["material"] for s in by_path["stacks"]] == ["</World/Looks/Brick>"]
     _, both = _run(layer, "--dry-run", "--materials", "Wood", "--materials", "Brick", capsys=capsys)
     assert len(both["stacks"]) == 2
+    # a pattern that matches nothing (case counts): refused when none matches, named when some other one does
+    assert main(["process", *RUN, layer, "--dry-run", "--materials", "wood"]) == 2
+    assert "--materials wood matches no material" in capsys.readouterr().err
+    _, partly = _run(layer, "--dry-run", "--materials", "Wood", "--materials", "Stone", capsys=capsys)
+    assert [s["material"] for s in partly["stacks"]] == ["</World/Looks/Wood>"]
+    assert [f["code"] for f in partly["findings"] if "Stone" in f["message"]] == ["pattern-unmatched"]
 
 
 def test_two_stages_whose_materials_share_a_path_and_a_file_name_get_tiles_of_their_own(tmp_path, capsys):

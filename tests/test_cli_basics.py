@@ -67,3 +67,22 @@ def test_ctrl_c_that_an_import_reports_as_import_error_ends_the_run_as_interrupt
     monkeypatch.setattr(scan_command, "run", broken)
     assert main(["scan", "x.usda"]) == 3
     assert "internal error" in capsys.readouterr().err
+
+
+def test_process_refuses_values_it_cannot_use_before_any_work(tmp_path, capsys):
+    """A seed torch cannot take, a pixel limit under 1 and -o beside --in-place: exit 2, named, nothing written."""
+    import shutil
+    from pathlib import Path
+
+    from seamless_usd_cli.main import main
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    scene = str(tmp_path / "brick" / "scene.usda")
+    for args, said in ((["--seed", "-1"], "--seed"), (["--seed", str(1 << 40)], "--seed"),
+                       (["--max-pixels", "0"], "--max-pixels"),
+                       (["--in-place", "-o", str(tmp_path / "x.usda")], "--in-place")):
+        assert main(["process", scene, *args]) == 2, args
+        assert said in capsys.readouterr().err
+    assert sorted(p.name for p in (tmp_path / "brick").iterdir()) == ["scene.usda"]

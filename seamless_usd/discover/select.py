@@ -9,7 +9,8 @@ from seamless_usd.discover.intent import Intent
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.findings import Finding, Severity, prim_ref
 
-__all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "blocked_stacks", "set_aside_stacks", "instanced_stacks", "left_alone_stacks",
+__all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "unmatched_patterns", "blocked_stacks", "set_aside_stacks",
+           "instanced_stacks", "left_alone_stacks",
            "unread_findings", "unread_materials", "unread_files"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
@@ -30,6 +31,11 @@ def select_stacks(scan: ScanResult, patterns: Sequence[str]) -> list[TextureStac
     if not patterns:
         return list(scan.stacks)
     return [stack for stack in scan.stacks if _matches(stack, patterns)]
+
+
+def unmatched_patterns(materials: Sequence[str], patterns: Sequence[str]) -> list[str]:
+    """The ``patterns`` that match none of ``materials`` (by path or name, case-sensitive)."""
+    return [p for p in patterns if not any(_matches(m, [p]) for m in materials)]
 
 
 def left_alone_stacks(stacks: Sequence[TextureStack], source: str, force: bool = False,

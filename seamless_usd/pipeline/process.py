@@ -16,7 +16,7 @@ from pathlib import Path
 from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
 from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, instanced_stacks, select_stacks,
-                                          set_aside_stacks)
+                                          set_aside_stacks, unmatched_patterns)
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
@@ -210,6 +210,23 @@ def _triage_dir(options: Options) -> Path:
     return StackCache(options.cache_dir).root / "triage"
 
 
+def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
+    """--materials that match no material of any input: a usage error (nothing would be done, and a typo must not
+    read as success); some of them, or --force-materials, matching none: a warning."""
+    seen = [m for src in sources for m in src.scan.materials]
+    named = f"the {len(set(seen))} material(s) found: {', '.join(sorted(set(seen))[:8])}" + (
+        ", ..." if len(set(seen)) > 8 else "")
+    for option, patterns in (("--materials", run.options.materials), ("--force-materials", run.options.force_materials)):
+        unmatched = unmatched_patterns(seen, patterns)
+        if not unmatched:
+            continue
+        said = (f"{option} {' '.join(unmatched)} matches no material of the inputs ({named}); a pattern matches a "
+                "material's prim path or name, upper and lower case apart")
+        if option == "--materials" and len(unmatched) == len(patterns) and sources:
+            raise UsageError(said)
+        run.report.findings.append(Finding(Severity.WARNING, "pattern-unmatched", option, said))
+
+
 def _check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
     """-o/--output-layer names the one layer or document written: one input, of its kind."""
     if len(inputs) > 1:
@@ -231,6 +248,10 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
     sources = []
     inputs = expand_inputs(paths)
     if run.options.output_layer is not None:
+        modes = authoring_module().WriteMode
+        if modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
+            raise UsageError("-o/--output-layer names a new layer, but --in-place edits the source layers: use one "
+                             "or the other")
         _check_output_layer(Path(run.options.output_layer), inputs)
     for path in inputs:
         run.report.sources.append(str(path))
@@ -249,6 +270,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
     if modes.IN_PLACE in (run.options.mode, run.options.plan_mode if run.options.mode is modes.DRY_RUN else None):
         for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
             run.blocked.update(_locked_in_place(run, src))
+    _check_patterns(run, sources)
     if run.options.mode != authoring_module().WriteMode.DRY_RUN:
         for src in sources:  # a source whose tiles' folder cannot be made: its stacks fail with why, before any work
             problem = folder_problem(_output_dir(run.options, src.path))
