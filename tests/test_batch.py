@@ -397,3 +397,19 @@ def test_a_scheduler_that_cannot_be_reached_is_a_usage_error(tmp_path, capsys, m
                  "tcp://127.0.0.1:1"])
     assert code == 2 and "cannot reach the Dask scheduler" in capsys.readouterr().err
     assert not (lib / "brick0" / "scene.seamless.usda").exists()
+
+
+def test_a_cache_whose_locks_cannot_be_taken_still_gives_its_results(tmp_path, capsys):
+    """A shared cache this process cannot write (here: each entry's lock is a folder, so no lock can be taken, as in
+    a read-only cache) still gives its finished results; nothing in it is needed to be written."""
+    lib = _library(tmp_path, copies=1)
+    cache = tmp_path / "shared-cache"
+    code, first = _run(str(lib / "brick0"), "--cache-dir", str(cache), capsys=capsys)
+    for lock in cache.rglob("*.lock"):
+        lock.unlink()
+        lock.mkdir()
+    shutil.rmtree(lib / "brick0" / "tileable")
+    (lib / "brick0" / "scene.seamless.usda").unlink()
+    again_code, again = _run(str(lib / "brick0"), "--cache-dir", str(cache), capsys=capsys)
+    assert again_code == code and [s["status"] for s in again["stacks"]] == [s["status"] for s in first["stacks"]]
+    assert again["stacks"][0]["origin"] == "cache" and (lib / "brick0" / "scene.seamless.usda").is_file()

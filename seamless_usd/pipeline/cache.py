@@ -9,6 +9,8 @@ Writers hold a file lock per entry, so two processes never train or write the sa
 """
 from __future__ import annotations
 
+import contextlib
+
 import hashlib
 import json
 import shutil
@@ -84,6 +86,21 @@ class CacheEntry:
             ) from None
         return FileLock(str(self.root) + ".lock", timeout=timeout)
 
+    @contextlib.contextmanager
+    def guard(self):
+        """The entry's lock held, yielding True; in a cache folder this process cannot write (a read-only shared
+        cache) no lock can be taken, and it yields False: a finished result can still be read, nothing written."""
+        lock = self.lock()
+        try:
+            lock.acquire()
+        except OSError:
+            yield False
+            return
+        try:
+            yield True
+        finally:
+            lock.release()
+
     def load(self) -> tuple[dict[str, np.ndarray], dict[str, Any]] | None:
         """The finished tiles and metadata, or None when absent or failing verification."""
         manifest_path = self.root / MANIFEST
@@ -118,7 +135,8 @@ class CacheEntry:
 
     def discard_result(self, reason: str = "") -> None:
         for name in (MANIFEST, TILES):
-            (self.root / name).unlink(missing_ok=True)
+            with contextlib.suppress(OSError):  # a read-only cache keeps it: it is not read as a result either
+                (self.root / name).unlink(missing_ok=True)
 
     def remove(self) -> None:
         shutil.rmtree(self.root, ignore_errors=True)
@@ -198,7 +216,7 @@ class JobIndex:
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             atomic_write_text(path, json.dumps({"model_hash": model_hash}))
-        except OSError:
+        except (OSError, InputError):  # a read-only cache: said as InputError by the atomic writer
             return
         if self._live is not None:
             self._live.add(model_hash)

@@ -19,6 +19,7 @@ import numpy as np
 from safetensors import SafetensorError
 from safetensors.numpy import load_file, save_file
 
+from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write, atomic_write_text, file_sha256
 from seamless_usd.report.model import Previews
 from seamless_usd.version import __version__
@@ -78,7 +79,7 @@ def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str
         body = {**record, "outputs": outputs, "previews": info, "version": __version__,
                 "pictures": file_sha256(paths[1])}
         atomic_write_text(paths[0], json.dumps(body, default=str))
-    except (OSError, SafetensorError):
+    except (OSError, InputError, SafetensorError):  # a read-only cache, say: the record is not kept
         return
 
 

@@ -16,7 +16,9 @@ from typing import Any
 import numpy as np
 
 from seamless_usd.textures import TextureStack
+from seamless_usd.errors import InputError
 from seamless_usd.fileio import confine
+from seamless_usd.findings import asset_ref
 from seamless_usd.imaging.io import DEFAULT_MAX_PIXELS
 from seamless_usd.pipeline.cache import StackCache, stack_key
 from seamless_usd.pipeline.madefrom import (as_made, on_tile_grid, source_uv_scale, straighten, tile_record,
@@ -115,8 +117,11 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         settings.seed,
     )
     entry = StackCache(settings.cache_dir).entry(key)
-    with entry.lock():
+    with entry.guard() as writable:
         cached = entry.load()
+        if cached is None and not writable:
+            raise InputError(f"the cache folder {asset_ref(entry.root.parent.parent)} cannot be written and holds no "
+                             "result for this stack; choose a writable one with --cache-dir")
         if cached is None:
             straightened = None
             if settings.straighten:  # from here on the straightened maps are the stack's source
