@@ -65,3 +65,19 @@ def test_an_unchanged_rerun_takes_the_judged_result_back_and_a_changed_tile_is_j
     elsewhere = _run(tmp_path, capsys, "--output-dir", str(tmp_path / "elsewhere"))
     assert all(p.startswith(str(tmp_path / "elsewhere")) for p in _outputs(elsewhere))
     assert [s["verdict"] for s in elsewhere["stacks"]] == [s["verdict"] for s in first["stacks"]]
+
+
+def test_the_same_tiles_written_into_several_folders_keep_their_pictures_once(tmp_path, capsys):
+    """Copies of a library processed with one cache: each folder keeps its own small record, the report's pictures
+    of the same tiles once (the cache no longer grows by them for every copy)."""
+    import shutil
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for copy in ("a", "b"):
+        for name in ("brick", "textures"):
+            shutil.copytree(samples / name, tmp_path / copy / name)
+        assert main(["process", str(tmp_path / copy / "brick" / "scene.usda"), "--preset", "tiny", "--max-size", "128",
+                     "--cache-dir", str(tmp_path / "cache")]) in (0, 1)
+    judged = list((tmp_path / "cache").rglob("judged/*"))
+    assert len([p for p in judged if p.name.endswith(".json")]) == 2
+    assert len([p for p in judged if p.name.endswith(".pictures.safetensors")]) == 1

@@ -3,7 +3,8 @@
 A cache hit still wrote the tiles, read them back and judged them again: a second or more a small stack,
 tens of seconds at 2K. When the tiles a previous run wrote into the same folder for the same stack are still
 on disk, byte for byte (SHA-256 of each file), that run's figures, verdict and pictures are what judging them
-again would give: they are kept here, one record per output folder and stack, and taken back instead. A file
+again would give: they are kept here, one record per output folder and stack (its pictures once, by their content, for every folder
+the same tiles went to), and taken back instead. A file
 missing or changed (edited by hand, half written) is written and judged again.
 
 Records are JSON (figures, verdict) and safetensors (the report's pictures); nothing is unpickled.
@@ -17,10 +18,10 @@ from typing import Any
 
 import numpy as np
 from safetensors import SafetensorError
-from safetensors.numpy import load_file, save_file
+from safetensors.numpy import load_file, save
 
 from seamless_usd.errors import InputError
-from seamless_usd.fileio import atomic_write, atomic_write_text, file_sha256
+from seamless_usd.fileio import atomic_write_bytes, atomic_write_text, file_sha256
 from seamless_usd.report.model import Previews
 from seamless_usd.version import __version__
 
@@ -28,6 +29,8 @@ __all__ = ["JUDGED", "judged_key", "record_paths", "save_judged", "load_judged",
 
 #: Folder of an entry that holds the judged records.
 JUDGED = "judged"
+#: A record's pictures, named by their content: the same stack written into several folders keeps them once.
+PICTURES_SUFFIX = ".pictures.safetensors"
 
 
 def judged_key(stack) -> str:
@@ -75,9 +78,13 @@ def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str
     try:
         outputs = {k: {**v, "sha256": file_sha256(Path(v["path"]))} for k, v in record["outputs"].items()}
         paths[0].parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(paths[1], lambda tmp: save_file(arrays, str(tmp)))
-        body = {**record, "outputs": outputs, "previews": info, "version": __version__,
-                "pictures": file_sha256(paths[1])}
+        blob = save(arrays)
+        digest = hashlib.sha256(blob).hexdigest()
+        pictures = paths[0].parent / f"{digest[:32]}{PICTURES_SUFFIX}"  # by content: kept once for every folder
+        if not pictures.is_file() or file_sha256(pictures) != digest:
+            atomic_write_bytes(pictures, blob)
+        body = {**record, "outputs": outputs, "previews": info, "version": __version__, "pictures": digest,
+                "pictures_file": pictures.name}
         atomic_write_text(paths[0], json.dumps(body, default=str))
     except (OSError, InputError, SafetensorError):  # a read-only cache, say: the record is not kept
         return
@@ -89,12 +96,13 @@ def load_judged(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[dict[st
     paths = record_paths(entry_root, out_dir, stack_id)
     try:
         record = json.loads(paths[0].read_text(encoding="utf-8"))
-        if record.get("version") != __version__ or file_sha256(paths[1]) != record["pictures"]:
+        pictures = paths[0].parent / str(record.get("pictures_file", paths[1].name))
+        if record.get("version") != __version__ or file_sha256(pictures) != record["pictures"]:
             return None
         for out in record["outputs"].values():
             if file_sha256(Path(out["path"])) != out["sha256"]:
                 return None
-        previews = previews_from_arrays(load_file(str(paths[1])), record["previews"])
+        previews = previews_from_arrays(load_file(str(pictures)), record["previews"])
     except (OSError, ValueError, KeyError, TypeError, SafetensorError):
         return None
     return record, previews
