@@ -413,3 +413,17 @@ def test_a_cache_whose_locks_cannot_be_taken_still_gives_its_results(tmp_path, c
     again_code, again = _run(str(lib / "brick0"), "--cache-dir", str(cache), capsys=capsys)
     assert again_code == code and [s["status"] for s in again["stacks"]] == [s["status"] for s in first["stacks"]]
     assert again["stacks"][0]["origin"] == "cache" and (lib / "brick0" / "scene.seamless.usda").is_file()
+
+
+def test_a_stage_in_a_folder_of_the_users_named_tileable_is_walked(tmp_path):
+    """This tool writes tiles, never stages, into tileable/ folders: a stage there is the user's, and a folder walk
+    takes it (it was skipped silently)."""
+    from seamless_usd.pipeline.inputs import expand_inputs
+
+    lib = _library(tmp_path, copies=1)
+    (lib / "tileable").mkdir()
+    shutil.copy(SAMPLES / "brick" / "scene.usda", lib / "tileable" / "floor.usda")
+    (lib / "brick0" / "tileable").mkdir()
+    (lib / "brick0" / "scene.seamless.usda").write_text("#usda 1.0\n")
+    found = {str(p.relative_to(lib)) for p in expand_inputs([lib])}
+    assert found == {"brick0/scene.usda", "looks/two.usda", "tileable/floor.usda"}

@@ -18,8 +18,15 @@ OUTPUT_DIR_NAME = "tileable"
 
 
 def is_own_output(path: Path) -> bool:
-    """A layer or document this tool wrote (or its backups): not an input when walking folders."""
-    return OUTPUT_MARK in path.name or path.suffix == ".bak" or OUTPUT_DIR_NAME in path.parent.parts
+    """A layer, document or tile this tool wrote (or a backup): not an input when walking folders (a picture in a
+    ``tileable`` folder below is a tile, judged with the stage that uses it)."""
+    return _own_layer(path) or OUTPUT_DIR_NAME in path.parent.parts
+
+
+def _own_layer(path: Path) -> bool:
+    """A layer or document this tool wrote, or a backup (no stage is ever written into a ``tileable`` folder: a
+    stage there is the user's)."""
+    return OUTPUT_MARK in path.name or path.suffix == ".bak"
 
 
 def _walk(folder: Path) -> list[Path]:
@@ -28,7 +35,7 @@ def _walk(folder: Path) -> list[Path]:
     bound, so a UV atlas would read as a material meant to tile), not again as a scene of its own."""
     found = sorted(
         p for p in folder.rglob("*")
-        if p.is_file() and p.suffix.lower() in SCENE_SUFFIXES and not is_own_output(p.relative_to(folder))
+        if p.is_file() and p.suffix.lower() in SCENE_SUFFIXES and not _own_layer(p)
     )
     used = _composed_by(found)
     roots = [p for p in found if p.resolve() not in used]
@@ -78,7 +85,7 @@ def expand_inputs(items: Sequence[str | Path]) -> list[Path]:
         elif _GLOB_CHARS & set(text) and not path.exists():
             matches = [
                 Path(m) for m in sorted(glob.glob(text, recursive=True))
-                if Path(m).is_file() and Path(m).suffix.lower() in SCENE_SUFFIXES and not is_own_output(Path(m))
+                if Path(m).is_file() and Path(m).suffix.lower() in SCENE_SUFFIXES and not _own_layer(Path(m))
             ]
             if not matches:
                 raise UsageError(f"the pattern {text!r} matches no USD or MaterialX file")
