@@ -56,9 +56,12 @@ def test_report_target_names_the_file_and_refuses_folders(tmp_path):
     assert report_target(tmp_path / "r") == tmp_path / "r.html"
     assert report_target(tmp_path / "r.htm") == tmp_path / "r.htm"
     assert report_target(tmp_path / "r.html", ".json") == tmp_path / "r.json"
-    (tmp_path / "d.html").mkdir()
+    (tmp_path / "out").mkdir()  # a folder named: the report goes inside it
+    assert report_target(tmp_path / "out") == tmp_path / "out" / "report.html"
+    assert report_target(f"{tmp_path / 'new'}/") == tmp_path / "new" / "report.html"
+    (tmp_path / "d.html").mkdir()  # a folder where the page would go
     with pytest.raises(InputError, match="is a folder"):
-        report_target(tmp_path / "d.html")
+        report_target(tmp_path / "d")
     stage = tmp_path / "s.usda"
     stage.write_text("#usda 1.0\n")
     assert report_target(stage) == tmp_path / "s.html"  # the stage itself is never the target

@@ -31,13 +31,16 @@ def _is_own(path: Path) -> bool:
 
 def report_target(path: str | Path, suffix: str = ".html") -> Path:
     """The file a report asked for at ``path`` is written to: ``path`` itself when it ends in ``suffix`` (``.htm``
-    too for a page), else ``path`` with ``suffix``. Raises :class:`InputError` naming it when it is a folder, or
-    a file that is not one of this tool's reports (a stage, a picture, another page), which is never replaced.
+    too for a page), ``report<suffix>`` inside it when it is a folder, else ``path`` with ``suffix``. Raises
+    :class:`InputError` naming it when that is a folder, or a file that is not one of this tool's reports (a
+    stage, a picture, another page), which is never replaced.
 
     >>> report_target("out/run").name, report_target("out/run.HTML").name, report_target("run", ".json").name
     ('run.html', 'run.HTML', 'run.json')
     """
     p = Path(path)
+    if p.is_dir() or str(path).endswith(("/", "\\")):  # a folder named: the report goes inside it
+        p = p / f"report{suffix}"
     kept = (suffix, ".htm") if suffix == ".html" else (suffix,)
     target = p if p.suffix.lower() in kept else p.with_suffix(suffix)
     if target.is_dir():
