@@ -18,6 +18,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write_text, file_sha256
 from seamless_usd.textures import TextureMap
 from seamless_usd.version import __version__
@@ -25,7 +26,7 @@ from seamless_usd.version import __version__
 __all__ = ["TriageMemo", "TRIAGE_REVISION"]
 
 #: Bump whenever the same files would be triaged differently (a rule or a figure changed).
-TRIAGE_REVISION = 2
+TRIAGE_REVISION = 3  # 3: a normal map read as its vectors, with its scale and bias
 
 
 class TriageMemo:
@@ -51,7 +52,8 @@ class TriageMemo:
             if not m.resolved or m.in_package:
                 return None
             try:
-                h.update(f"|{self._digest(m.resolved)}:{m.channels_used}:{m.is_normal}".encode())
+                decoding = f":{tuple(m.scale)}:{tuple(m.bias)}" if m.is_normal else ""  # how a normal map is read
+                h.update(f"|{self._digest(m.resolved)}:{m.channels_used}:{m.is_normal}{decoding}".encode())
             except OSError:
                 return None
         return h.hexdigest()
@@ -76,6 +78,6 @@ class TriageMemo:
             try:
                 path.parent.mkdir(parents=True, exist_ok=True)
                 atomic_write_text(path, json.dumps({"kind": kind, "value": value}))
-            except OSError:  # a read-only cache: the figure is simply measured again next time
+            except (OSError, InputError):  # a read-only cache: the figure is simply measured again next time
                 pass
         return value
