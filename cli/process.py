@@ -10,6 +10,7 @@ or did not pass (the rest were written); 2 usage error or unreadable input.
 from __future__ import annotations
 
 import argparse
+import os
 import json
 import sys
 from pathlib import Path
@@ -197,10 +198,13 @@ def _stack_table(report: Report, console: Console) -> None:
     for col in ("status", "maps", "crop", "tile", "UV scale", "time"):
         table.add_column(col, no_wrap=True)
     table.add_column("why not passed", overflow="fold")
+    sources = sorted({s.source for s in report.stacks if s.source})
+    common = os.path.commonpath([os.path.dirname(p) for p in sources]) if len(sources) > 1 else None
     for s in report.stacks:
         style = {StackStatus.PASSED: "green", StackStatus.NOT_PASSED: "yellow", StackStatus.FAILED: "red"}.get(s.status, "")
+        where = f" of {os.path.relpath(s.source, common)}" if common is not None and s.source else ""  # several inputs
         table.add_row(
-            escape(s.material + (f" in {s.variant}" if s.variant else "")),
+            escape(s.material + (f" in {s.variant}" if s.variant else "") + where),
             f"[{style}]{s.status.value}[/]" if style else s.status.value,
             str(len(s.maps)),
             _wh(s.crop_size) if s.crop_size and s.model_hash else "-",  # no GAN, no crop
