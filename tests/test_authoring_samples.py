@@ -5,13 +5,13 @@ The tileable files are stand-ins (copies of the sources): authoring only places 
 from __future__ import annotations
 
 import hashlib
-import shutil
 from dataclasses import replace
 from pathlib import Path
 
 import MaterialX as mx
 import pytest
 from pxr import Usd, UsdShade
+from standins import stand_ins
 
 from seamless_usd.authoring import (
     MapResult,
@@ -24,7 +24,6 @@ from seamless_usd.authoring import (
     scale2d,
     uv_affine,
 )
-from seamless_usd.discover import scan_paths
 from seamless_usd.textures import Origin
 
 SCALE = (2.0, 3.0)
@@ -36,17 +35,8 @@ MTLX_DOCS = ["mtlx/tiled.mtlx", "mtlx/prefixed.mtlx"]
 
 
 def stand_in_results(path: Path) -> list[StackResult]:
-    scan = scan_paths([path])
-    results = []
-    for stack in scan.stacks:
-        maps = []
-        for tex in stack.maps:
-            out = path.parent / "tileable" / f"{Path(tex.resolved).stem}_tile.png"
-            out.parent.mkdir(exist_ok=True)
-            shutil.copyfile(tex.resolved, out)
-            maps.append(MapResult(tex, out))
-        prov = Provenance(stack.maps[0].asset, (64, 64), SCALE, True, 0.5, (0.6, 0.7), "hash", "0.1.0")
-        results.append(StackResult(stack, maps, SCALE, prov))
+    results = stand_ins(path, SCALE, lambda stack: Provenance(stack.maps[0].asset, (64, 64), SCALE, True, 0.5,
+                                                              (0.6, 0.7), "hash", "0.1.0"))
     assert results, f"discovery found no stack in {path}"
     return results
 

@@ -4,6 +4,7 @@ look; a node two materials share keeps the first one's tile, and the other is to
 from __future__ import annotations
 
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
@@ -17,27 +18,20 @@ TEXTURES = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
 
 
 def _material(stage: Usd.Stage, path: str, texture: str, transform: bool) -> None:
-    """A UsdPreviewSurface material reading ``texture`` through st (and a UsdTransform2d with ``transform``)."""
-    mat = UsdShade.Material.Define(stage, path)
-    surface = UsdShade.Shader.Define(stage, f"{path}/Surface")
-    surface.CreateIdAttr("UsdPreviewSurface")
-    mat.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
-    reader = UsdShade.Shader.Define(stage, f"{path}/St")
-    reader.CreateIdAttr("UsdPrimvarReader_float2")
-    reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
-    st = reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+    """usdkit's UsdPreviewSurface material reading ``texture`` (its node ``diffuseColorTex``) through st, and with
+    ``transform`` a UsdTransform2d between them."""
+    sys.path.insert(0, str(TEXTURES.parent))
+    from usdkit import preview_material
+
+    preview_material(stage, path, {"diffuseColor": (texture, "rgb", "sRGB")}, wrap=None)
     if transform:
         xf = UsdShade.Shader.Define(stage, f"{path}/Xf")
         xf.CreateIdAttr("UsdTransform2d")
-        xf.CreateInput("in", Sdf.ValueTypeNames.Float2).ConnectToSource(st)
+        xf.CreateInput("in", Sdf.ValueTypeNames.Float2).ConnectToSource(
+            UsdShade.Shader.Get(stage, f"{path}/StReader").ConnectableAPI(), "result")
         xf.CreateInput("scale", Sdf.ValueTypeNames.Float2).Set((2.0, 2.0))
-        st = xf.CreateOutput("result", Sdf.ValueTypeNames.Float2)
-    tex = UsdShade.Shader.Define(stage, f"{path}/Color")
-    tex.CreateIdAttr("UsdUVTexture")
-    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(texture)
-    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(st)
-    surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
-        tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
+        UsdShade.Shader.Get(stage, f"{path}/diffuseColorTex").GetInput("st").ConnectToSource(
+            xf.CreateOutput("result", Sdf.ValueTypeNames.Float2))
 
 
 def _asset(root: Path) -> Path:
@@ -72,7 +66,7 @@ def _asset(root: Path) -> Path:
 def _composed(layer: Path, selection: str) -> tuple[str, bool, list]:
     stage = Usd.Stage.Open(str(layer))
     stage.GetPrimAtPath("/Asset").GetVariantSets().GetVariantSet("look").SetVariantSelection(selection)
-    color = stage.GetPrimAtPath("/Asset/Looks/Brick/Color")
+    color = stage.GetPrimAtPath("/Asset/Looks/Brick/diffuseColorTex")
     st = color.GetAttribute("inputs:st").GetConnections()
     transform = stage.GetPrimAtPath(st[0].GetPrimPath()) if st else None
     upstream = transform.GetAttribute("inputs:in").GetConnections() if transform else []
@@ -94,7 +88,7 @@ def test_a_payload_inside_a_variant_is_edited_inside_that_variant(tmp_path, refe
     brick, brick_linked, _ = _composed(written, "brick")
     plain, plain_linked, upstream = _composed(written, "plain")
     assert brick == "brick_albedo_tile.png" and plain == "wood_color_tile.png"
-    assert brick_linked and plain_linked and upstream == ["/Asset/Looks/Brick/St.outputs:result"]
+    assert brick_linked and plain_linked and upstream == ["/Asset/Looks/Brick/StReader.outputs:result"]
     layer = Sdf.Layer.FindOrOpen(str(written))
     assert not layer.GetPrimAtPath("/Asset/Looks"), "an edit outside the variant changes every selection"
 
@@ -115,14 +109,14 @@ def test_a_texture_node_two_materials_share_keeps_the_first_ones_tile_and_names_
     surface.CreateIdAttr("UsdPreviewSurface")
     m2.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
     surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
-        UsdShade.Shader.Get(stage, "/Looks/M1/Color").ConnectableAPI(), "rgb")
+        UsdShade.Shader.Get(stage, "/Looks/M1/diffuseColorTex").ConnectableAPI(), "rgb")
     stage.GetRootLayer().Save()
     first, second = stand_ins(tmp_path / "scene.usda")
     assert (first.stack.material, second.stack.material) == ("</Looks/M1>", "</Looks/M2>")
     second = StackResult(second.stack, second.maps, (3.0, 3.0), replace(second.provenance, uv_scale=(3.0, 3.0)))
     result = author_usd(tmp_path / "scene.usda", [first, second])
-    assert "</Looks/M1/Color>" not in result.unwritten_nodes("</Looks/M1>")
-    assert "shared with </Looks/M1>" in result.unwritten_nodes("</Looks/M2>")["</Looks/M1/Color>"]
+    assert "</Looks/M1/diffuseColorTex>" not in result.unwritten_nodes("</Looks/M1>")
+    assert "shared with </Looks/M1>" in result.unwritten_nodes("</Looks/M2>")["</Looks/M1/diffuseColorTex>"]
 
 
 def test_a_run_over_other_materials_keeps_the_earlier_runs_edits_unless_the_stage_changed(tmp_path):

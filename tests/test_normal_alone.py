@@ -4,6 +4,7 @@ answer, and a map that does not read as a normal map at all (a colour photo wire
 and the scan alike."""
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -25,25 +26,16 @@ def _write(path: Path, values: np.ndarray, fmt) -> None:
 
 def _scene(root: Path, files: dict[str, tuple[str, tuple | None]]) -> Path:
     """One material per file, its normal input reading it (with the scale and bias given, else none authored)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "sample_assets"))
+    from usdkit import preview_material
+
     stage = Usd.Stage.CreateNew(str(root / "normals.usda"))
     for name, (file, scale_bias) in files.items():
-        path = f"/Looks/{name}"
-        mat = UsdShade.Material.Define(stage, path)
-        surface = UsdShade.Shader.Define(stage, f"{path}/Surface")
-        surface.CreateIdAttr("UsdPreviewSurface")
-        mat.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
-        reader = UsdShade.Shader.Define(stage, f"{path}/St")
-        reader.CreateIdAttr("UsdPrimvarReader_float2")
-        reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
-        tex = UsdShade.Shader.Define(stage, f"{path}/Normal")
-        tex.CreateIdAttr("UsdUVTexture")
-        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(f"./{file}")
-        tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
-        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+        preview_material(stage, f"/Looks/{name}", {"normal": (f"./{file}", "rgb", "raw")}, wrap=None)
         if scale_bias:
+            tex = UsdShade.Shader.Get(stage, f"/Looks/{name}/normalTex")
             tex.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set(scale_bias[0])
             tex.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set(scale_bias[1])
-        surface.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(tex.ConnectableAPI(), "rgb")
     stage.GetRootLayer().Save()
     return root / "normals.usda"
 
