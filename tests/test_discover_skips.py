@@ -156,3 +156,26 @@ def test_in_memory_stage_with_missing_and_good_textures(tmp_path):
     result = scan_stage(mem)
     assert len(result.stacks) == 1 and not result.findings
     assert result.sources and result.sources[0].startswith("anon:")
+
+
+def test_an_animated_file_input_is_named_and_its_material_left_alone(tmp_path, capsys):
+    """A file input with time samples (a texture swapped over time; with a default too, or without) renders the
+    samples, not its default: it is named as animated, not as a node with no file, and its material is left
+    alone (exit 0), since a layer over it would replace the swap with one tile."""
+    import json
+
+    from seamless_usd_cli.main import main
+
+    shutil.copyfile(TEXTURES / "brick_albedo.png", tmp_path / "a.png")
+    shutil.copyfile(TEXTURES / "cloth.png", tmp_path / "b.png")
+    for with_default in (True, False):
+        path = texture_scene(tmp_path / f"s{int(with_default)}.usda", "a.png" if with_default else None)
+        stage = Usd.Stage.Open(str(path))
+        attr = UsdShade.Shader.Get(stage, "/Looks/M/Tex").CreateInput("file", Sdf.ValueTypeNames.Asset).GetAttr()
+        attr.Set(Sdf.AssetPath("a.png"), 1)
+        attr.Set(Sdf.AssetPath("b.png"), 10)
+        stage.Save()
+        f = _only_finding(scan_paths([path]))
+        assert f.code == "animated-file" and "2 time sample(s)" in f.message
+        assert main(["process", str(path), "--dry-run", "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["layers_written"] == []

@@ -42,6 +42,7 @@ class TextureUse:
     normal_y_flip: bool = False
     selection: tuple = ()  # variant selection it was found under (VariantChoice; () : the stage's own)
     recorded_passed: bool | None = None  # a tile this tool wrote: whether it passed when written (else None)
+    animated: int = 0  # time samples of its file input (a texture swapped over time), 0 when none
 
     def key(self) -> tuple:
         """What makes two uses found under two variant selections the same use."""
@@ -95,6 +96,9 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
     for use in group:
         if use.role not in roles:
             roles.append(use.role)
+    if first.animated:
+        return None, [_skip(first, Codes.ANIMATED_FILE, f"its file input is animated ({first.animated} time "
+                                                        "sample(s)): a texture swapped over time is not made tileable")]
     if not first.asset or first.file_at is None:
         return None, [_skip(first, Codes.NO_FILE, "texture node has no file")]
     if first.uv is None:

@@ -165,6 +165,7 @@ class Codes:
     MISSING_FILE = "missing-file"
     UNREADABLE_FILE = "unreadable-file"
     UDIM = "udim"
+    ANIMATED_FILE = "animated-file"
     NO_UV = "no-uv"
     TOO_SMALL = "too-small"
     COLORSPACE_MISMATCH = "colorspace-mismatch"

@@ -184,7 +184,9 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
     asset = resolved = udim = expected = ""
     file_at = None
     labels: list[Label] = []
+    animated = 0
     if file_attr is not None:
+        animated = file_attr.GetNumTimeSamples()  # a texture swapped over time: its default is not what renders
         asset, resolved = usdgraph.asset_text(file_attr.Get())
         file_at = usdgraph.authored_at(file_attr)
         expected = _anchor(file_attr, asset) if asset else ""
@@ -235,6 +237,7 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
         uv=usd_uv_chain(tex, sid),
         normal_y_flip=flip and role.role in NORMAL_ROLES,
         recorded_passed=_recorded_passed(tex),
+        animated=animated,
     )
 
 
