@@ -1,6 +1,7 @@
 """Where a material's edits go when its texture node is reached another way: brought in by a payload (or a
 reference) authored inside a variant, the edits go inside that variant, so the other selections keep their own
-look; a node two materials share keeps the first one's tile, and the other is told so."""
+look; a node two materials share keeps the first one's tile, and the other is told so; in place, every edit of a
+texture goes into the layer holding its file value."""
 from __future__ import annotations
 
 import shutil
@@ -152,3 +153,44 @@ def test_a_run_over_other_materials_keeps_the_earlier_runs_edits_unless_the_stag
     assert not any("/BrickOrm/" in p for p in kept) and any("/Brick/" in p for p in kept)
     [warning] = [f for f in changed.findings if f.code == "edits-replaced"]
     assert "</World/Looks/BrickOrm/" in warning.message
+
+
+def _library_and_shot(root: Path, override: bool) -> Path:
+    """lib/mat.usda defines /Mat (a texture reading st); shots/shot.usda references it as /World/M, and with
+    ``override`` sets the texture's file itself."""
+    (root / "lib").mkdir()
+    (root / "shots").mkdir()
+    lib = Usd.Stage.CreateNew(str(root / "lib" / "mat.usda"))
+    _material(lib, "/Mat", str(TEXTURES / "brick_roughness.png"), transform=False)
+    lib.SetDefaultPrim(lib.GetPrimAtPath("/Mat"))
+    lib.GetRootLayer().Save()
+    shot = Usd.Stage.CreateNew(str(root / "shots" / "shot.usda"))
+    shot.DefinePrim("/World/M").GetReferences().AddReference("../lib/mat.usda")
+    if override:
+        shot.OverridePrim("/World/M/diffuseColorTex").CreateAttribute("inputs:file", Sdf.ValueTypeNames.Asset).Set(
+            str(TEXTURES / "brick_albedo.png"))
+    shot.GetRootLayer().Save()
+    return root / "shots" / "shot.usda"
+
+
+@pytest.mark.parametrize("override", [True, False])
+def test_in_place_every_edit_of_a_texture_goes_where_its_file_is(tmp_path, override):
+    """In place, a texture's file, wrap, UV link, UV transform and provenance go into one layer, the one holding its
+    file value: the shot's override (the library it references stays as it was; its UV link had gone there, scaling
+    every stage's untiled texture), or the library itself, which is then said to be shared."""
+    from seamless_usd.authoring import WriteMode
+
+    shot = _library_and_shot(tmp_path, override)
+    library = (tmp_path / "lib" / "mat.usda").read_bytes()
+    result = author_usd(shot, stand_ins(shot), mode=WriteMode.IN_PLACE)
+    stage = Usd.Stage.Open(str(shot))
+    tex = stage.GetPrimAtPath("/World/M/diffuseColorTex")
+    assert "_tile" in tex.GetAttribute("inputs:file").Get().path
+    assert tex.GetAttribute("inputs:st").GetConnections() == [Sdf.Path("/World/M/SeamlessUV.outputs:result")]
+    shared = [f for f in result.findings if f.code == "shared-layer-edited"]
+    if override:
+        assert result.layers_written == [shot] and (tmp_path / "lib" / "mat.usda").read_bytes() == library
+        assert not shared
+    else:
+        assert result.layers_written == [tmp_path / "lib" / "mat.usda"]
+        assert [f.where for f in shared] == [f"@{tmp_path / 'lib' / 'mat.usda'}@"]

@@ -41,6 +41,7 @@ class Codes:
     EDIT_NOT_COMPOSED = "edit-not-composed"  # an edit a stronger opinion hides
     MTLX_EDITS_REPLACED = "mtlx-edits-replaced"  # a new document made again from a changed source
     EDITS_REPLACED = "edits-replaced"  # a new layer made again over a changed stage
+    SHARED_LAYER_EDITED = "shared-layer-edited"  # in place: a referenced or payload layer other stages may use
 
 
 class WriteMode(str, Enum):

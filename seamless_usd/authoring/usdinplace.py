@@ -42,17 +42,15 @@ def _prim_nodes(prim: Usd.Prim):
         stack.extend(node.children)
 
 
-def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None):
-    """Where an in-place edit goes: the strongest layer holding the opinion, mapped."""
-    if attr:
-        specs = attr.GetPropertyStack(Usd.TimeCode.Default())
-        layers = [s.layer for s in specs]
-    else:
-        layers = []
-    layers += [s.layer for s in prim.GetPrimStack()]
-    if not layers:
-        return Finding(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(prim.GetPath()), "no layer holds it")
-    layer = layers[0]
+def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None, layer: Sdf.Layer | None = None):
+    """Where an in-place edit goes: ``layer`` (the layer of the texture's file value, which gets all of that
+    texture's edits), else the strongest layer holding the opinion; mapped into it."""
+    if layer is None:
+        layers = [s.layer for s in attr.GetPropertyStack(Usd.TimeCode.Default())] if attr else []
+        layers += [s.layer for s in prim.GetPrimStack()]
+        if not layers:
+            return Finding(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(prim.GetPath()), "no layer holds it")
+        layer = layers[0]
     problem = _editable(layer)
     if problem is not None:
         return problem
@@ -73,7 +71,7 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
     stage = Usd.Stage.Open(str(stage_path), Usd.Stage.LoadAll)  # materials inside payloads too
     layers = {layer: layer.dirty for layer in stage.GetUsedLayers()}
     author = _Author(stage, result, anchor_dir=None)
-    author.plan_all(results, _in_place_target, selections=True)
+    author.plan_all(results, _in_place_target, selections=True, one_layer=True)
     if not author.edits:
         if author.planned_maps and not result.findings:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
@@ -83,6 +81,12 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
         author.apply()  # records the plan only
         return result
     changed = {edit.target.GetLayer() for edit in author.edits}
+    own = set(stage.GetLayerStack(includeSessionLayers=False))
+    for layer in sorted(changed - own, key=lambda lay: lay.identifier):  # a library's: other stages change too
+        result.findings.append(Finding(
+            Severity.WARNING, Codes.SHARED_LAYER_EDITED, asset_ref(layer.realPath or layer.identifier),
+            f"edited in place, though {asset_ref(stage_path)} only references or loads it: every stage that uses it "
+            "shows the tiles now, from the tiles folder of this stage (leave out --in-place for a layer of its own)"))
     for layer in changed:
         if layers.get(layer):
             raise InputError(f"{asset_ref(layer.identifier)} has unsaved changes in this process; "

@@ -43,17 +43,21 @@ class _Author(_UVPlanner):
         self._reserved: set[Sdf.Path] = set()
         self._uv_updates: dict[tuple, tuple[float, float]] = {}  # (marked node, selection) -> total scale
         self.target_for = None
+        self.one_layer = False
+        self._anchor: Sdf.Layer | None = None  # one_layer: the layer of the current texture's file value
         self.planned_maps = 0
         self.variant_layer: Sdf.Layer | None = None  # new-layer mode: edits follow the opinion's variant
-        self._context: Usd.EditTarget | None = None  # the current map's edit target (variant_layer set)
+        self._context: Usd.EditTarget | None = None  # the current map's edit target (variant_layer or one_layer)
         self._refused: str | None = None  # why an edit target of the current map was refused
         self._selection: tuple = ()  # the variant selection the stage is composed under
 
     # -- planning ------------------------------------------------------------------------
 
     def plan_all(self, results: Iterable[StackResult], target_for, variant_layer: Sdf.Layer | None = None,
-                 selections: bool = False) -> None:
-        """``target_for(prim, attr_or_None) -> Usd.EditTarget | Finding`` picks where edits go.
+                 selections: bool = False, one_layer: bool = False) -> None:
+        """``target_for(prim, attr_or_None) -> Usd.EditTarget | Finding`` picks where edits go; with ``one_layer``
+        (in place) every edit of one texture goes where its file value is (its UV link and transform too, which a
+        weaker layer, a library's, may hold: edited there, every stage using it would change).
 
         With ``variant_layer`` (a new layer over the stage) a map whose file value is authored
         inside a variant gets its edits inside the same variant of that layer, so the other
@@ -63,6 +67,7 @@ class _Author(_UVPlanner):
         """
         self.target_for = target_for
         self.variant_layer = variant_layer
+        self.one_layer = one_layer
         if not schemas_known():
             self._find(Severity.WARNING, Codes.SCHEMA_NOT_REGISTERED, asset_ref(Schema.TILE_API),
                        "USD's schema registry was built before seamless_usd.authoring was "
@@ -113,7 +118,11 @@ class _Author(_UVPlanner):
         self.result.findings.append(Finding(severity, code, where, message))
 
     def _target(self, prim: Usd.Prim, attr: Usd.Attribute | None = None) -> Usd.EditTarget | None:
-        target = self._context if self._context is not None else self.target_for(prim, attr)
+        if self._context is not None:
+            target = self._context
+        else:
+            target = self.target_for(prim, attr, self._anchor) if self._anchor is not None else self.target_for(prim,
+                                                                                                              attr)
         if isinstance(target, Finding):
             self.result.findings.append(target)
             self._refused = self._refused or target.message
@@ -156,11 +165,11 @@ class _Author(_UVPlanner):
         self._done[done_key] = (out, scale, tex_map.material)
         first_edit = len(self.edits)
         self._refused = None
-        self._context = None
+        self._context = self._anchor = None
         try:
             why = self._plan_texture(prim, tex_map, out, scale, stack_result)
         finally:
-            self._context = None
+            self._context = self._anchor = None
         why = why or self._refused
         if why:
             del self.edits[first_edit:]  # all of a map's edits or none
@@ -179,6 +188,10 @@ class _Author(_UVPlanner):
                 self.result.findings.append(context)
                 return context.message
             self._context = context
+        elif self.one_layer:  # the layer of the file value: every edit of this texture goes there
+            file_attr = self._file_attr(prim, shader, tex_map)
+            stack = file_attr.GetPropertyStack(Usd.TimeCode.Default()) if file_attr else []
+            self._anchor = stack[0].layer if stack else None
         if stack_result.wrap_only:  # already tileable: the source stays, it only has to repeat
             self._plan_wrap(prim, shader, kind)
             return None
