@@ -22,7 +22,7 @@ from rich.table import Table
 
 from seamless_usd.api import Options, process_paths
 from seamless_usd.authoring import WriteMode
-from seamless_usd.pipeline.options import REFINE_MODES, TILE_SIZES, ProgressEvent
+from seamless_usd.pipeline.options import MAX_SEED, REFINE_MODES, TILE_SIZES, ProgressEvent
 from seamless_usd.report import Report, StackStatus
 
 __all__ = ["add_arguments", "run"]
@@ -86,8 +86,8 @@ def _seed(text: str) -> int:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 0 <= value < 1 << 32:
-        raise argparse.ArgumentTypeError(f"must be from 0 to {(1 << 32) - 1}, got {value}")
+    if not 0 <= value <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"must be from 0 to {MAX_SEED}, got {value}")
     return value
 
 

@@ -69,6 +69,15 @@ class Options:
         for name, valid in (("refine", REFINE_MODES), ("tile_size", TILE_SIZES)):
             if getattr(self, name) not in valid:
                 raise ValueError(f"Options.{name} must be one of {', '.join(valid)}; got {getattr(self, name)!r}")
+        for name in ("materials", "force_materials"):  # one pattern given as itself, not as its letters
+            if isinstance(getattr(self, name), str):
+                object.__setattr__(self, name, (getattr(self, name),))
+        if not 0 <= int(self.seed) <= MAX_SEED:
+            raise UsageError(f"seed {self.seed}: must be from 0 to {MAX_SEED}")
+        for name in ("seeds", "iterations", "max_pixels"):  # the command line's rules, for the API and the hooks
+            value = getattr(self, name)
+            if value is not None and int(value) < 1:
+                raise UsageError(f"{name} {value}: must be at least 1")
 
     def with_(self, **changes: Any) -> "Options":
         return replace(self, **changes)
@@ -90,6 +99,10 @@ class Options:
                 value = value.value
             out[name] = value
         return out
+
+
+#: The largest seed torch and numpy both take.
+MAX_SEED = (1 << 32) - 1
 
 
 def check_device(name: str) -> None:

@@ -237,7 +237,7 @@ def _check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
         raise UsageError(f"-o/--output-layer {output}: the input {inputs[0].name} is edited in {kind}; name one")
 
 
-def process_paths(paths: Sequence[str | Path], options: Options | None = None) -> Report:
+def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | None = None) -> Report:
     """Process stages and MaterialX documents (files, folders, glob patterns); the report owns the exit code.
 
     Every input is scanned first (so progress knows the total), then stacks are processed one
@@ -246,7 +246,7 @@ def process_paths(paths: Sequence[str | Path], options: Options | None = None) -
     started = time.perf_counter()
     run = _new_run(options or Options())
     sources = []
-    inputs = expand_inputs(paths)
+    inputs = expand_inputs([paths] if isinstance(paths, (str, Path)) else paths)  # one path given as itself
     if run.options.output_layer is not None:
         modes = authoring_module().WriteMode
         if modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
@@ -319,7 +319,9 @@ def process_stage(stage, options: Options | None = None) -> Report:
 
     run.report.findings += [variant_not_composed(s) for s in stacks if s.selection]
     stacks = [s for s in stacks if not s.selection]
+    _check_patterns(run, [_Source(Path(label), "usd", scan, stacks)])
     run.blocked.update(blocked_stacks(scan, stacks, label))
+    run.blocked.update(instanced_stacks(stage, stacks, label))
     run.set_aside.update(set_aside_stacks(scan, stacks, label))
     unread_rows(run, scan, label)
     run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))

@@ -1,0 +1,46 @@
+"""The Python API and the hooks refuse what the command line refuses, before any work: option values no run can use,
+a single path given as a string, materials matching nothing; an open stage whose material is inside an instance is
+failed before a tile is written, as ``process_paths`` fails it."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+from pxr import Usd
+
+import seamless_usd
+from seamless_usd.errors import UsageError
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
+
+
+@pytest.mark.parametrize("values", [{"seed": -7}, {"seed": 1 << 40}, {"seeds": 0}, {"iterations": -5},
+                                    {"max_pixels": 0}])
+def test_option_values_no_run_can_use_are_refused(values):
+    with pytest.raises(UsageError):
+        seamless_usd.Options(preset="tiny", **values)
+
+
+def test_one_path_or_pattern_given_as_a_string_is_one(tmp_path):
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    options = seamless_usd.Options(preset="tiny", mode=seamless_usd.WriteMode.DRY_RUN, materials="/World/Looks/Brick")
+    assert options.materials == ("/World/Looks/Brick",)
+    report = seamless_usd.process_paths(str(tmp_path / "brick" / "scene.usda"), options)
+    assert report.sources == [str((tmp_path / "brick" / "scene.usda"))] and len(report.stacks) == 1
+
+
+def test_an_open_stage_refuses_unmatched_materials_and_instanced_stacks_before_any_tile(tmp_path):
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    stage = Usd.Stage.Open(str(tmp_path / "brick" / "scene.usda"))
+    with pytest.raises(UsageError, match="matches no material"):
+        seamless_usd.process_stage(stage, seamless_usd.Options(preset="tiny", materials=("/World/Looks/Brik*",)))
+    shot = Usd.Stage.CreateNew(str(tmp_path / "brick" / "shot.usda"))
+    prim = shot.DefinePrim("/Inst")
+    prim.GetReferences().AddReference("./scene.usda", "/World")
+    prim.SetInstanceable(True)
+    report = seamless_usd.process_stage(shot, seamless_usd.Options(preset="tiny", seeds=1))
+    assert [s.status.value for s in report.stacks] == ["failed"]
+    assert "inside an instance" in report.stacks[0].message and not (tmp_path / "brick" / "tileable").exists()
