@@ -226,8 +226,10 @@ def test_progress_logger_logs_stack_start_and_end_only():
     progress(SimpleNamespace(kind="stack-start", stack_id="brick", index=0, total=2))
     progress(SimpleNamespace(kind="train", stack_id="brick", index=0, total=2))
     progress(SimpleNamespace(kind="stack-done", stack_id="brick", index=0, total=2,
-                             detail=SimpleNamespace(status=SimpleNamespace(value="passed"))))
-    assert [ln.text for ln in got] == ["seamless-usd: stack 1/2: brick", "seamless-usd: stack 1/2 passed"]
+                             detail=SimpleNamespace(passed=True)))  # the job's outcome
+    progress(SimpleNamespace(kind="stack-done", stack_id="wood", index=1, total=2, detail=ValueError("broken")))
+    assert [ln.text for ln in got] == ["seamless-usd: stack 1/2: brick", "seamless-usd: stack 1/2 passed",
+                                       "seamless-usd: stack 2/2 failed"]
 
 
 def test_progress_logger_forwards_every_event():

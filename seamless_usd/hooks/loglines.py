@@ -36,6 +36,14 @@ def _value(x: object) -> str:
     return str(getattr(x, "value", x))
 
 
+def _done(result: object) -> str:
+    """A finished stack's result (the job's outcome, or the error it ended in) in a word or two."""
+    if isinstance(result, Exception):
+        return "failed"
+    passed = getattr(result, "passed", None)
+    return "done" if passed is None else "passed" if passed else "not passed"
+
+
 def report_lines(report: object) -> list[LogLine]:
     """A report as DCC log lines: one summary line, one per stack, one per finding.
 
@@ -96,8 +104,8 @@ def progress_logger(
         if kind == "stack-start":
             emit(LogLine(Level.INFO, f"{PREFIX}: stack {event.index + 1}/{event.total}: {event.stack_id}"))
         elif kind == "stack-done":
-            status = _value(getattr(getattr(event, "detail", None), "status", "done"))
-            emit(LogLine(Level.INFO, f"{PREFIX}: stack {event.index + 1}/{event.total} {status}"))
+            emit(LogLine(Level.INFO, f"{PREFIX}: stack {event.index + 1}/{event.total} "
+                                     f"{_done(getattr(event, 'detail', None))}"))
 
     return progress
 

@@ -19,7 +19,8 @@ class ProgressEvent:
     stack_id: str
     index: int  # 0-based index of the stack among the stacks to process
     total: int  # stacks to process in this run
-    detail: Any = None  # synthesis progress record for "train"/"sample"; a StackReport for "stack-done"
+    detail: Any = None  # synthesis progress record for "train"/"sample"; for "stack-done" the job's result (its
+    #                     outcome, with ``passed``, or the exception it ended in)
 
 
 #: Values of ``Options.refine`` and ``Options.tile_size`` (the CLI's choices); ``TILE_SIZES`` is also

@@ -163,7 +163,7 @@ def on_export(export_context, settings: HookSettings) -> bool:
     wm.progress_begin(0, 1000)  # the export blocks the UI while stacks train: show where it is
 
     def progress(event) -> None:
-        done = event.index + (1 if event.kind in ("stack-done", "write") else 0)
+        done = event.index + (1 if event.kind == "stack-done" else 0)
         wm.progress_update(int(1000 * done / max(event.total, 1)))
 
     try:
