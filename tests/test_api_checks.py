@@ -44,3 +44,28 @@ def test_an_open_stage_refuses_unmatched_materials_and_instanced_stacks_before_a
     report = seamless_usd.process_stage(shot, seamless_usd.Options(preset="tiny", seeds=1))
     assert [s.status.value for s in report.stacks] == ["failed"]
     assert "inside an instance" in report.stacks[0].message and not (tmp_path / "brick" / "tileable").exists()
+
+
+def test_an_open_stage_keeps_none_of_a_stacks_edits_when_one_of_its_maps_cannot_be_composed(tmp_path):
+    """The edit target is a sublayer and the root layer holds a stronger file value for the colour map: that map's
+    edit is not composed, so none of the stack's edits are kept (its normal and roughness tiles with a UV scale the
+    colour map does not get would no longer line up), and the stack fails saying so."""
+    from pxr import Sdf
+
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene = tmp_path / "brick" / "scene.usda"
+    root = Sdf.Layer.CreateNew(str(tmp_path / "brick" / "root.usda"))
+    root.subLayerPaths.append("./scene.usda")
+    root.Save()
+    stage = Usd.Stage.Open(root)
+    stage.GetPrimAtPath("/World/Looks/Brick/Albedo").GetAttribute("inputs:file").Set(
+        Sdf.AssetPath("../textures/brick_albedo.png"))
+    sub = Sdf.Layer.Find(str(scene))
+    before = sub.ExportToString()
+    stage.SetEditTarget(Usd.EditTarget(sub))
+    report = seamless_usd.process_stage(stage, seamless_usd.Options(preset="tiny", seeds=1))
+    [stack] = report.stacks
+    assert stack.status.value == "failed" and "stronger value" in stack.message
+    assert sub.ExportToString() == before  # none of its edits kept
+    assert not stage.GetPrimAtPath("/World/Looks/Brick/SeamlessUV")

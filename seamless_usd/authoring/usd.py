@@ -187,10 +187,40 @@ def author_usd_stage(
     # variant or a reference is used as it is)
     plain = target.GetMapFunction().isIdentity
     author.plan_all(results, lambda prim, prop=None: target, variant_layer=layer if plain else None)
+    author.owners += [""] * (len(author.edits) - len(author.owners))
+    layers = {edit.target.GetLayer() for edit in author.edits}
+    before = {lay: lay.ExportToString() for lay in layers} if not result.dry_run else {}
+    planned = len(result.plan)
     author.apply()
     if not result.dry_run:
         _check_composed(stage, author.edits, results, result)
+        _keep_whole_stacks(author, results, result, before, planned)
     return result
+
+
+def _keep_whole_stacks(author, results: Sequence[StackResult], result: AuthoringResult, before: dict, planned: int
+                       ) -> None:
+    """A stack one of whose maps' edits the stage does not compose keeps none of its edits (its maps would no
+    longer line up): the layers go back to what they held and the other stacks' edits are made again."""
+    unwritten = result.unwritten_nodes()
+    failed = {r.stack.id for r in results for m in r.maps if prim_ref(m.map.node.strip("<>")) in unwritten}
+    if not failed:
+        return
+    for layer, text in before.items():
+        layer.ImportFromString(text)
+    author.edits = [e for e, owner in zip(author.edits, author.owners) if owner not in failed]
+    author.owners = [o for o in author.owners if o not in failed]
+    del result.plan[planned:]
+    result.edited_prims = [p for p in result.edited_prims if p not in {
+        prim_ref(m.map.node.strip("<>")) for r in results if r.stack.id in failed for m in r.maps}]
+    author.apply()
+    for r in results:
+        if r.stack.id in failed:
+            for m in r.maps:
+                node = prim_ref(m.map.node.strip("<>"))
+                if node not in result.unwritten_nodes():
+                    result.not_written.append((node, "another map of its stack cannot be edited here, so none of "
+                                                     "its edits are kept (its maps would no longer line up)"))
 
 
 def _earlier_layer(out: Path, stage_path: Path, made_from: str) -> tuple[Sdf.Layer, list[str]]:

@@ -44,6 +44,7 @@ class _Author(_UVPlanner):
         self._uv_updates: dict[tuple, tuple[float, float]] = {}  # (marked node, selection) -> total scale
         self.target_for = None
         self.one_layer = False
+        self.owners: list[str] = []  # the stack id of each planned edit, in order ("" for one of no map's)
         self._anchor: Sdf.Layer | None = None  # one_layer: the layer of the current texture's file value
         self.planned_maps = 0
         self.variant_layer: Sdf.Layer | None = None  # new-layer mode: edits follow the opinion's variant
@@ -92,6 +93,7 @@ class _Author(_UVPlanner):
                 if map_result.map.origin is Origin.USD:  # MaterialX documents: author_mtlx
                     self.planned_maps += 1
                     why = self._plan_map(map_result, stack_result)
+                    self.owners += [stack_result.stack.id] * (len(self.edits) - len(self.owners))
                     if why:
                         self.result.not_written.append((prim_ref(map_result.map.node.strip("<>")), why))
         if composed:
