@@ -64,7 +64,7 @@ def test_an_open_stage_keeps_none_of_a_stacks_edits_when_one_of_its_maps_cannot_
     sub = Sdf.Layer.Find(str(scene))
     before = sub.ExportToString()
     stage.SetEditTarget(Usd.EditTarget(sub))
-    report = seamless_usd.process_stage(stage, seamless_usd.Options(preset="tiny", seeds=1))
+    report = seamless_usd.process_stage(stage, seamless_usd.Options(preset="tiny", seeds=1, max_size=128))
     [stack] = report.stacks
     assert stack.status.value == "failed" and "stronger value" in stack.message
     assert sub.ExportToString() == before  # none of its edits kept

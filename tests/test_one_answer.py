@@ -128,8 +128,8 @@ def _process(tmp_path: Path, capsys, scene: str, names: tuple[str, ...]) -> tupl
     samples = Path(__file__).resolve().parents[1] / "sample_assets"
     for name in names:
         shutil.copytree(samples / name, tmp_path / name)
-    code = main(["process", str(tmp_path / scene), "--preset", "tiny", "--seeds", "1", "--cache-dir",
-                 str(tmp_path / "cache"), "--json"])
+    code = main(["process", str(tmp_path / scene), "--preset", "tiny", "--seeds", "1", "--max-size", "128",
+                 "--cache-dir", str(tmp_path / "cache"), "--json"])
     [stack] = json.loads(capsys.readouterr().out)["stacks"]
     return tmp_path / scene, stack, code
 
@@ -189,8 +189,8 @@ def test_output_layer_names_the_new_materialx_document_judged_against_its_record
     assert main(["process", str(source), str(tmp_path / "mtlx" / "prefixed.mtlx"), "-o", str(tmp_path / "n.mtlx")]) == 2
     capsys.readouterr()
     new = tmp_path / "out" / "new.mtlx"
-    code = main(["process", str(source), "-o", str(new), "--preset", "tiny", "--seeds", "1", "--cache-dir",
-                 str(tmp_path / "cache"), "--json"])
+    code = main(["process", str(source), "-o", str(new), "--preset", "tiny", "--seeds", "1", "--max-size", "128",
+                 "--cache-dir", str(tmp_path / "cache"), "--json"])
     report = json.loads(capsys.readouterr().out)
     assert report["layers_written"] == [str(new)] and not source.with_name("tiled.seamless.mtlx").exists()
     doc = mx.createDocument()

@@ -66,8 +66,8 @@ def test_colour_and_alpha_of_one_file_read_by_two_nodes_get_a_tile_each(tmp_path
     out.close()
     scene = tmp_path / "leaf.usda"
     scene.write_text(SCENE)
-    code = main(["process", str(scene), "--preset", "tiny", "--seeds", "1", "--cache-dir", str(tmp_path / "cache"),
-                 "--json"])
+    code = main(["process", str(scene), "--preset", "tiny", "--seeds", "1", "--max-size", "128", "--cache-dir",
+                 str(tmp_path / "cache"), "--json"])
     [stack] = json.loads(capsys.readouterr().out)["stacks"]
     outputs = {m["roles"][0]: Path(m["output"]) for m in stack["maps"]}
     assert len(set(outputs.values())) == 2, outputs  # one tile each
