@@ -167,32 +167,38 @@ def _alone(item: CheckItem, files: list) -> None:
     item.thumbnail = (uri, size, scale * reading.shape[1] / verdict.size[1])  # thumbnail px per full-size texel
 
 
-def _picture_groups(pictures: list[Path]) -> list[list[Path]]:
-    """The pictures as judged, each a list: a tile this tool wrote first, with the other tiles of its stack that its
-    file names (:mod:`seamless_usd.imaging.tag`) and that lie beside it (a stack is judged together, as ``process``
-    judged it, and once when several of its tiles are named); any other picture alone."""
+def _picture_groups(pictures: list[Path]) -> list[tuple[list[Path], list[dict | None]]]:
+    """The pictures as judged, each (files, their records): a tile this tool wrote first, with the other tiles of
+    its stack that its file names (:mod:`seamless_usd.imaging.tag`) and that lie beside it (a stack is judged
+    together, as ``process`` judged it, and once when several of its tiles are named); any other picture alone.
+    Each file's record is read once."""
     from seamless_usd.imaging.tag import read_tag
+
+    tags: dict[Path, dict | None] = {}
+
+    def tag(q: Path) -> dict | None:
+        if q not in tags:
+            tags[q] = read_tag(q) if q.is_file() else None
+        return tags[q]
 
     groups, seen = [], set()
     for p in pictures:
-        record = read_tag(p) if p.is_file() else None
-        stack = [p.parent / str(n) for n in (record or {}).get("stack", [])]
+        stack = [p.parent / str(n) for n in (tag(p) or {}).get("stack", [])]
         files = [p] + [q for q in stack if q.name != p.name and q.is_file()]
         key = frozenset(_real(q) for q in files)
         if key not in seen:
             seen.add(key)
-            groups.append(files)
+            groups.append((files, [tag(q) for q in files]))
     return groups
 
 
-def _judge_picture(files: list[Path], named: frozenset = frozenset()) -> list[CheckItem]:
-    """Pictures judged: tiles this tool wrote whose files record their sources (``files``: a tile, then the other
-    tiles of its stack beside it) together against those sources, as ``process`` judged them; a picture that
-    records nothing, or a tile whose source is gone or has changed since, against itself, saying why. Of a stack's
-    tiles, those named or found (``named``, as :func:`_real` paths) have items, the first file always."""
-    from seamless_usd.imaging.tag import read_tag
-
-    records = [read_tag(f) for f in files]
+def _judge_picture(group: tuple[list[Path], list[dict | None]], named: frozenset = frozenset()) -> list[CheckItem]:
+    """Pictures judged (``group``: files and their records, :func:`_picture_groups`): tiles this tool wrote whose
+    files record their sources (a tile, then the other tiles of its stack beside it) together against those
+    sources, as ``process`` judged them; a picture that records nothing, or a tile whose source is gone or has
+    changed since, against itself, saying why. Of a stack's tiles, those named or found (``named``, as
+    :func:`_real` paths) have items, the first file always."""
+    files, records = group
     made, notes = zip(*(recorded_source(f, r) if r else (None, "") for f, r in zip(files, records)))
     wanted = [k == 0 or _real(f) in named for k, f in enumerate(files)]
     together = [k for k, m in enumerate(made) if m]
@@ -294,7 +300,7 @@ def _unread_item(scene: Path, material: str, skipped: list, maps: list[str]) -> 
                      error=f"not judged: a texture of it cannot be read: {files}; fix or restore it and check again")
 
 
-def _judged_pictures(pictures: list[list[Path]], jobs: int, named: frozenset) -> Iterator[list[CheckItem]]:
+def _judged_pictures(pictures: list[tuple], jobs: int, named: frozenset) -> Iterator[list[CheckItem]]:
     """The items of each group of pictures (:func:`_picture_groups`; ``named``: the pictures named or found, as
     :func:`_real` paths), in order; ``jobs`` > 1 judges them in that many worker processes (a picture is judged in
     numpy alone, one core each)."""
@@ -367,7 +373,7 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
             done += 1
             report.unreadable.append(f"{asset_ref(picture)}: {_missing(picture)}")
     groups = _picture_groups(found)  # a stack's tiles are judged together
-    for files, items in zip(groups, _judged_pictures(groups, jobs, frozenset(map(_real, found)))):
+    for (files, _), items in zip(groups, _judged_pictures(groups, jobs, frozenset(map(_real, found)))):
         emit(items[0].name)
         done += len(files)
         report.items += items
