@@ -30,7 +30,10 @@ def moving_mean(a: np.ndarray, length: int, periodic: bool, step: int = 1) -> np
     rows = a.shape[0]
     if step > 1 and length % step == 0 and (rows % step == 0 or not periodic) and rows >= length:
         # every window is whole groups of ``step`` rows: sum the groups first, a ``step`` times shorter cumsum
-        groups = a[: rows - rows % step].reshape((rows // step, step) + a.shape[1:]).sum(1, dtype=np.float64)
+        whole = rows - rows % step
+        groups = np.array(a[0:whole:step], dtype=np.float64)  # the rows of each group added one by one
+        for k in range(1, step):
+            groups += a[k:whole:step]
         return moving_mean(groups, length // step, periodic) * (1 / step)
     if periodic:
         a = np.concatenate([a, a[: length - 1]], axis=0)
@@ -41,8 +44,12 @@ def moving_mean(a: np.ndarray, length: int, periodic: bool, step: int = 1) -> np
 
 
 def _square_norm(a: np.ndarray) -> np.ndarray:
-    """Sum of squares over the last axis (faster than ``(a ** 2).sum(-1)`` for a few channels)."""
-    return np.einsum("...c,...c->...", a, a)
+    """Sum of squares over the last axis, channel by channel (a few channels: three times faster than
+    ``einsum`` or ``(a ** 2).sum(-1)``)."""
+    out = np.square(a[..., 0])
+    for k in range(1, a.shape[-1]):
+        out += np.square(a[..., k])
+    return out
 
 
 def _column_sums(a: np.ndarray) -> np.ndarray:
@@ -63,24 +70,28 @@ def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> 
     h, w, channels = u.shape
     if periodic:
         ext = np.concatenate([u[:, w - REACH:], u, u[:, :REACH]], axis=1)
-        lines = np.arange(w) + REACH
+        first, count = REACH, w
     else:
         ext = u
-        lines = np.arange(REACH, w - REACH + 1)
+        first, count = REACH, w - 2 * REACH + 1
+
+    def at(a: np.ndarray, shift: int) -> np.ndarray:  # columns ``lines + shift`` of ``a``, as a view
+        return a[:, first + shift: first + shift + count]
+
     feats, within_all = [], []
     for d in DISTANCES:
         sq = moving_mean(_square_norm(ext[:, d:] - ext[:, :-d]), length, periodic, step)  # pair (x, x + d)
         # pairs (c - j, c - j + d), j = 1..d, cross the line at c; (c - j - d, c - j) lie on its left and
         # (c + j - 1, c + j - 1 + d) on its right: three windows of d pair positions
         cs = _column_sums(sq)
-        straddle = (cs[:, lines] - cs[:, lines - d]) / d
-        within = 0.5 * ((cs[:, lines - d] - cs[:, lines - 2 * d]) + (cs[:, lines + d] - cs[:, lines])) / d
+        straddle = (at(cs, 0) - at(cs, -d)) / d
+        within = 0.5 * ((at(cs, -d) - at(cs, -2 * d)) + (at(cs, d) - at(cs, 0))) / d
         feats.append(np.log(straddle + _EPS) - np.log(within + _EPS))
         within_all.append(within)
     for within in within_all:  # local contrast against the image's own
         feats.append(np.log(within + _EPS) - np.log(np.median(within) + _EPS))
-    step1 = ext[:, lines] - ext[:, lines - 1]  # (H, lines, C)
-    mean_step = moving_mean(step1.reshape(h, -1), length, periodic, step).reshape(-1, len(lines), channels)
+    step1 = at(ext, 0) - at(ext, -1)  # (H, lines, C)
+    mean_step = moving_mean(step1.reshape(h, -1), length, periodic, step).reshape(-1, count, channels)
     energy = moving_mean(_square_norm(step1), length, periodic, step)
     feats.append(_square_norm(mean_step) / (energy + _EPS))  # 1: one coherent step along the stretch
     return np.stack(feats, axis=-1)
