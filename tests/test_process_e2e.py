@@ -159,7 +159,7 @@ def test_second_run_on_the_output_is_clean(processed_copy, model_cache, capsys):
     first_scale = processed_copy["payload"]["stacks"][0]["uv_scale"]
     del first_stage
     before = layer.read_bytes()
-    code = _process(str(layer), "--in-place", "--force", "--json", cache=model_cache)
+    code = _process(str(layer), "--in-place", "--force", "--max-size", "128", "--refine", "off", "--json", cache=model_cache)
     payload = json.loads(capsys.readouterr().out)
     _assert_all_written(code, payload)
     [stack] = payload["stacks"]
