@@ -80,16 +80,23 @@ def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> 
 
     feats, within_all = [], []
     for d in DISTANCES:
-        sq = moving_mean(_square_norm(ext[:, d:] - ext[:, :-d]), length, periodic, step)  # pair (x, x + d)
         # pairs (c - j, c - j + d), j = 1..d, cross the line at c; (c - j - d, c - j) lie on its left and
-        # (c + j - 1, c + j - 1 + d) on its right: three windows of d pair positions
+        # (c + j - 1, c + j - 1 + d) on its right: three windows of d pair positions, read from the columns
+        # c - 2d .. c + 2d only (a narrow image, such as the classifier's stacked joins, is mostly outside them)
+        near = ext[:, first - 2 * d: first + count + 2 * d]
+        sq = moving_mean(_square_norm(near[:, d:] - near[:, :-d]), length, periodic, step)  # pair (x, x + d)
         cs = _column_sums(sq)
-        straddle = (at(cs, 0) - at(cs, -d)) / d
-        within = 0.5 * ((at(cs, -d) - at(cs, -2 * d)) + (at(cs, d) - at(cs, 0))) / d
-        feats.append(np.log(straddle + _EPS) - np.log(within + _EPS))
-        within_all.append(within)
-    for within in within_all:  # local contrast against the image's own
-        feats.append(np.log(within + _EPS) - np.log(np.median(within) + _EPS))
+
+        def window(shift: int) -> np.ndarray:  # cs at the lines shifted by ``shift``
+            return cs[:, 2 * d + shift: 2 * d + shift + count]
+
+        straddle = (window(0) - window(-d)) / d
+        within = 0.5 * ((window(-d) - window(-2 * d)) + (window(d) - window(0))) / d
+        log_within = np.log(within + _EPS)
+        feats.append(np.log(straddle + _EPS) - log_within)
+        within_all.append((within, log_within))
+    for within, log_within in within_all:  # local contrast against the image's own
+        feats.append(log_within - np.log(np.median(within) + _EPS))
     step1 = at(ext, 0) - at(ext, -1)  # (H, lines, C)
     mean_step = moving_mean(step1.reshape(h, -1), length, periodic, step).reshape(-1, count, channels)
     energy = moving_mean(_square_norm(step1), length, periodic, step)
