@@ -229,12 +229,14 @@ def test_in_place_leaves_a_layer_marked_read_only_alone(assets, model_cache, cap
     assert not (scene.parent / "tileable").exists()  # no tile that no layer would reference
 
 
-def test_dry_run_writes_nothing(assets, model_cache, capsys):
+def test_dry_run_writes_nothing(assets, tmp_path, capsys):
     before = _hashes(assets)
-    code = _process(str(assets / "brick" / "scene.usda"), "--dry-run", "--json", cache=model_cache)
+    cache = tmp_path / "cache"  # nor in the cache: the triage's figures are read from it, not added to it
+    code = _process(str(assets / "brick" / "scene.usda"), "--dry-run", "--json", cache=cache)
     payload = json.loads(capsys.readouterr().out)
     assert code == 0
     assert _hashes(assets) == before
+    assert not [p for p in cache.rglob("*") if p.is_file()]
     assert [s["status"] for s in payload["stacks"]] == ["planned"]
     assert payload["plan"], "a dry run lists the edits it would make"
 

@@ -86,8 +86,8 @@ def _mtlx_target(target: str) -> tuple[str, bool]:
 class _Scan:
     """Accumulates one scan over any number of stages and documents."""
 
-    def __init__(self, triage_dir: Path | None = None) -> None:
-        self.triage = TriageMemo(triage_dir, repr(THRESHOLDS))  # pixel figures of the triage, by content
+    def __init__(self, triage_dir: Path | None = None, keep_triage: bool = True) -> None:
+        self.triage = TriageMemo(triage_dir, repr(THRESHOLDS), keep_triage)  # pixel figures of the triage, by content
         self.result = ScanResult()
         self.uses: list[TextureUse] = []
         self.cache = HeaderCache()
@@ -198,23 +198,24 @@ class _Scan:
         return self.result
 
 
-def scan_stage(stage: Usd.Stage, triage_dir: Path | None = None) -> ScanResult:
+def scan_stage(stage: Usd.Stage, triage_dir: Path | None = None, keep_triage: bool = True) -> ScanResult:
     """Scan an open stage (possibly in memory, as a DCC export hook has it). ``triage_dir``: where the
-    triage's pixel figures are kept between runs (see ``triagememo.py``); None keeps them for this scan only.
+    triage's pixel figures are kept between runs (see ``triagememo.py``); None keeps them for this scan only;
+    ``keep_triage`` False reads the figures kept there and adds none (a dry run).
 
     >>> from pxr import Usd
     >>> scan_stage(Usd.Stage.CreateInMemory()).stacks
     []
     """
-    scan = _Scan(triage_dir)
+    scan = _Scan(triage_dir, keep_triage)
     layer = stage.GetRootLayer()
     scan.add_stage(stage, layer.realPath or layer.identifier)
     return scan.finish()
 
 
-def scan_mtlx(path: str | Path, triage_dir: Path | None = None) -> ScanResult:
-    """Scan one MaterialX document (``triage_dir``: as for :func:`scan_stage`)."""
-    scan = _Scan(triage_dir)
+def scan_mtlx(path: str | Path, triage_dir: Path | None = None, keep_triage: bool = True) -> ScanResult:
+    """Scan one MaterialX document (``triage_dir``, ``keep_triage``: as for :func:`scan_stage`)."""
+    scan = _Scan(triage_dir, keep_triage)
     scan.add_document(path)
     return scan.finish()
 

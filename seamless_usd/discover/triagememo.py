@@ -30,11 +30,13 @@ TRIAGE_REVISION = 3  # 3: a normal map read as its vectors, with its scale and b
 
 
 class TriageMemo:
-    """Figures by (what was measured, the maps' content, the settings); ``folder`` None keeps them in memory."""
+    """Figures by (what was measured, the maps' content, the settings); ``folder`` None keeps them in memory;
+    ``keep`` False reads the figures already in ``folder`` and writes none (a dry run writes nothing)."""
 
-    def __init__(self, folder: Path | None = None, settings: str = ""):
+    def __init__(self, folder: Path | None = None, settings: str = "", keep: bool = True):
         self.folder = None if folder is None else Path(folder)
         self.settings = settings
+        self.keep = keep
         self._values: dict[str, Any] = {}
         self._digests: dict[tuple, str] = {}
 
@@ -74,7 +76,7 @@ class TriageMemo:
                 pass
         value = json.loads(json.dumps(compute()))  # the same form whether measured now or read back
         self._values[key] = value
-        if path is not None:
+        if path is not None and self.keep:
             try:
                 path.parent.mkdir(parents=True, exist_ok=True)
                 atomic_write_text(path, json.dumps({"kind": kind, "value": value}))

@@ -95,18 +95,19 @@ class _Source:
     instanced: dict[tuple[str, str], str] = field(default_factory=dict)  # stacks inside instances, with why
 
 
-def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = None) -> _Source:
+def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = None, keep_triage: bool = True
+                 ) -> _Source:
     """Open and scan one input; InputError when it cannot be read. ``triage_dir`` keeps the triage's pixel
-    figures between runs."""
+    figures between runs (``keep_triage`` False: only reads them)."""
     if not path.exists():
         raise InputError(f"{asset_ref(path)} does not exist")
     suffix = path.suffix.lower()
     if suffix in MTLX_SUFFIXES:
-        scan, kind = scan_mtlx(path, triage_dir), "mtlx"
+        scan, kind = scan_mtlx(path, triage_dir, keep_triage), "mtlx"
     elif suffix in USD_SUFFIXES:
         authoring_module()  # registers the schema plugin before the stage is opened
         stage = open_stage(path)
-        scan, kind = scan_stage(stage, triage_dir), "usd"
+        scan, kind = scan_stage(stage, triage_dir, keep_triage), "usd"
     else:
         raise InputError(f"{asset_ref(path)} is neither a USD stage (.usd/.usda/.usdc/.usdz) nor a .mtlx document")
     stacks = select_stacks(scan, patterns)
@@ -205,9 +206,10 @@ def _new_run(options: Options) -> Run:
     return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
 
 
-def _triage_dir(options: Options) -> Path:
-    """Where the triage's pixel figures are kept between runs: beside the trained stacks."""
-    return StackCache(options.cache_dir).root / "triage"
+def _triage(options: Options) -> tuple[Path, bool]:
+    """Where the triage's pixel figures are kept between runs (beside the trained stacks), and whether this run
+    adds to them (a dry run writes nothing)."""
+    return StackCache(options.cache_dir).root / "triage", options.mode is not authoring_module().WriteMode.DRY_RUN
 
 
 def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
@@ -256,7 +258,7 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
     for path in inputs:
         run.report.sources.append(str(path))
         try:
-            src = _scan_source(path, run.options.materials, _triage_dir(run.options))
+            src = _scan_source(path, run.options.materials, *_triage(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
             run.blocked.update(src.instanced)
             run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
@@ -310,7 +312,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     source = None if root.anonymous else Path(root.realPath)
     label = root.identifier
     run.report.sources.append(label)
-    scan = scan_stage(stage, _triage_dir(run.options))
+    scan = scan_stage(stage, *_triage(run.options))
     run.report.findings += scan.findings
     run.report.variants += [v.to_dict() for v in scan.variants]
     stacks = select_stacks(scan, run.options.materials)
