@@ -1,8 +1,8 @@
 """seamless-usd: make USD / MaterialX material textures seamlessly tileable with SeamlessGAN.
 
-The public API (see :mod:`seamless_usd.api`): :func:`scan`, :func:`process_stage`,
-:func:`process_paths`, :class:`Options`, :class:`WriteMode`, :class:`Report`. Names are loaded on
-first use so that ``import seamless_usd`` stays light (no torch, no pxr) for DCC start-up.
+The public API (see :mod:`seamless_usd.api`): :func:`scan`, :func:`check`, :func:`process_stage`,
+:func:`process_paths`, :class:`Options`, :class:`WriteMode`, :class:`Report`, :class:`CheckReport`. Names are
+loaded on first use so that ``import seamless_usd`` stays light (no torch, no pxr) for DCC start-up.
 """
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ from seamless_usd.version import __version__
 # first imports torch (the verdict imports it only when it resizes a map); an explicit setting always wins.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-_API = {"scan", "process_stage", "process_paths", "Options", "ProgressEvent", "Report", "StackReport", "StackStatus", "WriteMode"}
+_API = {"scan", "check", "process_stage", "process_paths", "Options", "ProgressEvent", "Report", "StackReport",
+        "StackStatus", "CheckReport", "CheckItem", "WriteMode"}
 
 __all__ = ["__version__", *sorted(_API)]
 

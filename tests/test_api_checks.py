@@ -69,3 +69,33 @@ def test_an_open_stage_keeps_none_of_a_stacks_edits_when_one_of_its_maps_cannot_
     assert stack.status.value == "failed" and "stronger value" in stack.message
     assert sub.ExportToString() == before  # none of its edits kept
     assert not stage.GetPrimAtPath("/World/Looks/Brick/SeamlessUV")
+
+
+def _answers(payload: dict) -> list[tuple]:
+    return [(i["name"], i["passed"], i["verdict"].get("strongest"), i["error"], i["note"]) for i in payload["items"]]
+
+
+def test_check_in_python_gives_the_command_lines_answer_and_refuses_what_is_not_a_path(tmp_path, capsys):
+    import json
+
+    from seamless_usd_cli.main import main
+
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene, picture = tmp_path / "brick" / "scene.usda", tmp_path / "textures" / "wood_tileable.jpg"
+    report = seamless_usd.check([scene, str(picture)])
+    code = main(["check", "--json", str(scene), str(picture)])
+    payload = json.loads(capsys.readouterr().out)
+    assert report.exit_code == code == payload["exit_code"]
+    assert _answers(report.to_dict()) == _answers(payload) and len(report.items) == 2
+    assert [i.passed for i in report.items] == [False, True]  # the brick photo does not tile; the wood made to does
+    one = seamless_usd.check(str(picture))  # one path given as a string is one path
+    assert [i.name for i in one.items] == [report.items[1].name]
+    for bad in (None, 3, [scene, None]):
+        with pytest.raises(UsageError, match="takes a path"):
+            seamless_usd.check(bad)
+    with pytest.raises(UsageError, match="at least 1"):
+        seamless_usd.check(scene, jobs=0)
+    for bad in (None, 3):
+        with pytest.raises(UsageError, match="takes an open Usd.Stage"):
+            seamless_usd.scan(bad)
