@@ -386,3 +386,23 @@ def test_importing_the_hooks_pulls_in_no_dcc_pxr_or_torch():
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_a_stack_that_failed_is_logged_once_not_again_as_its_finding(tmp_path):
+    """A material left alone because one of its files cannot be read: its stack line says why, and the error finding
+    saying the same of the same material is not logged a second time (the file's own finding still is)."""
+    import shutil
+
+    import seamless_usd
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    (tmp_path / "textures" / "brick_roughness.png").write_bytes(b"\x89PNG\r\n\x1a\n not really a png")
+    report = seamless_usd.process_paths(tmp_path / "brick" / "scene.usda", seamless_usd.Options(
+        preset="tiny", mode=seamless_usd.WriteMode.DRY_RUN, cache_dir=tmp_path / "cache"))
+    [stack] = report.stacks
+    assert stack.status.value == "failed" and any(f.message == stack.message for f in report.findings)
+    lines = [ln.text for ln in common.report_lines(report)]
+    assert sum(stack.message in text for text in lines) == 1, lines
+    assert any("brick_roughness.png" in text and "cannot read the image header" in text for text in lines)

@@ -62,9 +62,12 @@ def report_lines(report: object) -> list[LogLine]:
             f"{PREFIX}: {len(stacks)} stack(s): {parts} (exit code {exit_code})",
         )
     ]
+    said: set[tuple[str, str]] = set()  # (material, message) of each stack line: a finding saying the same is not
+    #                                     logged again
     for s in stacks:
         status = _value(s.status)
         material = str(s.material)
+        said.add((material, str(getattr(s, "message", ""))))
         text = f"{PREFIX}: {status}: {material if material.startswith('<') else f'<{material}>'}"
         if getattr(s, "uv_scale", None):
             text += " uv scale ({:.4g}, {:.4g})".format(*s.uv_scale)
@@ -75,6 +78,8 @@ def report_lines(report: object) -> list[LogLine]:
             if getattr(m, "output", None):
                 lines.append(LogLine(Level.INFO, f"{PREFIX}:   @{m.asset}@ -> @{m.output}@"))
     for f in getattr(report, "findings", []):
+        if (str(f.where), str(f.message)) in said:
+            continue
         level = _SEVERITY_LEVEL.get(_value(f.severity), Level.WARNING)
         # Warnings and errors carry their level already (LogLine.__str__); skipped items say so.
         text = f"{PREFIX}: {f}" if level is Level.INFO else f"{PREFIX}: {f.where}: {f.message}"
