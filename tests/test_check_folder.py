@@ -197,3 +197,27 @@ def test_links_that_loop_are_named_and_the_rest_judged(tmp_path, capsys):
     assert [Path(i.name).name for i in report.items] == ["wood.png"]
     assert len(report.unreadable) == 2 and all("loop of links" in u for u in report.unreadable)
     assert main(["check", str(lib / "x.png")]) == 2 and "loop of links" in capsys.readouterr().out
+
+
+def test_a_folder_walk_for_check_takes_each_scene_as_processed_and_one_for_process_as_made():
+    """``check`` walks a processed library as it now is: a stage's new layer (which composes the stage) instead of
+    the stage, a document's new document instead of the document; ``.bak`` copies and stages in ``tileable``
+    folders never. ``process`` and ``scan`` walk the sources, leaving every output out."""
+    import tempfile
+
+    from seamless_usd.pipeline.inputs import expand_inputs
+
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        (root / "a").mkdir()
+        (root / "a" / "scene.usda").write_text('#usda 1.0\ndef Xform "World" {}\n')
+        (root / "a" / "scene.seamless.usda").write_text('#usda 1.0\n(\n    subLayers = [@./scene.usda@]\n)\n')
+        (root / "a" / "scene.usda.bak").write_text('#usda 1.0\n')
+        (root / "b").mkdir()
+        (root / "b" / "doc.mtlx").write_text('<?xml version="1.0"?>\n<materialx version="1.38"/>\n')
+        (root / "b" / "doc.seamless.mtlx").write_text('<?xml version="1.0"?>\n<materialx version="1.38"/>\n')
+        (root / "b" / "other.mtlx").write_text('<?xml version="1.0"?>\n<materialx version="1.38"/>\n')
+        names = lambda found: sorted(str(p.relative_to(root)) for p in found)  # noqa: E731
+        assert names(expand_inputs([root], outputs=True)) == ["a/scene.seamless.usda", "b/doc.seamless.mtlx",
+                                                              "b/other.mtlx"]
+        assert names(expand_inputs([root])) == ["a/scene.usda", "b/doc.mtlx", "b/other.mtlx"]

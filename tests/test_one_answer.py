@@ -109,6 +109,9 @@ def test_a_processed_stage_gets_one_answer_from_process_scan_and_check(tmp_path,
     [checked] = check_paths([written]).items
     assert checked.verdict["reference"] == "source"
     assert (stack["status"] == "passed") == (scanned.intent == "already-tileable") == checked.passed == (code == 0)
+    # the folder checked after the run: the stage as the run left it (its new layer), not the photo it was made from
+    [in_folder] = check_paths([tmp_path / "brick"]).items
+    assert Path(in_folder.source) == written and in_folder.verdict == checked.verdict
     assert "seamless:passed" in scanned.intent_reason
     # cut from its source with no network trained: said so, and no Q figures or model hash recorded
     assert stack["origin"] == "cut" and not stack["model_hash"]

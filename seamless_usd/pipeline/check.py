@@ -135,7 +135,7 @@ def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path], list[P
     for item in paths:
         p = Path(item)
         if p.is_dir():
-            found = expand_inputs([p])
+            found = expand_inputs([p], outputs=True)  # each scene as processed: what it now uses
             in_folder = _folder_pictures(p)
             if found:
                 scenes += found

@@ -29,14 +29,21 @@ def _own_layer(path: Path) -> bool:
     return OUTPUT_MARK in path.name or path.suffix == ".bak"
 
 
-def _walk(folder: Path) -> list[Path]:
+def _walk(folder: Path, outputs: bool = False) -> list[Path]:
     """The stages and documents in ``folder`` and below that no other one there composes: a sublayer, a payload, a
     reference or a ``.mtlx`` document a stage uses is processed through that stage (on its own it has no geometry
-    bound, so a UV atlas would read as a material meant to tile), not again as a scene of its own."""
+    bound, so a UV atlas would read as a material meant to tile), not again as a scene of its own.
+
+    ``outputs``: the scenes as this tool left them: a stage's new layer (``scene.seamless.usda``, which composes
+    the stage) and a document's new document (``doc.seamless.mtlx``) instead of what they were made from."""
     found = sorted(
         p for p in folder.rglob("*")
-        if p.is_file() and p.suffix.lower() in SCENE_SUFFIXES and not _own_layer(p)
+        if p.is_file() and p.suffix.lower() in SCENE_SUFFIXES and (not _own_layer(p) or outputs and p.suffix != ".bak")
     )
+    if outputs:  # a document's new document is a whole document: the one it was made from is left out
+        remade = {p.with_name(p.name.replace(OUTPUT_MARK, ".", 1)) for p in found if p.suffix.lower() == ".mtlx"
+                  and OUTPUT_MARK in p.name}
+        found = [p for p in found if p not in remade]
     used = _composed_by(found)
     roots = [p for p in found if p.resolve() not in used]
     return roots or found  # layers that only compose one another (a cycle): every one is a scene
@@ -64,12 +71,13 @@ def _composed_by(files: Sequence[Path]) -> set[Path]:
     return used
 
 
-def expand_inputs(items: Sequence[str | Path]) -> list[Path]:
+def expand_inputs(items: Sequence[str | Path], outputs: bool = False) -> list[Path]:
     """Files as given; folders walked recursively for USD and MaterialX files; globs expanded.
 
     Folder walks and globs leave out this tool's own outputs (``*.seamless.usda``,
     ``*.seamless.mtlx``, ``.bak`` copies, ``tileable/`` folders) so a re-run does not process
-    them. A file named explicitly is always taken. Duplicates are removed, order is kept.
+    them; ``outputs`` (``check``): a folder walk takes each scene as this tool left it instead (its new layer or
+    document where there is one; see :func:`_walk`). A file named explicitly is always taken. Duplicates are removed, order is kept.
     A glob that matches nothing is a usage error; a missing file is left for the caller to
     report (it is unreadable input, not a usage error).
 
@@ -81,7 +89,7 @@ def expand_inputs(items: Sequence[str | Path]) -> list[Path]:
         text = str(item)
         path = Path(text)
         if path.is_dir():
-            out.extend(_walk(path))
+            out.extend(_walk(path, outputs))
         elif _GLOB_CHARS & set(text) and not path.exists():
             matches = [
                 Path(m) for m in sorted(glob.glob(text, recursive=True))
