@@ -10,9 +10,9 @@ OIIO_TYPES = {np.uint8: oiio.UINT8, np.uint16: oiio.UINT16, np.float16: oiio.HAL
 
 
 def write_raw_image(path: Path, data: np.ndarray, names: tuple[str, ...] | None = None,
-                    color_space: str | None = None) -> Path:
+                    color_space: str | None = None, icc_profile: bytes | None = None) -> Path:
     """Write ``data`` (H, W) or (H, W, C) as stored; its dtype decides the file's sample type.
-    ``color_space`` is recorded as the file's ``oiio:ColorSpace``."""
+    ``color_space`` is recorded as the file's ``oiio:ColorSpace``; ``icc_profile`` embedded."""
     if data.ndim == 2:
         data = data[..., None]
     h, w, c = data.shape
@@ -22,6 +22,8 @@ def write_raw_image(path: Path, data: np.ndarray, names: tuple[str, ...] | None 
     spec.attribute("oiio:UnassociatedAlpha", 1)
     if color_space:
         spec.attribute("oiio:ColorSpace", color_space)
+    if icc_profile:
+        spec.attribute("ICCProfile", oiio.TypeDesc(f"uint8[{len(icc_profile)}]"), np.frombuffer(icc_profile, np.uint8))
     out = oiio.ImageOutput.create(str(path))
     assert out.open(str(path), spec), out.geterror()
     assert out.write_image(np.ascontiguousarray(data)), out.geterror()

@@ -89,6 +89,16 @@ def _source_maps(seed: int) -> dict[str, np.ndarray]:
     return {"albedo": albedo, "normal": n * 0.5 + 0.5, "roughness": rough}
 
 
+def _icc_profile() -> bytes:
+    """An RGB ICC profile as a photo editor embeds one (littleCMS's sRGB, through Pillow)."""
+    from PIL import ImageCms
+
+    return ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
+
+
+ICC_PROFILE = _icc_profile()
+
+
 def _write_stack(folder: Path, kind: str) -> None:
     folder.mkdir(parents=True)
     maps = _source_maps(seed=0 if kind == "png16" else 1)
@@ -97,7 +107,8 @@ def _write_stack(folder: Path, kind: str) -> None:
         space = "srgb_rec709_scene" if (kind, name) == ("png16", "albedo") else "lin_rec709_scene"
         if kind == "png16":
             data = np.round(values * 65535).astype(np.uint16)
-            write_raw_image(folder / f"{name}.png", data, color_space=space)
+            write_raw_image(folder / f"{name}.png", data, color_space=space,
+                            icc_profile=ICC_PROFILE if name == "albedo" else None)
         else:
             data = values.astype(np.float16)
             names = ("R", "G", "B") if data.shape[-1] == 3 else ("Y",)
@@ -153,6 +164,12 @@ def test_each_written_map_keeps_sample_type_channels_and_colour_space(processed,
         expected_space = src_spec.get_string_attribute("oiio:ColorSpace")
         assert expected_space, f"{name}: the source file records a colour space"
         assert spec.get_string_attribute("oiio:ColorSpace") == expected_space, name
+        # the embedded colour profile is kept where the format holds one (PNG, not OpenEXR)
+        profile = spec.getattribute("ICCProfile")
+        if (kind, name) == ("png16", "albedo"):
+            assert profile is not None and bytes(np.asarray(profile, np.uint8)) == ICC_PROFILE, name
+        else:
+            assert profile is None, name
     # the stage points at the written files
     stage = Usd.Stage.Open(str(root / kind / "scene.seamless.usda"))
     for node in ("Albedo", "Normal", "Roughness"):

@@ -3,8 +3,10 @@
 The output keeps the source's format family and bit depth (8-bit -> PNG, 16-bit -> 16-bit PNG or
 TIFF, half / float -> OpenEXR half / float; see :func:`~seamless_usd.imaging.io.output_extension`),
 its channel count and layout (channels the network did not see are filled with a constant),
-straight alpha, and the colour encoding the stage declares for the map (the map's colour space,
-also recorded in the file's colour metadata).
+straight alpha, the colour encoding the stage declares for the map (the map's colour space,
+also recorded in the file's colour metadata), and the source's embedded ICC colour profile where the output
+format holds one (PNG, TIFF; not OpenEXR): the tile's texels are in the source's encoding, so an image editor
+shows its colours as it shows the source's.
 """
 from __future__ import annotations
 
@@ -21,7 +23,7 @@ from seamless_usd.textures import ColorSpace, ImageInfo
 from seamless_usd.imaging.encoding import MapEncoding, encode_map
 from seamless_usd.imaging.io import alpha_channel, norm_ext, output_dtype, output_extension, reader_config
 
-__all__ = ["write_map", "write_pixels", "output_path"]
+__all__ = ["write_map", "write_pixels", "output_path", "kept_attributes", "KEPT_ATTRIBUTES"]
 
 _OIIO_TYPES = {"uint8": oiio.UINT8, "uint16": oiio.UINT16, "half": oiio.HALF, "float": oiio.FLOAT}
 _NUMPY_TYPES = {"uint8": np.uint8, "uint16": np.uint16, "half": np.float16, "float": np.float32}
@@ -58,7 +60,8 @@ def output_path(path: str | os.PathLike, like: ImageInfo) -> Path:
 
 
 def write_map(
-    path: str | os.PathLike, values: np.ndarray, encoding: MapEncoding, like: ImageInfo, record: dict | None = None
+    path: str | os.PathLike, values: np.ndarray, encoding: MapEncoding, like: ImageInfo, record: dict | None = None,
+    keep_from: str | os.PathLike | None = None,
 ) -> Path:
     """Encode network values and write them atomically in the source's format family.
 
@@ -76,6 +79,8 @@ def write_map(
         The source's header: sample type, channel count and names.
     record
         What the tile records in its file of how it was made (:mod:`.tag`), or None.
+    keep_from
+        The source file, whose embedded colour profile the tile keeps (:data:`KEPT_ATTRIBUTES`), or None.
 
     Returns
     -------
@@ -96,7 +101,26 @@ def write_map(
             f"the source has {like.channels}"
         )
     pixels = encode_map(values, encoding)
-    return write_pixels(target, pixels, like, encoding.color_space, record)
+    return write_pixels(target, pixels, like, encoding.color_space, record, keep_from)
+
+
+#: Header attributes a tile keeps from its source file: the embedded colour profile (how an image editor reads its
+#: colours; renderers go by the stage's colour space).
+KEPT_ATTRIBUTES = ("ICCProfile",)
+_PROFILE_FORMATS = (".png", ".tif", ".tx")  # the output formats that hold an ICC profile
+
+
+def kept_attributes(source: str | os.PathLike) -> list[tuple[str, object, object]]:
+    """(name, type, value) of the :data:`KEPT_ATTRIBUTES` in ``source``'s header (none when it cannot be read:
+    the tile is written without them)."""
+    inp = oiio.ImageInput.open(str(source), reader_config())
+    if inp is None:
+        oiio.geterror()  # cleared: a missing profile is not an error
+        return []
+    try:
+        return [(pv.name, pv.type, pv.value) for pv in inp.spec().extra_attribs if pv.name in KEPT_ATTRIBUTES]
+    finally:
+        inp.close()
 
 
 def write_pixels(
@@ -105,9 +129,10 @@ def write_pixels(
     like: ImageInfo,
     color_space: ColorSpace,
     record: dict | None = None,
+    keep_from: str | os.PathLike | None = None,
 ) -> Path:
     """Write float file values atomically in the output family of ``like``; ``record``: what the file
-    records of how it was made (:mod:`.tag`).
+    records of how it was made (:mod:`.tag`); ``keep_from``: the source file whose colour profile is kept.
 
     Parameters
     ----------
@@ -162,6 +187,9 @@ def write_pixels(
         spec.attribute("oiio:UnassociatedAlpha", 1)  # values are straight alpha, store as is
         if ext in (".tif", ".tx"):
             spec.attribute("compression", "zip")
+    if keep_from is not None and norm_ext(ext) in _PROFILE_FORMATS:
+        for name, kind, value in kept_attributes(keep_from):
+            spec.attribute(name, kind, value)
     if record is not None:
         from seamless_usd.imaging.tag import tag_attributes
 

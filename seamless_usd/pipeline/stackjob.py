@@ -196,7 +196,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
         values = tiles[name]
         target = confine(out_dir / filename, out_dir)
         record = tile_record(m, out_dir, uv_scale, (straightened, levelled, evened), filenames)  # read by check
-        written = imaging.write_map(target, values, encoding, like=info, record=record)
+        written = imaging.write_map(target, values, encoding, like=info, record=record, keep_from=m.resolved or None)
         back = imaging.decode_map(imaging.read_image(written, max_pixels=None)[0], encoding)  # what is on disk
         written_values.append(back)
         outcomes[map_identity(m)] = MapOutcome(
