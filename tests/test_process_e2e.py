@@ -84,6 +84,7 @@ def processed_copy(processed, tmp_path):
 def test_new_layer_edits_resolve_to_written_tiles(processed):
     payload = processed["payload"]
     assert processed["code"] == payload["exit_code"]
+    assert not [f for f in payload["findings"] if f["code"] == "coarser-tile"]  # at the source's texel density
     _assert_all_written(processed["code"], payload)
     [stack] = payload["stacks"]
     assert stack["status"] in ("passed", "not-passed")
@@ -284,6 +285,12 @@ def test_every_sample_asset_processes(assets, model_cache, capsys):
     assert by_material["<M_wood_tiled>"] == {("already-tileable", "left-alone")}
     processed = [s for s in payload["stacks"] if s["status"] != "left-alone"]
     assert processed and all(s["intent"] == "tiling" for s in processed)
+    # read at 128 px, each tile is coarser on the asset than its source, and the run says so (once per stack made;
+    # a duplicate reuses its first stack's tile)
+    coarser = [f["material"] for f in payload["findings"] if f["code"] == "coarser-tile"]
+    bigger = [s["material"] for s in processed if s["origin"] != "duplicate"
+              and max(max(m["original_size"]) for m in s["resampled"]["maps"]) > 135]
+    assert bigger and sorted(coarser) == sorted(bigger), (coarser, bigger)
     jsonschema.validate(payload, json_schema("report"))
 
 

@@ -160,8 +160,30 @@ def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, p
         output_dir=out_dir,
         peak_rss_mb=_peak_rss_mb(),
         previews=previews,
-        findings=list(pixels.findings) + _turn_refused(straightened),
+        findings=list(pixels.findings) + _turn_refused(straightened)
+        + _coarser(stack, record["tile_size"], source_uv_scale(meta["uv_scale"], straightened), pixels.original_sizes),
     )
+
+
+#: A tile holding less than this share of its source's texels per UV unit is named coarser than the source.
+COARSER = 0.95
+
+
+def _coarser(stack: TextureStack, tile_hw, uv_scale, sizes) -> list[Finding]:
+    """A warning when the tile holds fewer texels per UV unit than the stack's largest source map: read at a capped
+    size (``--max-size``) or the SeamlessGAN tile at its working resolution (``--refine off``), it is blurrier on
+    the asset than the source was."""
+    width, height = max(w for w, _ in sizes), max(h for _, h in sizes)
+    share = min(tile_hw[1] * uv_scale[0] / width, tile_hw[0] * uv_scale[1] / height)
+    if share >= COARSER:
+        return []
+    from seamless_usd.findings import Severity, prim_ref
+
+    return [Finding(Severity.WARNING, "coarser-tile", prim_ref(stack.material.strip("<>")),
+                    f"the tile holds {share:.0%} of the source's texels per UV unit ({tile_hw[1]}x{tile_hw[0]} px "
+                    f"where the source has {width}x{height}), so it is blurrier on the asset: a stack read at a capped "
+                    "size (--max-size) or the SeamlessGAN tile kept at its working resolution (--refine off)",
+                    stack.material)]
 
 
 def _turn_refused(straightened: dict | None) -> list[Finding]:
