@@ -38,7 +38,7 @@ def _walk(folder: Path, outputs: bool = False) -> list[Path]:
     the stage) and a document's new document (``doc.seamless.mtlx``) instead of what they were made from."""
     found = sorted(
         p for p in folder.rglob("*")
-        if p.is_file() and p.suffix.lower() in SCENE_SUFFIXES and (not _own_layer(p) or outputs and p.suffix != ".bak")
+        if p.is_file() and p.suffix.lower() in SCENE_SUFFIXES and (outputs or not _own_layer(p))  # .bak: no scene
     )
     if outputs:  # a document's new document is a whole document: the one it was made from is left out
         remade = {p.with_name(p.name.replace(OUTPUT_MARK, ".", 1)) for p in found if p.suffix.lower() == ".mtlx"
@@ -77,7 +77,8 @@ def expand_inputs(items: Sequence[str | Path], outputs: bool = False) -> list[Pa
     Folder walks and globs leave out this tool's own outputs (``*.seamless.usda``,
     ``*.seamless.mtlx``, ``.bak`` copies, ``tileable/`` folders) so a re-run does not process
     them; ``outputs`` (``check``): a folder walk takes each scene as this tool left it instead (its new layer or
-    document where there is one; see :func:`_walk`). A file named explicitly is always taken. Duplicates are removed, order is kept.
+    document where there is one; see :func:`_walk`). A file named explicitly is always taken. Duplicates are
+    removed, order is kept.
     A glob that matches nothing is a usage error; a missing file is left for the caller to
     report (it is unreadable input, not a usage error).
 

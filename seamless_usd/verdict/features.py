@@ -52,6 +52,11 @@ def _square_norm(a: np.ndarray) -> np.ndarray:
     return out
 
 
+def _columns(a: np.ndarray, start: int, count: int) -> np.ndarray:
+    """``count`` columns of ``a`` from ``start``, as a view."""
+    return a[:, start: start + count]
+
+
 def _column_sums(a: np.ndarray) -> np.ndarray:
     """Cumulative sums along the columns with a leading zero: ``sum(a[:, i: j])`` is ``c[:, j] - c[:, i]``."""
     c = np.zeros((a.shape[0], a.shape[1] + 1))
@@ -75,9 +80,6 @@ def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> 
         ext = u
         first, count = REACH, w - 2 * REACH + 1
 
-    def at(a: np.ndarray, shift: int) -> np.ndarray:  # columns ``lines + shift`` of ``a``, as a view
-        return a[:, first + shift: first + shift + count]
-
     feats, within_all = [], []
     for d in DISTANCES:
         # pairs (c - j, c - j + d), j = 1..d, cross the line at c; (c - j - d, c - j) lie on its left and
@@ -85,19 +87,16 @@ def line_features(u: np.ndarray, length: int, periodic: bool, step: int = 1) -> 
         # c - 2d .. c + 2d only (a narrow image, such as the classifier's stacked joins, is mostly outside them)
         near = ext[:, first - 2 * d: first + count + 2 * d]
         sq = moving_mean(_square_norm(near[:, d:] - near[:, :-d]), length, periodic, step)  # pair (x, x + d)
-        cs = _column_sums(sq)
-
-        def window(shift: int) -> np.ndarray:  # cs at the lines shifted by ``shift``
-            return cs[:, 2 * d + shift: 2 * d + shift + count]
-
-        straddle = (window(0) - window(-d)) / d
-        within = 0.5 * ((window(-d) - window(-2 * d)) + (window(d) - window(0))) / d
+        cs = _column_sums(sq)  # its column 2d is the first line's
+        straddle = (_columns(cs, 2 * d, count) - _columns(cs, d, count)) / d
+        within = 0.5 * ((_columns(cs, d, count) - _columns(cs, 0, count))
+                        + (_columns(cs, 3 * d, count) - _columns(cs, 2 * d, count))) / d
         log_within = np.log(within + _EPS)
         feats.append(np.log(straddle + _EPS) - log_within)
         within_all.append((within, log_within))
     for within, log_within in within_all:  # local contrast against the image's own
         feats.append(log_within - np.log(np.median(within) + _EPS))
-    step1 = at(ext, 0) - at(ext, -1)  # (H, lines, C)
+    step1 = _columns(ext, first, count) - _columns(ext, first - 1, count)  # (H, lines, C)
     mean_step = moving_mean(step1.reshape(h, -1), length, periodic, step).reshape(-1, count, channels)
     energy = moving_mean(_square_norm(step1), length, periodic, step)
     feats.append(_square_norm(mean_step) / (energy + _EPS))  # 1: one coherent step along the stretch
