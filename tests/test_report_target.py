@@ -65,3 +65,42 @@ def test_report_target_names_the_file_and_refuses_folders(tmp_path):
     stage = tmp_path / "s.usda"
     stage.write_text("#usda 1.0\n")
     assert report_target(stage) == tmp_path / "s.html"  # the stage itself is never the target
+
+
+def test_a_page_that_only_names_the_tool_and_a_json_that_only_has_its_key_are_the_users(tmp_path, capsys):
+    """Only a page with the tool's own generator mark, or a JSON report with its keys, is replaced: a hand-written page
+    about the tool, or a JSON file with one of its keys, is the user's."""
+    picture = tmp_path / "albedo.png"
+    shutil.copy(SAMPLES / "textures" / "brick_albedo.png", picture)
+    notes = tmp_path / "notes.html"
+    notes.write_text("<!DOCTYPE html>\n<html><head><title>Notes: seamless-usd rollout</title></head><body>mine</body>"
+                     "</html>\n")
+    assert main(["check", str(picture), "--report", str(notes)]) == 2
+    assert "mine" in notes.read_text() and "not replaced" in capsys.readouterr().err
+    data = tmp_path / "settings.json"
+    data.write_text('{"tool_version": "mine"}')
+    with pytest.raises(InputError, match="not replaced"):
+        report_target(data, ".json")
+    assert main(["check", str(picture), "--report", str(tmp_path / "sheet.html")]) in (0, 1)
+    assert main(["check", str(picture), "--report", str(tmp_path / "sheet.html")]) in (0, 1)  # its own: replaced
+
+
+def test_a_library_reports_pages_replace_only_its_own_and_leave_no_earlier_run_behind(tmp_path, capsys):
+    """A file of the user's in the report's pages folder is refused before any work; a second run's report (one page,
+    or fewer pages) removes the pages the earlier run wrote there that it no longer links."""
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    shutil.copytree(SAMPLES / "brick", tmp_path / "brick2")
+    scenes = [str(tmp_path / "brick" / "scene.usda"), str(tmp_path / "brick2" / "scene.usda")]
+    report = tmp_path / "out" / "report.html"
+    pages = tmp_path / "out" / "report.files"
+    pages.mkdir(parents=True)
+    (pages / "0001-scene.html").write_text("<html>mine</html>")
+    assert main(["process", *scenes, "--dry-run", "--report", str(report)]) == 2
+    assert "0001-scene.html" in capsys.readouterr().err and (pages / "0001-scene.html").read_text() == "<html>mine</html>"
+    assert not report.exists()
+    (pages / "0001-scene.html").unlink()
+    assert main(["process", *scenes, "--dry-run", "--report", str(report)]) == 0
+    assert len(list(pages.glob("*.html"))) == 2
+    assert main(["process", scenes[0], "--dry-run", "--report", str(report)]) == 0  # one source: one page
+    assert report.is_file() and not pages.exists()

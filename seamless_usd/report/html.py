@@ -17,6 +17,7 @@ import numpy as np
 from seamless_usd.fileio import atomic_write_text
 from seamless_usd.report.facts import stack_facts
 from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page, seams_svg
+from seamless_usd.report.target import clear_stale_pages
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
 from seamless_usd.synthesis.advice import structure_advice
@@ -286,8 +287,10 @@ def render_html(report: Report, title: str = "seamless-usd report") -> str:
 
 
 def write_html(report: Report, path: Path) -> Path:
+    """The report as one page at ``path``; the pages an earlier library report left beside it are removed."""
     path = Path(path)
     atomic_write_text(path, render_html(report))
+    clear_stale_pages(path)
     return path
 
 

@@ -6,6 +6,7 @@ import html
 import numpy as np
 
 from seamless_usd.report.png import png_data_uri
+from seamless_usd.report.target import GENERATOR
 from seamless_usd.report.webimage import image_data_uri
 
 __all__ = ["CSS", "OVERLAY_TOGGLE", "esc", "fmt", "figure", "overlay_svg", "seams_svg", "page"]
@@ -124,9 +125,9 @@ def figure(pixels: np.ndarray | None, caption: str, overlay: str = "", lossless:
 
 
 def page(title: str, body: str, extra_css: str = "", toggle: bool = True) -> str:
-    """A whole self-contained HTML document."""
+    """A whole self-contained HTML document (its head marks it as this tool's: :data:`.target.GENERATOR`)."""
     return (f'<!doctype html><html lang="en"><head><meta charset="utf-8">'
-            f'<meta name="generator" content="seamless-usd">'
+            f'{GENERATOR}'
             f'<meta name="viewport" content="width=device-width,initial-scale=1"><link rel="icon" href="data:,">'
             f"<title>{esc(title)}</title><style>{CSS}{extra_css}</style></head><body>"
             f'{OVERLAY_TOGGLE if toggle else ""}<main>{body}</main></body></html>\n')

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from seamless_usd.fileio import atomic_write_text
+from seamless_usd.report.target import clear_stale_pages
 from seamless_usd.naming import slug
 from seamless_usd.report.html import failing_figures, render_html, source_report
 from seamless_usd.report.htmlparts import esc, page
@@ -154,5 +155,6 @@ def write_library_html(report: Report, path: Path) -> Path:
         target = folder / f"{n:04d}-{slug(Path(source).stem, 40)}.html"
         atomic_write_text(target, render_html(source_report(report, source), title=f"seamless-usd: {Path(source).name}"))
         pages[source] = f"{folder.name}/{target.name}"
+    clear_stale_pages(path, frozenset(Path(p).name for p in pages.values()))  # an earlier run's other pages
     atomic_write_text(path, render_index(report, pages))
     return path
