@@ -131,13 +131,16 @@ def test_a_name_that_is_not_utf8_and_a_small_picture_are_named_and_the_rest_judg
     _write(lib / "tileable.png", wood)
     shutil.copy(lib / "tileable.png", os.fsdecode(bytes(lib) + b"/odd\xff.png"))
     _write(lib / "icon.png", wood[:40, :40])
+    _write(lib / "strip.png", np.tile(wood[:96], (1, 12, 1)))  # 96 px tall, 12 times as wide
     sheet = tmp_path / "sheet.html"
     assert main(["check", str(lib), "--json", "--report", str(sheet)]) == 1
     items = {Path(i["name"]).name: i for i in json.loads(capsys.readouterr().out)["items"]}
     assert items["tileable.png"]["passed"]
     odd = items[os.fsdecode(b"odd\xff.png")]
     assert "not valid UTF-8" in odd["error"] and "rename" in odd["error"]
-    assert "40 x 40 px is too small to be judged on its own" in items["icon.png"]["error"]
+    assert "40 x 40 px: too small to be judged on its own" in items["icon.png"]["error"]
+    strip = items["strip.png"]["error"]  # both sides above 64 px, but a strip read at 512 px across is too thin
+    assert "x 96 px: a strip thinner than 1:8 is too thin" in strip and "against its source" in strip
     assert "not valid UTF-8" in sheet.read_text(encoding="utf-8")
 
 

@@ -225,9 +225,14 @@ def _judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
     read = [read_alone(m) for m in maps]
     for m, (pixels, full) in zip(maps, read):
         if min(pixels.shape[:2]) < MIN_SIDE:
-            raise ValueError(f"{asset_ref(m.path)}: {full[1]} x {full[0]} px is too small to be judged on its own (a "
-                             f"texture with no separate source is judged from {MIN_SIDE} px on each side, as read at "
-                             f"most {READ_SIDE} px across)")
+            thin = min(full) >= MIN_SIDE  # both sides large enough, but read at READ_SIDE across it is too thin
+            why = (f"a strip thinner than 1:{READ_SIDE // MIN_SIDE} is too thin to be judged on its own: read at "
+                   f"{READ_SIDE} px across, as the verdict reads a texture with no separate source, its short side "
+                   f"falls under {MIN_SIDE} px; judge it against its source (a tile this tool wrote is) or in square "
+                   f"pieces") if thin else (
+                   f"too small to be judged on its own (a texture with no separate source is judged from {MIN_SIDE} "
+                   f"px on each side)")
+            raise ValueError(f"{asset_ref(m.path)}: {full[1]} x {full[0]} px: {why}")
     names = [m.name or m.path for m in maps]
     shapes = [p.shape[:2] for p, _ in read]
     same_aspect = all(abs(h * shapes[0][1] - w * shapes[0][0]) <= max(h, w, *shapes[0]) for h, w in shapes)
