@@ -224,3 +224,33 @@ def test_a_folder_walk_for_check_takes_each_scene_as_processed_and_one_for_proce
         assert names(expand_inputs([root], outputs=True)) == ["a/scene.seamless.usda", "b/doc.seamless.mtlx",
                                                               "b/other.mtlx"]
         assert names(expand_inputs([root])) == ["a/scene.usda", "b/doc.mtlx", "b/other.mtlx"]
+
+
+def test_what_a_picture_holds_beyond_what_is_judged_is_named(tmp_path):
+    """A picture's colour is judged; its alpha, channels beyond colour and alpha (an OpenEXR's depth) and images after
+    its first (a multi-part OpenEXR) are not, and the answer says so instead of passing them silently."""
+    wood = _wood()
+    seamed = np.roll(wood, (128, 128), (0, 1))[..., :1]  # a seam through its middle
+    from imagefiles import write_raw_image
+
+    codes = np.round(np.concatenate([wood, seamed], axis=2) * 255).astype(np.uint8)
+    write_raw_image(tmp_path / "cutout.png", codes)  # straight alpha, as stored
+    write_raw_image(tmp_path / "plain.png", codes[..., :3])
+    spec = oiio.ImageSpec(256, 256, 4, oiio.HALF)
+    spec.channelnames = ("R", "G", "B", "Z")
+    out = oiio.ImageOutput.create(str(tmp_path / "depth.exr"))
+    assert out.open(str(tmp_path / "depth.exr"), spec) and out.write_image(np.concatenate([wood, seamed], axis=2))
+    out.close()
+    parts = [oiio.ImageSpec(256, 256, 3, oiio.HALF) for _ in range(2)]
+    for n, part in enumerate(parts):
+        part.attribute("name", f"layer{n}")
+    out = oiio.ImageOutput.create(str(tmp_path / "parts.exr"))
+    assert out.open(str(tmp_path / "parts.exr"), parts) and out.write_image(wood)
+    assert out.open(str(tmp_path / "parts.exr"), parts[1], "AppendSubimage") and out.write_image(np.roll(wood, 128, 1))
+    out.close()
+    items = {Path(i.name).name: i for i in check_paths([tmp_path]).items}
+    assert items["cutout.png"].note == "not judged: its alpha channel"
+    assert items["depth.exr"].note == "not judged: its other channel(s) Z"
+    assert items["parts.exr"].note == "not judged: its second image (the file holds 2; only the first is read)"
+    assert items["plain.png"].note == ""
+    assert items["cutout.png"].verdict == items["plain.png"].verdict  # its colour, judged as the picture without alpha

@@ -161,6 +161,22 @@ def read_info(path: str | os.PathLike, *, max_pixels: int | None = DEFAULT_MAX_P
     return info
 
 
+def image_count(path: str | os.PathLike) -> int:
+    """How many images (parts, pages: OpenImageIO's subimages, not MIP levels) the file holds; 0 when unreadable."""
+    try:
+        inp = _open(Path(path))
+    except InputError:
+        return 0
+    count = 1
+    try:
+        while inp.seek_subimage(count, 0):
+            count += 1
+    finally:
+        inp.close()
+    oiio.geterror()  # the seek past the last one is not an error
+    return count
+
+
 def read_image(
     path: str | os.PathLike, *, max_pixels: int | None = DEFAULT_MAX_PIXELS, min_side: int | None = None,
     stored: bool = False,

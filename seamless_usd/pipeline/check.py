@@ -156,11 +156,13 @@ def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path], list[P
 def _alone(item: CheckItem, files: list) -> None:
     """``item`` judged against itself from ``files`` (:func:`seamless_usd.verdict.alone.judge_alone`, the reading
     the scan's triage uses too), with its thumbnail."""
-    from seamless_usd.verdict.alone import judge_alone, normal_doubts
+    from seamless_usd.verdict.alone import judge_alone, left_unread, normal_doubts
 
     verdict, reading = judge_alone(files)
     item.verdict = verdict.as_dict()
     doubts = normal_doubts(files)  # a normal map that does not read as one: said, as process says it
+    if item.name == item.source:  # a picture: what of its file the verdict did not read (alpha, layers, parts)
+        doubts += [f for f in (left_unread(m) for m in files) if f]
     if doubts:
         item.note = "; ".join(([item.note] if item.note else []) + doubts)
     uri, size, scale = thumbnail(reading)

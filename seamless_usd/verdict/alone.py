@@ -26,7 +26,7 @@ from .judge import Verdict, judge
 from .lines import Seam
 
 __all__ = ["READ_SIDE", "MIN_SIDE", "FileMap", "reduce_bins", "read_alone", "judge_alone", "normal_doubts",
-           "file_map"]
+           "file_map", "left_unread"]
 
 #: Longest side (px) a texture judged on its own is read at: the line breaks read lines at this size.
 READ_SIDE = 512
@@ -171,6 +171,36 @@ def normal_doubts(maps: Sequence[FileMap]) -> list[str]:
         if doubt:
             out.append(f"{asset_ref(m.name or m.path)} {doubt}")
     return out
+
+
+def left_unread(m: FileMap) -> str:
+    """What of ``m``'s file its reading (:func:`read_alone`) leaves out, in words, or "": its alpha when only colour
+    is read, channels beyond colour and alpha (an OpenEXR's other layers, a depth channel), and every part after the
+    first (a multi-part OpenEXR, a multi-page TIFF). ``check`` says so beside its answer."""
+    from seamless_usd.imaging.io import alpha_channel, image_count, read_info
+
+    try:
+        info = read_info(m.path, max_pixels=None)
+    except InputError:
+        return ""  # the reading names why it cannot be read
+    parts = image_count(m.path)
+    names = info.channel_names if len(info.channel_names) == info.channels else tuple(str(i) for i in range(info.channels))
+    alpha = alpha_channel(info) if info.channels > 1 else None
+    if alpha is not None and names[alpha].lower() not in ("a", "alpha", str(alpha)):
+        alpha = None  # a named channel that is not alpha (an OpenEXR's Z): one more channel
+    colour = [i for i in range(info.channels) if i != alpha]
+    read = set(colour[:3] if m.is_normal or "r" in m.channels or not m.channels else [])
+    read |= {alpha} if alpha is not None and "a" in m.channels else set()
+    left = []
+    if alpha is not None and alpha not in read:
+        left.append("its alpha channel")
+    extra = [names[i] for i in colour[3:]]
+    if extra:
+        left.append(f"its other channel(s) {', '.join(extra[:6])}{', ...' if len(extra) > 6 else ''}")
+    if parts > 1:
+        left.append(f"{'its second image' if parts == 2 else f'its images 2-{parts}'} (the file holds {parts}; "
+                    "only the first is read)")
+    return f"not judged: {'; '.join(left)}" if left else ""
 
 
 def _scaled(v: Verdict, reduced: tuple[int, int], full: tuple[int, int]) -> Verdict:
