@@ -254,3 +254,20 @@ def test_what_a_picture_holds_beyond_what_is_judged_is_named(tmp_path):
     assert items["parts.exr"].note == "not judged: its second image (the file holds 2; only the first is read)"
     assert items["plain.png"].note == ""
     assert items["cutout.png"].verdict == items["plain.png"].verdict  # its colour, judged as the picture without alpha
+
+
+def test_a_linear_openexrs_thumbnail_shows_as_its_8_bit_twin_does():
+    """The sample brick colour stored as 8-bit sRGB and as linear half OpenEXR: the contact sheet shows both through
+    the same display transfer, so the two thumbnails look alike instead of the EXR's reading far darker."""
+    import base64
+    import io
+
+    from PIL import Image
+
+    def shown(item) -> np.ndarray:
+        uri = item.thumbnail[0]
+        return np.asarray(Image.open(io.BytesIO(base64.b64decode(uri.split(",", 1)[1]))).convert("RGB"), np.float64)
+
+    png, exr = check_paths([SAMPLES / "brick_albedo.png", SAMPLES / "brick_albedo_linear.exr"]).items
+    a, b = shown(png), shown(exr)
+    assert a.shape == b.shape and abs(a.mean() - b.mean()) < 3.0 and np.abs(a - b).mean() < 6.0, (a.mean(), b.mean())

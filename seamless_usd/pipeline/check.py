@@ -165,8 +165,20 @@ def _alone(item: CheckItem, files: list) -> None:
         doubts += [f for f in (left_unread(m) for m in files) if f]
     if doubts:
         item.note = "; ".join(([item.note] if item.note else []) + doubts)
-    uri, size, scale = thumbnail(reading)
+    uri, size, scale = thumbnail(reading, linear=_linear_light(files[0]))
     item.thumbnail = (uri, size, scale * reading.shape[1] / verdict.size[1])  # thumbnail px per full-size texel
+
+
+def _linear_light(m) -> bool:
+    """Whether a map judged on its own holds linear light (a float file's colour, not a normal map's vectors)."""
+    from seamless_usd.imaging.io import read_info
+
+    if m.is_normal or len(m.channels) < 3:
+        return False
+    try:
+        return read_info(m.path, max_pixels=None).dtype in ("half", "float")
+    except SeamlessUsdError:
+        return False
 
 
 def _picture_groups(pictures: list[Path]) -> list[tuple[list[Path], list[dict | None]]]:

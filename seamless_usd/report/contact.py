@@ -45,15 +45,21 @@ class SheetCard:
     seams: list[dict] = field(default_factory=list)  # Seam.as_dict() in the thumbnail's pixels of one repeat
 
 
-def thumbnail(pixels: np.ndarray, side: int = THUMB) -> tuple[str, tuple[int, int], float]:
+def thumbnail(pixels: np.ndarray, side: int = THUMB, linear: bool = False) -> tuple[str, tuple[int, int], float]:
     """A picture ``(H, W, C)`` in ``[-1, 1]`` as a 2 x 2 repeat of at most ``side`` px a repeat (data URI), the
-    repeat's ``(w, h)`` and the scale from the picture's texels to the thumbnail's pixels."""
+    repeat's ``(w, h)`` and the scale from the picture's texels to the thumbnail's pixels. ``linear``: its values
+    are linear light (a float OpenEXR's colour), shown through the sRGB transfer as a viewer shows them."""
     a = np.asarray(pixels)
     scale = min(1.0, side / max(a.shape[:2]))
     h, w = max(1, round(a.shape[0] * scale)), max(1, round(a.shape[1] * scale))
     ys = (np.arange(h) * a.shape[0] / h).astype(int)
     xs = (np.arange(w) * a.shape[1] / w).astype(int)
-    rgb = preview_uint8(a[ys][:, xs])
+    small = a[ys][:, xs]
+    if linear:
+        from seamless_usd.imaging.transfer import eotf_inverse_srgb
+
+        small = eotf_inverse_srgb(np.clip((small + 1.0) / 2.0, 0.0, 1.0)) * 2.0 - 1.0
+    rgb = preview_uint8(small)
     return image_data_uri(np.tile(rgb, (2, 2, 1))), (w, h), scale
 
 
