@@ -94,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
     if sheet is not None:
         from seamless_usd.report.contact import write_contact_sheet
 
-        written = write_contact_sheet([item.card() for item in report.items], sheet)
+        written = write_contact_sheet([item.card() for item in report.items], sheet, unreadable=report.unreadable,
+                                      not_judged=report.not_judged, exit_code=report.exit_code)
         err.print(f"contact sheet: {escape(str(written))}", highlight=False)
     if args.json:
         json.dump(report.to_dict(), sys.stdout, indent=2)

@@ -150,17 +150,22 @@ def test_folders_with_nothing_to_judge_and_pictures_no_stage_uses_are_named(tmp_
     import shutil
 
     (tmp_path / "empty").mkdir()
-    assert main(["check", str(tmp_path / "empty"), str(tmp_path / "nowhere")]) == 2
+    sheet = tmp_path / "sheet.html"  # the contact sheet says what the command says
+    assert main(["check", str(tmp_path / "empty"), str(tmp_path / "nowhere"), "--report", str(sheet)]) == 2
     out = capsys.readouterr().out
     assert "no USD stage, MaterialX document or picture found in this folder" in out and "no such file or folder" in out
+    html = sheet.read_text(encoding="utf-8")
+    assert "Could not be opened" in html and "nowhere" in html and "Exit code 2" in html
     lib = tmp_path / "lib"
     for name in ("brick", "textures"):
         shutil.copytree(SAMPLES.parent / name, lib / name)
     _write(lib / "loose.png", _wood())
-    assert main(["check", str(lib), "--json"]) == 1
+    assert main(["check", str(lib), "--json", "--report", str(sheet)]) == 1
     payload = json.loads(capsys.readouterr().out)
     jsonschema.validate(payload, json_schema("check"))
     assert [i["name"] for i in payload["items"]] == ["</World/Looks/Brick>"]
+    html = sheet.read_text(encoding="utf-8")
+    assert "1 texture or stack:" in html and "Not judged" in html and "loose.png" in html and "Exit code 1" in html
     not_judged = {Path(p).name for p in payload["not_judged"]}
     assert "loose.png" in not_judged and "brick_albedo.png" not in not_judged  # used by the stage: judged there
     assert main(["scan", str(lib)]) == 0 and "</World/Looks/Brick>" in capsys.readouterr().out

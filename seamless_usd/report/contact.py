@@ -6,6 +6,7 @@ by status is pure CSS (radio buttons), so the page needs no script.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -77,12 +78,23 @@ def _segments(card: SheetCard) -> list[tuple[float, float, float, float, str]]:
     return out
 
 
-def render_contact_sheet(cards: list[SheetCard], title: str = "seamless-usd check") -> str:
-    """The whole page: a summary, the status filters and a card per item."""
+def render_contact_sheet(cards: list[SheetCard], title: str = "seamless-usd check", unreadable: Sequence[str] = (),
+                         not_judged: Sequence[str] = (), exit_code: int | None = None) -> str:
+    """The whole page: a summary (with the inputs that could not be opened, the pictures not judged and the exit
+    code, as the command says them), the status filters and a card per item."""
     counts = {k: sum(c.status == k for c in cards) for k in ("passed", "not-passed", "error")}
-    body = [f"<h1>{esc(title)}</h1><p class=muted>{len(cards)} textures or stacks: {counts['passed']} passed, "
-            f"{counts['not-passed']} not passed, {counts['error']} could not be judged. Each picture is repeated "
-            "2 x 2, so its wrap runs through the middle; red lines are the seams found.</p><div class=sheet>"]
+    things = "texture or stack" if len(cards) == 1 else "textures or stacks"
+    opened = f" {len(unreadable)} input(s) could not be opened." if unreadable else ""
+    code = f" Exit code {exit_code}." if exit_code is not None else ""
+    body = [f"<h1>{esc(title)}</h1><p class=muted>{len(cards)} {things}: {counts['passed']} passed, "
+            f"{counts['not-passed']} not passed, {counts['error']} could not be judged.{opened}{code} Each picture is "
+            "repeated 2 x 2, so its wrap runs through the middle; red lines are the seams found.</p>"]
+    for heading, lines in (("Could not be opened", unreadable),
+                           ("Not judged (pictures in folders of scenes that no scene uses)", not_judged)):
+        if lines:
+            body.append(f"<h2>{esc(heading)}</h2><ul class=findings>"
+                        + "".join(f"<li>{esc(line)}</li>" for line in lines) + "</ul>")
+    body.append("<div class=sheet>")
     for c in cards:
         view = ""
         if c.picture:
@@ -102,9 +114,11 @@ def render_contact_sheet(cards: list[SheetCard], title: str = "seamless-usd chec
     return html.replace("<body>", "<body>" + filters, 1)
 
 
-def write_contact_sheet(cards: list[SheetCard], path: Path, title: str = "seamless-usd check") -> Path:
-    """Write the page to ``path`` atomically."""
+def write_contact_sheet(cards: list[SheetCard], path: Path, title: str = "seamless-usd check",
+                        unreadable: Sequence[str] = (), not_judged: Sequence[str] = (),
+                        exit_code: int | None = None) -> Path:
+    """Write the page (:func:`render_contact_sheet`) to ``path`` atomically."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(path, render_contact_sheet(cards, title))
+    atomic_write_text(path, render_contact_sheet(cards, title, unreadable, not_judged, exit_code))
     return path
