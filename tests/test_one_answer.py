@@ -206,3 +206,27 @@ def test_output_layer_names_the_new_materialx_document_judged_against_its_record
     assert checked.passed == (report["stacks"][0]["status"] == "passed") == (code == 0)
     [original] = check_paths([source]).items  # the sources themselves: nothing recorded, judged against themselves
     assert original.verdict["reference"] == "itself"
+
+
+def test_a_materialx_stack_written_across_nodegraph_scopes_is_read_back_as_one_stack(tmp_path, capsys):
+    """The brick document's albedo sits at the document's top level, its ORM and normal images inside a nodegraph: the
+    authoring inserts one UV place2d in each scope (a node inside a nodegraph cannot read one outside it). Scanned and
+    checked again, the three maps are still one stack, judged together as ``process`` judged them."""
+    import json
+    import shutil
+
+    from seamless_usd_cli.main import main
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("mtlx", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    source = tmp_path / "mtlx" / "prefixed.mtlx"
+    code = main(["process", str(source), "--preset", "tiny", "--seeds", "1", "--max-size", "128", "--cache-dir",
+                 str(tmp_path / "cache"), "--json"])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    written = source.with_name("prefixed.seamless.mtlx")
+    assert written.read_text().count('<place2d name="seamless_uv"') == 2  # one place2d per scope
+    [scanned] = scan_paths([written]).stacks
+    assert len(scanned.maps) == len(stack["maps"]) == 3
+    [checked] = check_paths([written]).items
+    assert checked.passed == (stack["status"] == "passed") == (code == 0) and len(checked.maps) == 3

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 
+from seamless_usd.discover.tokens import Recorded
 from seamless_usd.textures import TextureMap, TextureStack, UVChain
 
 __all__ = ["build_stacks", "chain_key"]
@@ -13,13 +14,21 @@ __all__ = ["build_stacks", "chain_key"]
 def chain_key(uv: UVChain, texture_node: str) -> str:
     """Maps sharing this key share a UV chain. Like ``UVChain.key``, except that a transform held
     by the texture node itself (``tiledimage`` uvtiling/uvoffset, a glTF image's place2d) counts by
-    value, so tiled images with the same tiling over the same texcoord form one stack."""
+    value, so tiled images with the same tiling over the same texcoord form one stack; so does the place2d this
+    tool inserts in a MaterialX document, one per nodegraph scope (a node inside a nodegraph cannot read one
+    outside it), so a stack it wrote across scopes is read back as one stack."""
+    def ours(node: str) -> bool:
+        return node.rsplit("/", 1)[-1] == Recorded.MTLX_UV_NODE
+
     transforms = [
         [t.kind, list(t.scale), t.rotation, list(t.translation), list(t.pivot), t.operation_order]
-        if t.node == texture_node else t.node
+        if t.node == texture_node or ours(t.node) else t.node
         for t in uv.transforms
     ]
-    return json.dumps([uv.primvar, uv.reader, transforms, uv.connected_from])
+    connected = uv.connected_from
+    if connected and ours(connected.rsplit(".", 1)[0]):
+        connected = Recorded.MTLX_UV_NODE  # read through its values above, whichever scope holds it
+    return json.dumps([uv.primvar, uv.reader, transforms, connected])
 
 
 def build_stacks(maps: list[TextureMap]) -> list[TextureStack]:

@@ -198,3 +198,4 @@ class Recorded:
     USD_PASSED = "seamless:passed"
     MTLX_SOURCE = "seamless_sourceasset"
     MTLX_PASSED = "seamless_passed"
+    MTLX_UV_NODE = "seamless_uv"  # the place2d the authoring inserts: one per nodegraph scope, the same values
