@@ -1,6 +1,7 @@
 """Names of the files a run writes, derived from the source asset and the stack."""
 from __future__ import annotations
 
+import hashlib
 import re
 from pathlib import Path
 
@@ -38,7 +39,10 @@ def tile_filename(source_asset: str, stack_id: str, extension: str, source_diges
 
 
 def stack_tile_filenames(maps, stack_id: str, extensions: list[str]) -> list[str]:
-    """:func:`tile_filename` of each map of a stack (``TextureMap``), with its source's digest; maps of one file
+    """:func:`tile_filename` of each map of a stack (``TextureMap``), with a digest of its source's bytes and of the
+    whole stack's (every map's tile is cut through one field made from all of them: two stacks of one material path
+    that share a map but not the others make two tiles of it, neither overwriting the other, and a stack one of
+    whose maps changed names every tile anew, so a layer written before keeps the tiles it names); maps of one file
     (two texture nodes reading its colour and its alpha) also name the channels they read, and their place in the
     stack when those are the same too, so that neither tile overwrites the other.
 
@@ -47,7 +51,10 @@ def stack_tile_filenames(maps, stack_id: str, extensions: list[str]) -> list[str
     ...                       M(asset="rgba.png", resolved="", channels_used="a")], "M-0123456789", [".png"] * 2)
     ['rgba.M-0123456789.rgb.tile.png', 'rgba.M-0123456789.a.tile.png']
     """
-    names = [tile_filename(m.asset, stack_id, ext, source_digest(m.resolved)) for m, ext in zip(maps, extensions)]
+    digests = [source_digest(m.resolved) for m in maps]
+    whole = "|".join(sorted(f"{d}:{m.channels_used}" for d, m in zip(digests, maps)))
+    names = [tile_filename(m.asset, stack_id, ext, hashlib.sha256(f"{d}|{whole}".encode()).hexdigest() if d else "")
+             for m, d, ext in zip(maps, digests, extensions)]
     out = []
     for i, (m, name) in enumerate(zip(maps, names)):
         if names.count(name) > 1:

@@ -105,3 +105,30 @@ def test_two_stages_with_one_material_path_and_copies_of_one_file(tmp_path, caps
         stage = Usd.Stage.Open(str(tmp_path / f"s_{name}.seamless.usda"))
         tile = stage.GetPrimAtPath("/Looks/M/Colour").GetAttribute("inputs:file").Get().resolvedPath
         assert Path(tile).name.startswith(f"{name}.") and Path(tile).is_file()
+
+
+def test_two_stacks_of_one_material_path_sharing_one_map_write_two_tiles_of_it(tmp_path, capsys):
+    """Two stages in one folder, each with ``/World/Looks/Brick``: the same roughness file, albedos that differ (one is
+    the other mirrored). Every map's tile is cut through one field made from the whole stack, so each stack gets its
+    own roughness tile; neither overwrites the other, and each layer's tiles are judged by ``check`` as ``process``
+    judged them."""
+    import shutil
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    shutil.copytree(samples / "textures", tmp_path / "textures")
+    shutil.copytree(samples / "brick", tmp_path / "brick")
+    mirrored = oiio.ImageBufAlgo.flop(oiio.ImageBuf(str(tmp_path / "textures" / "brick_albedo.png")))
+    assert mirrored.write(str(tmp_path / "textures" / "brick_albedo_mirrored.png"))
+    scene = tmp_path / "brick" / "scene.usda"
+    (tmp_path / "brick" / "other.usda").write_text(scene.read_text().replace("brick_albedo.png",
+                                                                             "brick_albedo_mirrored.png"))
+    code = main(["process", str(tmp_path / "brick"), "--preset", "tiny", "--seeds", "1", "--max-size", "128",
+                 "--cache-dir", str(tmp_path / "cache"), "--json"])
+    stacks = json.loads(capsys.readouterr().out)["stacks"]
+    assert len(stacks) == 2 and all(s["origin"] != "duplicate" for s in stacks)
+    roughness = {Path(m["output"]) for s in stacks for m in s["maps"] if "roughness" in m["asset"]}
+    assert len(roughness) == 2 and all(p.is_file() for p in roughness)  # one tile of the shared map per stack
+    for s in stacks:
+        [item] = check_paths([Path(s["source"]).with_name(Path(s["source"]).stem + ".seamless.usda")]).items
+        assert item.passed == (s["status"] == "passed"), (item.verdict, s["status"])
+    assert code == (0 if all(s["status"] == "passed" for s in stacks) else 1)
