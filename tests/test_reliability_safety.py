@@ -19,6 +19,7 @@ import pytest
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import confine
 from seamless_usd.naming import tile_filename
+from seamless_usd.pipeline.rerun import JUDGED
 from seamless_usd.synthesis.gan.checkpoint import CHECKPOINT_NAME, load_checkpoint
 
 from seamless_usd_cli.main import main
@@ -159,3 +160,24 @@ def test_tile_names_from_hostile_assets_stay_inside(tmp_path, asset, stack_id):
     name = tile_filename(asset, stack_id, ".png")
     assert "/" not in name and "\\" not in name and not name.startswith(".")
     assert confine(out / name, out).parent == out.resolve()
+
+
+def test_cache_records_of_another_shape_are_made_again_not_internal_errors(tmp_path, capsys):
+    """A manifest or a judged record that is valid JSON of another shape (hand-edited, another tool's) is discarded and
+    the stack made again, as a truncated one is: never an internal error on every later run."""
+    scene, cache = _scene(tmp_path), tmp_path / "cache"
+    code, first, _ = run_cli(capsys, str(scene), "--cache-dir", str(cache))
+    assert first["stacks"][0]["origin"] == "trained"
+    manifest = _entry(cache) / "manifest.json"
+    for text in ('{"format": 1, "files": [], "meta": null}', '{"files": {}, "meta": {}}', "[]"):
+        manifest.write_text(text)
+        code, again, _ = run_cli(capsys, str(scene), "--cache-dir", str(cache))
+        [stack] = again["stacks"]
+        assert stack["origin"] == "trained" and "internal error" not in stack["message"], stack
+        assert stack["status"] in ("passed", "not-passed")
+    records = list(_entry(cache).glob(f"{JUDGED}/*.json"))
+    assert records
+    for judged in records:
+        judged.write_text("[]")
+    code, last, _ = run_cli(capsys, str(scene), "--cache-dir", str(cache))
+    assert last["stacks"][0]["origin"] == "cache" and "internal error" not in last["stacks"][0]["message"]

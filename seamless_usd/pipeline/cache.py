@@ -32,6 +32,9 @@ from seamless_usd.findings import asset_ref
 __all__ = ["StackCache", "CacheEntry", "JobIndex", "stack_key", "job_fingerprint", "default_cache_dir"]
 
 MANIFEST = "manifest.json"
+#: What a stack's result reads from its entry's metadata (:func:`.outcome.outcome_from_record`): an entry without
+#: them is made again.
+_META_KEYS = ("crop_size", "uv_scale", "scale", "q", "candidates", "model_hash", "device", "precision")
 TILES = "tiles.safetensors"
 CACHE_FORMAT = 1  # bump when the entry layout changes
 #: Bump whenever the same inputs and settings make a different tile (a candidate added or refused, a cut
@@ -108,15 +111,20 @@ class CacheEntry:
             return None
         try:
             manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
-            files = manifest["files"]
+            files, meta = manifest["files"], manifest["meta"]
+            if not isinstance(files, dict) or TILES not in files or not isinstance(meta, dict):
+                raise ValueError("the manifest does not name its tiles and metadata")
+            missing = [k for k in _META_KEYS if k not in meta]
+            if missing:
+                raise ValueError(f"the manifest's metadata lacks {', '.join(missing)}")
             for name, digest in files.items():
                 if file_sha256(self.root / name) != digest:
                     raise ValueError(f"{name} does not match its recorded hash")
             tiles = load_file(str(self.root / TILES))
-        except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
+        except (OSError, ValueError, KeyError, TypeError, SafetensorError) as exc:  # TypeError: JSON of another shape
             self.discard_result(reason=str(exc))
             return None
-        return tiles, manifest["meta"]
+        return tiles, meta
 
     def store(self, tiles: Mapping[str, np.ndarray], meta: Mapping[str, Any]) -> None:
         """Write tiles then the manifest (the manifest, written last and atomically, marks completion)."""

@@ -103,6 +103,6 @@ def load_judged(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[dict[st
             if file_sha256(Path(out["path"])) != out["sha256"]:
                 return None
         previews = previews_from_arrays(load_file(str(pictures)), record["previews"])
-    except (OSError, ValueError, KeyError, TypeError, SafetensorError):
-        return None
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, SafetensorError):  # AttributeError: JSON of
+        return None  # another shape (a list where the record is a mapping): judged again
     return record, previews
