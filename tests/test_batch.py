@@ -180,7 +180,7 @@ def test_make_executor_validates_names():
     remote = make_executor("tcp://127.0.0.1:8786")
     assert isinstance(remote, DaskExecutor) and remote.address == "tcp://127.0.0.1:8786"
     expected = {"local:x": "whole number", "local:0": "at least 1", "ssh://farm": "local:N, tcp://host:port",
-                "kubernetes": "unknown scheduler"}
+                "kubernetes": "unknown scheduler", "localhost:8786": "tcp://localhost:8786"}
     for bad, why in expected.items():
         with pytest.raises(UsageError, match=re.escape(why)):
             make_executor(bad)

@@ -171,7 +171,7 @@ def make_executor(scheduler: str | None, jobs: int | None = None) -> Executor:
         if jobs is not None and jobs < 1:
             raise UsageError(f"--jobs {jobs}: needs at least 1")
         return InProcessExecutor() if (jobs or 1) == 1 else ProcessPoolExecutor(jobs)
-    if scheduler.startswith("local"):
+    if scheduler == "local" or scheduler.startswith("local:"):  # not "localhost:8786" (a host without tcp://)
         _, _, n = scheduler.partition(":")
         try:
             workers = int(n) if n else (jobs or os.cpu_count() or 1)
@@ -182,8 +182,9 @@ def make_executor(scheduler: str | None, jobs: int | None = None) -> Executor:
         return DaskExecutor("local", workers=workers)
     if scheduler.startswith(("tcp://", "tls://", "ucx://", "inproc://")):
         return DaskExecutor(scheduler)
+    hint = f" (a scheduler's address: tcp://{scheduler})" if ":" in scheduler and "/" not in scheduler else ""
     raise UsageError(
-        f"unknown scheduler {scheduler!r}; use one of: inprocess (default), local:N, tcp://host:port"
+        f"unknown scheduler {scheduler!r}{hint}; use one of: inprocess (default), local:N, tcp://host:port"
     )
 
 
