@@ -184,12 +184,12 @@ def _summary(report: Report, console: Console) -> None:
         _stack_table(report, console)
     for f in report.findings:
         text = f.message if f.where in f.message else f"{f.where}: {f.message}"
-        console.print(f"[bold]{f.severity.value}[/]: {text}", highlight=False, soft_wrap=True)
-    for layer in report.layers_written:
-        console.print(f"wrote {layer}", highlight=False, soft_wrap=True)
+        console.print(f"[bold]{f.severity.value}[/]: {escape(text)}", highlight=False, soft_wrap=True)
+    for layer in report.layers_written:  # paths and messages as they are: a "[v2]" in a folder name is no markup
+        console.print(f"wrote {escape(str(layer))}", highlight=False, soft_wrap=True)
     if report.options.get("mode") == "dry-run":
         for line in report.plan:
-            console.print(f"would {line}", highlight=False, soft_wrap=True)
+            console.print(f"would {escape(line)}", highlight=False, soft_wrap=True)
 
 
 def _stack_table(report: Report, console: Console) -> None:
@@ -212,7 +212,7 @@ def _stack_table(report: Report, console: Console) -> None:
             ", ".join(f"{v:.3g}" for v in s.uv_scale) if s.uv_scale else "-",
             "cached" if s.origin == "cache" else "-" if s.origin == "duplicate"  # a duplicate's work was its twin's
             else f"{sum(s.timings.values()):.0f}s" if s.timings else "-",
-            s.message if s.status in (StackStatus.NOT_PASSED, StackStatus.FAILED) else "",
+            escape(s.message) if s.status in (StackStatus.NOT_PASSED, StackStatus.FAILED) else "",
         )
     console.print(table)
 
@@ -225,7 +225,7 @@ def run(args: argparse.Namespace) -> int:
         report = process_paths([Path(p) for p in args.paths], _options(args, view))
     _summary(report, console)
     if report.options.get("report_html"):
-        console.print(f"report: {report.options['report_html']}", highlight=False, soft_wrap=True)
+        console.print(f"report: {escape(str(report.options['report_html']))}", highlight=False, soft_wrap=True)
     if args.json:
         json.dump(report.to_dict(), sys.stdout, indent=2)
         sys.stdout.write("\n")

@@ -349,3 +349,17 @@ def test_a_wood_whose_joins_cannot_hide_is_told_what_to_do(assets, model_cache, 
     assert stack["message"].startswith("seam in ")
     assert "neither repeats nor continues itself" in stack["message"] and "a larger photo of the same surface" in stack["message"]
     assert "by hand" not in stack["message"]
+
+
+def test_paths_and_messages_with_brackets_are_printed_as_they_are(tmp_path, capsys):
+    """A folder named ``lib[v2]`` (brackets are markup to the console library): the table and the error lines name
+    the real path, not one with ``[v2]`` dropped."""
+    lib = tmp_path / "lib[v2]"
+    shutil.copytree(SAMPLES / "textures", lib / "tex[v2]")
+    (lib / "brick").mkdir()
+    scene = (SAMPLES / "brick" / "scene.usda").read_text().replace("../textures/", "../tex[v2]/")
+    (lib / "brick" / "scene.usda").write_text(scene)
+    (lib / "tex[v2]" / "brick_roughness.png").write_bytes(b"\x89PNG\r\n\x1a\n not really a png")
+    code = _process(str(lib / "brick" / "scene.usda"), "--dry-run", cache=tmp_path / "cache")
+    err = "".join(capsys.readouterr().err.split())  # the table folds long cells: compared without spaces
+    assert code == 1 and "@../tex[v2]/brick_roughness.png@" in err, err[-2000:]
