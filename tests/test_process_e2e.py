@@ -363,3 +363,11 @@ def test_paths_and_messages_with_brackets_are_printed_as_they_are(tmp_path, caps
     code = _process(str(lib / "brick" / "scene.usda"), "--dry-run", cache=tmp_path / "cache")
     err = "".join(capsys.readouterr().err.split())  # the table folds long cells: compared without spaces
     assert code == 1 and "@../tex[v2]/brick_roughness.png@" in err, err[-2000:]
+
+
+def test_an_output_layer_usd_cannot_write_is_refused_before_any_work(assets, tmp_path, capsys):
+    scene = assets / "brick" / "scene.usda"
+    for name in ("over.usdz", "over.txt"):
+        assert _process(str(scene), "-o", str(tmp_path / name), cache=tmp_path / "cache") == 2
+        assert ".usda, .usdc or .usd" in capsys.readouterr().err
+    assert not (scene.parent / "tileable").exists() and not list(tmp_path.glob("over.*"))

@@ -229,6 +229,9 @@ def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
         run.report.findings.append(Finding(Severity.WARNING, "pattern-unmatched", option, said))
 
 
+_LAYER_SUFFIXES = (".usda", ".usdc", ".usd")  # the layers a new layer can be written as (not a .usdz package)
+
+
 def _check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
     """-o/--output-layer names the one layer or document written: one input, of its kind."""
     if len(inputs) > 1:
@@ -237,6 +240,9 @@ def _check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
     if inputs and (inputs[0].suffix.lower() in MTLX_SUFFIXES) != (output.suffix.lower() in MTLX_SUFFIXES):
         kind = "a MaterialX document (.mtlx)" if inputs[0].suffix.lower() in MTLX_SUFFIXES else "a USD layer"
         raise UsageError(f"-o/--output-layer {output}: the input {inputs[0].name} is edited in {kind}; name one")
+    if output.suffix.lower() not in MTLX_SUFFIXES and output.suffix.lower() not in _LAYER_SUFFIXES:
+        raise UsageError(f"-o/--output-layer {output}: a new layer is written as .usda, .usdc or .usd (a .usdz "
+                         "package cannot be written in place of a layer); name one of those")
 
 
 def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | None = None) -> Report:
