@@ -155,3 +155,28 @@ def test_a_stack_whose_edits_cannot_be_written_fails_and_exits_1(assets, cache, 
     assert code == 1 and payload["exit_code"] == 1
     # nothing claims otherwise: no layer holding the floor was written
     assert not any("prop_mtl" in layer for layer in payload["layers_written"])
+
+
+def test_a_usdz_whose_maps_are_inside_it_is_left_alone_saying_why_and_is_never_edited_in_place(tmp_path, capsys):
+    """A .usdz with its textures packed inside: its maps are not read from inside the package, so the stack is left
+    alone with that reason (exit 0, nothing written), in a dry run as in a run; ``--in-place`` on a package, with
+    textures inside or outside it, is refused before any work."""
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    (tmp_path / "textures").mkdir()
+    for name in ("brick_albedo.png", "brick_normal.png", "brick_roughness.png"):
+        shutil.copy(samples / "textures" / name, tmp_path / "textures" / name)
+    (tmp_path / "scene.usda").write_text((samples / "brick" / "scene.usda").read_text().replace("@../textures/",
+                                                                                               "@./textures/"))
+    from pxr import UsdUtils
+
+    package = tmp_path / "brick.usdz"
+    assert UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp_path / "scene.usda")), str(package))
+    for extra in ((), ("--dry-run",)):
+        code = main(["process", str(package), "--preset", "tiny", "--cache-dir", str(tmp_path / "cache"), "--json",
+                     *extra])
+        [stack] = json.loads(capsys.readouterr().out)["stacks"]
+        assert code == 0 and stack["status"] == "left-alone", stack
+        assert "inside a .usdz package" in stack["message"] and "unpack" in stack["message"]
+    assert not (tmp_path / "tileable").exists() and not (tmp_path / "brick.seamless.usda").exists()
+    assert main(["process", str(package), "--in-place", "--cache-dir", str(tmp_path / "cache")]) == 2
+    assert "not edited in place" in capsys.readouterr().err

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 from seamless_usd.discover.intent import Intent
 from seamless_usd.textures import ScanResult, TextureStack
-from seamless_usd.findings import Finding, Severity, prim_ref
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "unmatched_patterns", "blocked_stacks", "set_aside_stacks",
            "instanced_stacks", "left_alone_stacks",
@@ -80,6 +80,10 @@ def set_aside_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: s
             out[(source, stack.id)] = (
                 f"left alone: {', '.join(reasons)} of this material is not made tileable, and tiling the other "
                 "maps would misalign them")
+        elif packed := [m for m in stack.maps if m.in_package]:
+            out[(source, stack.id)] = (
+                f"left alone: {asset_ref(packed[0].resolved)} is inside a .usdz package, and its maps are not read "
+                "from inside one; unpack the package (it is a zip file) and process the unpacked stage")
     return out
 
 

@@ -255,8 +255,12 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
     run = _new_run(options or Options())
     sources = []
     inputs = expand_inputs([paths] if isinstance(paths, (str, Path)) else paths)  # one path given as itself
+    modes = authoring_module().WriteMode
+    packages = [p for p in inputs if p.suffix.lower() == ".usdz"]
+    if packages and modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
+        raise UsageError(f"--in-place: {asset_ref(packages[0])} is a .usdz package, which is not edited in place; "
+                         "leave --in-place out (a new layer beside it sublayers the package) or unpack it")
     if run.options.output_layer is not None:
-        modes = authoring_module().WriteMode
         if modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
             raise UsageError("-o/--output-layer names a new layer, but --in-place edits the source layers: use one "
                              "or the other")
