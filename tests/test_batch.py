@@ -337,15 +337,16 @@ def test_one_output_layer_for_several_stages_is_a_usage_error(tmp_path, cache, c
     assert "several inputs were given" in capsys.readouterr().err
 
 
-def test_an_unusable_cache_folder_fails_the_stack_with_a_clear_message(tmp_path, capsys):
+def test_an_unusable_cache_folder_is_a_usage_error_before_any_work(tmp_path, capsys):
+    """A cache folder that is a file: one usage error (exit 2) before any work, not every stack failed (exit 1, which
+    reads like a texture that did not pass)."""
     lib = _library(tmp_path, copies=1)
     not_a_folder = tmp_path / "cache-file"
     not_a_folder.write_text("a file where the cache folder should be")
-    code, payload = _run(str(lib / "brick0"), "--cache-dir", str(not_a_folder), capsys=capsys)
-    assert code == 1
-    [stack] = payload["stacks"]
-    assert stack["status"] == "failed"
-    assert "cache folder" in stack["message"] and "--cache-dir" in stack["message"]
+    assert main(["process", *RUN, str(lib / "brick0"), "--cache-dir", str(not_a_folder)]) == 2
+    err = capsys.readouterr().err
+    assert "--cache-dir" in err and "is a file" in err
+    assert not (lib / "brick0" / "tileable").exists() and not_a_folder.read_text().startswith("a file")
 
 
 def test_materials_patterns_select_by_path_or_name(tmp_path, cache, capsys):

@@ -181,3 +181,4 @@ def test_cache_records_of_another_shape_are_made_again_not_internal_errors(tmp_p
         judged.write_text("[]")
     code, last, _ = run_cli(capsys, str(scene), "--cache-dir", str(cache))
     assert last["stacks"][0]["origin"] == "cache" and "internal error" not in last["stacks"][0]["message"]
+

@@ -197,6 +197,11 @@ def _new_run(options: Options) -> Run:
         check_device(options.device)
     if options.report is not None:
         _report_paths(options.report)  # refused before any work when it would replace a file of the user's
+    cache_root = StackCache(options.cache_dir).root
+    problem = folder_problem(cache_root)  # a file, or a folder that can neither be written nor holds results
+    if problem and not (cache_root.is_dir() and any(cache_root.iterdir())):
+        raise UsageError(f"--cache-dir: {problem}; name a folder this run can write (a read-only cache is used only "
+                         "when it holds results already)")
     if options.output_dir is not None and options.mode is not authoring.WriteMode.DRY_RUN:
         problem = folder_problem(options.output_dir)
         if problem:
