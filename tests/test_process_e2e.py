@@ -250,6 +250,9 @@ def test_unreadable_input_exits_2_and_names_the_file(assets, model_cache, capsys
     assert code == 2
     assert "broken.usda" in err and "missing.usda" in err
     assert "Traceback" not in err
+    _process(str(broken), "--json", cache=model_cache)  # the finding names the file once, as its place
+    [finding] = json.loads(capsys.readouterr().out)["findings"]
+    assert finding["where"] == "@" + str(broken) + "@" and "broken.usda" not in finding["message"], finding
 
 
 def test_a_broken_texture_fails_its_stack_and_the_rest_is_written(assets, model_cache, capsys):

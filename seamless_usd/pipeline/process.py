@@ -282,7 +282,9 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
             sources.append(src)
         except InputError as exc:
             run.report.unreadable.append(str(path))
-            run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", asset_ref(path), str(exc)))
+            where = asset_ref(path)
+            said = str(exc).removeprefix(f"{where}: ")  # the finding names the file once, as its place
+            run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", where, said))
     modes = authoring_module().WriteMode
     if modes.IN_PLACE in (run.options.mode, run.options.plan_mode if run.options.mode is modes.DRY_RUN else None):
         for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
