@@ -138,7 +138,7 @@ def processed(tmp_path_factory, model_cache):
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         code = main(["process", str(root / "png16" / "scene.usda"), str(root / "exr" / "scene.usda"),
-                     "--preset", "tiny", "--cache-dir", str(model_cache), "--json"])
+                     "--preset", "tiny", "--seeds", "1", "--cache-dir", str(model_cache), "--json"])
     payload = json.loads(out.getvalue())
     stacks = {Path(s["source"]).parent.name: s for s in payload["stacks"]}
     return root, code, payload, stacks
