@@ -396,6 +396,16 @@ def test_a_scheduler_that_cannot_be_reached_is_a_usage_error(tmp_path, capsys, m
                  "tcp://127.0.0.1:1"])
     assert code == 2 and "cannot reach the Dask scheduler" in capsys.readouterr().err
     assert not (lib / "brick0" / "scene.seamless.usda").exists()
+    # a cached stack beside one that needs the scheduler: the scheduler is reached before the cached stack's tiles are
+    # written (else they would be left with no layer naming them)
+    warm = tmp_path / "warm"
+    assert main(["process", *RUN, str(lib / "brick0"), "--cache-dir", str(warm)]) in (0, 1)
+    shutil.rmtree(lib / "brick0" / "tileable")
+    (lib / "brick0" / "scene.seamless.usda").unlink()
+    code = main(["process", *RUN, str(lib / "brick0"), str(lib / "looks"), "--cache-dir", str(warm), "--scheduler",
+                 "tcp://127.0.0.1:1"])
+    assert code == 2 and "cannot reach the Dask scheduler" in capsys.readouterr().err
+    assert not (lib / "brick0" / "tileable").exists() and not (lib / "brick0" / "scene.seamless.usda").exists()
 
 
 def test_a_cache_whose_locks_cannot_be_taken_still_gives_its_results(tmp_path, capsys):

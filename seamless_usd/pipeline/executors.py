@@ -121,6 +121,26 @@ class DaskExecutor:
         # a cluster of its own on this machine: its workers' threads; a remote one's are not known here
         self.threads_per_job = self.threads_per_worker if address == "local" else None
 
+    def _remote(self, client_type):
+        """A client of the scheduler at ``address``; a :class:`UsageError` naming it when it cannot be reached."""
+        try:
+            return client_type(self.address, timeout=CONNECT_TIMEOUT_S)
+        except Exception as exc:  # noqa: BLE001 - whatever the comm raises (a timeout, a refused or garbled line)
+            first = " ".join(str(exc).split())[:200] or type(exc).__name__
+            raise UsageError(f"--scheduler {self.address}: cannot reach the Dask scheduler ({first}); check the "
+                             "address and that the scheduler is running") from None
+
+    def reach(self) -> None:
+        """Make sure a remote scheduler answers, before a run writes anything: stacks from the cache are written in
+        this process first, and a scheduler found unreachable only after them would leave their tiles with no
+        layer. A local cluster is started when its jobs run."""
+        if self.address != "local":
+            try:
+                from distributed import Client
+            except ImportError:  # pragma: no cover - depends on the install
+                return  # said when the jobs run
+            self._remote(Client).close()
+
     def run(self, jobs, progress):
         if not jobs:  # nothing to do: no cluster started, no scheduler contacted
             return
@@ -136,12 +156,7 @@ class DaskExecutor:
             )
             client = Client(cluster)
         else:
-            try:
-                client = Client(self.address, timeout=CONNECT_TIMEOUT_S)
-            except Exception as exc:  # noqa: BLE001 - whatever the comm raises (a timeout, a refused or garbled line)
-                first = " ".join(str(exc).split())[:200] or type(exc).__name__
-                raise UsageError(f"--scheduler {self.address}: cannot reach the Dask scheduler ({first}); check the "
-                                 "address and that the scheduler is running") from None
+            client = self._remote(Client)
         try:
             futures = {}
             for job in jobs:

@@ -75,6 +75,8 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
         except OSError:  # unreadable file: the job reports it
             fingerprints[id(job)] = None
         (warm if fingerprints[id(job)] and index.finished(fingerprints[id(job)]) else cold).append(job)
+    if cold and hasattr(run.executor, "reach"):  # a remote scheduler that cannot be reached: before any tile is written
+        run.executor.reach()
     runs = [InProcessExecutor().run(warm, progress)]
     if cold:
         runs.append(run.executor.run(cold, progress))
