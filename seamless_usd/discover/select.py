@@ -63,7 +63,7 @@ def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str
         reasons = _skipped(scan, stack, UNREAD_SKIPS)
         if reasons:
             out[(source, stack.id)] = (
-                f"left alone: {', '.join(reasons)} of this material cannot be processed, and tiling the other "
+                f"not processed: {', '.join(reasons)} of this material cannot be read, and tiling the other "
                 "maps would misalign them; fix or remove that texture and run again"
             )
     return out
