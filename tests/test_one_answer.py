@@ -226,6 +226,19 @@ def test_a_materialx_stack_written_across_nodegraph_scopes_is_read_back_as_one_s
     [stack] = json.loads(capsys.readouterr().out)["stacks"]
     written = source.with_name("prefixed.seamless.mtlx")
     assert written.read_text().count('<place2d name="seamless_uv"') == 2  # one place2d per scope
+    import MaterialX as mx
+
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(written))
+    places = [n for n in doc.traverseTree() if isinstance(n, mx.Node) and n.getCategory() == "place2d"]
+    for place in places:  # each reads UV0, as the images did by default (a place2d's own default is (0, 0))
+        reader = place.getInput("texcoord").getConnectedNode()
+        assert reader is not None and reader.getCategory() == "texcoord", place.getNamePath()
+        assert int(reader.getInput("index").getValueString()) == 0
+    library = mx.createDocument()
+    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), library)
+    doc.importLibrary(library)
+    assert doc.validate()[0], doc.validate()[1]
     [scanned] = scan_paths([written]).stacks
     assert len(scanned.maps) == len(stack["maps"]) == 3
     [checked] = check_paths([written]).items

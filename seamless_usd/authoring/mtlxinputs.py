@@ -16,6 +16,7 @@ class MtlxNames:
     GLTF_PREFIX = "gltf_"  # gltf_image, gltf_colorimage, ...: their own place2d inside
     PLACE_2D = "place2d"
     UV_NODE = "seamless_uv"
+    UV_READER = "seamless_uv_texcoord"  # the texcoord node (UV0) a place2d reads where the image read its default UVs
     VECTOR2 = "vector2"
     STRING = "string"
     FILENAME = "filename"

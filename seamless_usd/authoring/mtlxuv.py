@@ -47,6 +47,8 @@ class _PlaceUV:
         name = self._uv_nodes.get(key)
         if name is None:
             aspect = 1.0
+            if not connection:  # the image read its default UVs (UV0); a place2d's own default is a constant (0, 0)
+                connection = (("nodename", self._uv0(parent).getName()),)
             if turn is not None:
                 turned = self._new_turn(parent, connection, turn.degrees, turn.aspect)
                 connection, aspect = (("nodename", turned.getName()),), turn.aspect
@@ -96,6 +98,17 @@ class _PlaceUV:
             self._plan(f"set {prim_ref(place.getNamePath())}.scale = {fmt(new)}")
         self._uv_updates[key] = (total, degrees)
         return total, degrees
+
+    def _uv0(self, parent: mx.Element) -> mx.Node:
+        """The ``texcoord`` node (index 0) in ``parent`` the inserted place2d nodes read, made once per scope: an image
+        with no ``texcoord`` input reads UV0, but a place2d with none reads a constant (0, 0)."""
+        reader = parent.getNode(MtlxNames.UV_READER)
+        if reader is None or reader.getCategory() != MtlxNames.TEXCOORD:
+            reader = parent.addNode(MtlxNames.TEXCOORD, parent.createValidChildName(MtlxNames.UV_READER),
+                                    MtlxNames.VECTOR2)
+            reader.addInput("index", "integer").setValueString("0")
+            self._plan(f"add texcoord {prim_ref(reader.getNamePath())} (UV0) for the inserted place2d")
+        return reader
 
     def _new_turn(self, parent: mx.Element, connection: tuple, degrees: float, aspect: float) -> mx.Node:
         """A turn place2d in ``parent`` fed as ``connection`` says."""

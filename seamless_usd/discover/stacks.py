@@ -28,7 +28,10 @@ def chain_key(uv: UVChain, texture_node: str) -> str:
     connected = uv.connected_from
     if connected and ours(connected.rsplit(".", 1)[0]):
         connected = Recorded.MTLX_UV_NODE  # read through its values above, whichever scope holds it
-    return json.dumps([uv.primvar, uv.reader, transforms, connected])
+    reader = uv.reader
+    if reader and reader.rsplit("/", 1)[-1] == Recorded.MTLX_UV_READER:
+        reader = None  # the UV0 reader it inserted, in whichever scope: the image's default UVs, as before
+    return json.dumps([uv.primvar if reader or uv.reader is None else None, reader, transforms, connected])
 
 
 def build_stacks(maps: list[TextureMap]) -> list[TextureStack]:

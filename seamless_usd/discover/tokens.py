@@ -199,3 +199,4 @@ class Recorded:
     MTLX_SOURCE = "seamless_sourceasset"
     MTLX_PASSED = "seamless_passed"
     MTLX_UV_NODE = "seamless_uv"  # the place2d the authoring inserts: one per nodegraph scope, the same values
+    MTLX_UV_READER = "seamless_uv_texcoord"  # the texcoord node (UV0) it reads where the image read its default
