@@ -210,3 +210,23 @@ def test_a_dry_run_plan_names_the_variant_each_edit_goes_into(tmp_path, capsys):
     assert len(plan) == 2 and {line.rsplit("inside variant ", 1)[1] for line in plan} == {
         "{finish=wood} of </Prop>", "{finish=cloth} of </Prop>"}
     assert all("tileable/" in line for line in plan)
+
+
+def test_in_place_edits_of_a_texture_whose_file_each_variant_sets_stay_inside_each_variant(tmp_path, capsys):
+    """The prop's floor texture is defined once, its file set inside each variant of ``finish`` (cloth, wood) in the
+    same layer: in place, each variant's new file goes inside that variant, so each selection shows its own tile
+    (the edits went to the texture's definition, above every variant, and both showed the cloth's tile)."""
+    for name in ("prop", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene = tmp_path / "prop" / "prop.usda"
+    main(["process", "--in-place", "--preset", "tiny", "--seeds", "1", "--max-size", "128", "--cache-dir",
+          str(tmp_path / "cache"), "--json", str(scene)])
+    payload = json.loads(capsys.readouterr().out)
+    floor = {s["variant"]: s for s in payload["stacks"] if s["material"] == "</Prop/Materials/M_floor>"}
+    stage = Usd.Stage.Open(str(scene), Usd.Stage.LoadAll)
+    finish = stage.GetPrimAtPath("/Prop").GetVariantSets().GetVariantSet("finish")
+    for selection, source in (("cloth", "cloth"), ("wood", "wood_color")):
+        finish.SetVariantSelection(selection)
+        value = _file(stage, "/Prop/Materials/M_floor/diffuseColorTex")
+        assert value is not None and Path(value).name.startswith(f"{source}.Prop_Materials_M_floor-"), (selection, value)
+    assert len(floor) == 2

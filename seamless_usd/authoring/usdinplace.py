@@ -42,9 +42,11 @@ def _prim_nodes(prim: Usd.Prim):
         stack.extend(node.children)
 
 
-def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None, layer: Sdf.Layer | None = None):
+def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None, layer: Sdf.Layer | None = None, node=None):
     """Where an in-place edit goes: ``layer`` (the layer of the texture's file value, which gets all of that
-    texture's edits), else the strongest layer holding the opinion; mapped into it."""
+    texture's edits) through ``node`` (the composition node holding that value: inside a variant, every edit of
+    the texture stays inside that variant, or it would replace the other variants' textures), else the strongest
+    layer holding the opinion; mapped into it."""
     if layer is None:
         layers = [s.layer for s in attr.GetPropertyStack(Usd.TimeCode.Default())] if attr else []
         layers += [s.layer for s in prim.GetPrimStack()]
@@ -54,6 +56,8 @@ def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None, layer: Sdf.Laye
     problem = _editable(layer)
     if problem is not None:
         return problem
+    if node is not None and node and layer in node.layerStack.layers and layer.GetPrimAtPath(node.path):
+        return Usd.EditTarget(layer, node)
     for node in _prim_nodes(prim):
         if layer in node.layerStack.layers and layer.GetPrimAtPath(node.path):
             return Usd.EditTarget(layer, node)

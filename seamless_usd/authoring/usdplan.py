@@ -46,6 +46,7 @@ class _Author(_UVPlanner):
         self.one_layer = False
         self.owners: list[str] = []  # the stack id of each planned edit, in order ("" for one of no map's)
         self._anchor: Sdf.Layer | None = None  # one_layer: the layer of the current texture's file value
+        self._anchor_node = None  # ... and the composition node holding it (a variant's: the edits stay inside it)
         self.planned_maps = 0
         self.variant_layer: Sdf.Layer | None = None  # new-layer mode: edits follow the opinion's variant
         self._context: Usd.EditTarget | None = None  # the current map's edit target (variant_layer or one_layer)
@@ -123,8 +124,8 @@ class _Author(_UVPlanner):
         if self._context is not None:
             target = self._context
         else:
-            target = self.target_for(prim, attr, self._anchor) if self._anchor is not None else self.target_for(prim,
-                                                                                                              attr)
+            target = (self.target_for(prim, attr, self._anchor, self._anchor_node) if self._anchor is not None
+                      else self.target_for(prim, attr))
         if isinstance(target, Finding):
             self.result.findings.append(target)
             self._refused = self._refused or target.message
@@ -167,11 +168,11 @@ class _Author(_UVPlanner):
         self._done[done_key] = (out, scale, tex_map.material)
         first_edit = len(self.edits)
         self._refused = None
-        self._context = self._anchor = None
+        self._context = self._anchor = self._anchor_node = None
         try:
             why = self._plan_texture(prim, tex_map, out, scale, stack_result)
         finally:
-            self._context = self._anchor = None
+            self._context = self._anchor = self._anchor_node = None
         why = why or self._refused
         if why:
             del self.edits[first_edit:]  # all of a map's edits or none
@@ -194,6 +195,7 @@ class _Author(_UVPlanner):
             file_attr = self._file_attr(prim, shader, tex_map)
             stack = file_attr.GetPropertyStack(Usd.TimeCode.Default()) if file_attr else []
             self._anchor = stack[0].layer if stack else None
+            self._anchor_node = file_attr.GetResolveInfo(Usd.TimeCode.Default()).GetNode() if stack else None
         if stack_result.wrap_only:  # already tileable: the source stays, it only has to repeat
             self._plan_wrap(prim, shader, kind)
             return None
