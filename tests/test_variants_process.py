@@ -215,7 +215,8 @@ def test_a_dry_run_plan_names_the_variant_each_edit_goes_into(tmp_path, capsys):
 def test_in_place_edits_of_a_texture_whose_file_each_variant_sets_stay_inside_each_variant(tmp_path, capsys):
     """The prop's floor texture is defined once, its file set inside each variant of ``finish`` (cloth, wood) in the
     same layer: in place, each variant's new file goes inside that variant, so each selection shows its own tile
-    (the edits went to the texture's definition, above every variant, and both showed the cloth's tile)."""
+    (the edits went to the texture's definition, above every variant, and both showed the cloth's tile). Its UV
+    scale cannot be composed there (below), and the stacks are failed saying why."""
     for name in ("prop", "textures"):
         shutil.copytree(SAMPLES / name, tmp_path / name)
     scene = tmp_path / "prop" / "prop.usda"
@@ -230,3 +231,72 @@ def test_in_place_edits_of_a_texture_whose_file_each_variant_sets_stay_inside_ea
         value = _file(stage, "/Prop/Materials/M_floor/diffuseColorTex")
         assert value is not None and Path(value).name.startswith(f"{source}.Prop_Materials_M_floor-"), (selection, value)
     assert len(floor) == 2
+    # its st connection is authored once, outside the variants, and is stronger than the UV scale's connection inside
+    # each: the tile would show at the wrong scale, and the run says so instead of passed
+    assert all(s["status"] == "failed" and "wrong scale" in s["message"] for s in floor.values()), floor
+    assert payload["exit_code"] == 1 and any(f["code"] == "edit-not-composed" for f in payload["findings"])
+
+
+def test_a_uv_scale_a_stronger_st_connection_hides_fails_the_stack_in_a_new_layer(tmp_path, capsys):
+    """A material whose texture file is set inside variants while its ``st`` connection is authored outside them, in
+    the root layer: the new layer's edits go inside the variant, where the root layer's own ``st`` connection is
+    stronger, so the tile would show at the wrong scale. The stack is failed naming the layer, not passed."""
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    (tmp_path / "scene.usda").write_text('''#usda 1.0
+(
+    defaultPrim = "World"
+)
+
+def Xform "World"
+{
+    def Scope "Looks" (
+        variants = {
+            string look = "brick"
+        }
+        prepend variantSets = "look"
+    )
+    {
+        def Material "Base"
+        {
+            token outputs:surface.connect = </World/Looks/Base/Surface.outputs:surface>
+
+            def Shader "Surface"
+            {
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor.connect = </World/Looks/Base/Albedo.outputs:rgb>
+                token outputs:surface
+            }
+
+            def Shader "St"
+            {
+                uniform token info:id = "UsdPrimvarReader_float2"
+                string inputs:varname = "st"
+                float2 outputs:result
+            }
+
+            def Shader "Albedo"
+            {
+                uniform token info:id = "UsdUVTexture"
+                float2 inputs:st.connect = </World/Looks/Base/St.outputs:result>
+                float3 outputs:rgb
+            }
+        }
+        variantSet "look" = {
+            "brick" {
+                over "Base"
+                {
+                    over "Albedo"
+                    {
+                        asset inputs:file = @./textures/brick_albedo.png@
+                    }
+                }
+            }
+        }
+    }
+}
+''')
+    code = main(["process", "--preset", "tiny", "--seeds", "1", "--max-size", "128", "--force", "--cache-dir",
+                 str(tmp_path / "cache"), "--json", str(tmp_path / "scene.usda")])
+    payload = json.loads(capsys.readouterr().out)
+    [stack] = payload["stacks"]
+    assert stack["status"] == "failed" and "wrong scale" in stack["message"] and code == 1, stack

@@ -25,6 +25,7 @@ from pxr import Sdf, Tf, Usd
 from seamless_usd.authoring.files import check_layer, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.fileio import source_sha256
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode
+from seamless_usd.authoring.usdedits import check_uv_composed
 from seamless_usd.authoring.usdinplace import _author_in_place, _open_layer
 from seamless_usd.authoring.usdnodes import Names, uv_affine
 from seamless_usd.authoring.usdplan import _Author, _layer_name
@@ -147,6 +148,7 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
     author.apply()
     if result.dry_run:
         return result
+    check_uv_composed(author, results, result)
     del author, stage, source  # the relative sublayer path below would not resolve from memory
     saved = Sdf.Layer.CreateAnonymous(".usda")
     saved.TransferContent(overrides)

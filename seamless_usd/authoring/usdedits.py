@@ -2,17 +2,18 @@
 where a new layer's edits go when the opinion they override is authored inside a variant."""
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from pxr import Sdf, Usd
 
-from seamless_usd.authoring.types import Codes
+from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult
 
 from seamless_usd.authoring.usdnodes import Names
 from seamless_usd.textures import TextureStack, describe_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
-__all__ = ["variant_edit_target", "variant_not_composed"]
+__all__ = ["variant_edit_target", "variant_not_composed", "check_uv_composed"]
 
 
 class _EditKind:
@@ -169,3 +170,43 @@ def variant_not_composed(stack: TextureStack) -> Finding:
         Severity.SKIPPED, Codes.VARIANT_NOT_EDITABLE, stack.material,
         f"found under variant selection {describe_selection(stack.selection)}, which this open stage does not "
         "make; nothing written for it (process the file to edit that variant)", material=stack.material)
+
+
+def check_uv_composed(author, results: Sequence[StackResult], result: AuthoringResult) -> None:
+    """Every texture-coordinate connection authored (a texture's ``st`` / ``texcoord`` to its UV scale) is the one
+    the stage composes, under the variant selection its stack was found in; a texture whose new connection loses to a
+    stronger one (an ``st`` authored outside the variant that holds its file) is recorded as not written, with a
+    finding: its tile would show at the wrong scale."""
+    from seamless_usd.discover.variants import apply_selection
+
+    selections = {r.stack.id: r.stack.selection for r in results}
+    nodes = {str(Sdf.Path(m.map.node.strip("<>"))): prim_ref(m.map.node.strip("<>")) for r in results for m in r.maps}
+    session = author.stage.GetSessionLayer()
+    composed = None
+    try:
+        for edit, owner in zip(author.edits, author.owners):
+            if edit.kind != _EditKind.CONNECT or edit.path.name not in ("inputs:st", "inputs:texcoord"):
+                continue
+            node = nodes.get(str(edit.path.GetPrimPath()))
+            if node is None or node in result.unwritten_nodes():
+                continue
+            selection = selections.get(owner, ())
+            if selection != composed:
+                apply_selection(session, selection)
+                composed = selection
+            attr = author.stage.GetAttributeAtPath(edit.path)
+            if attr and edit.value in attr.GetConnections():
+                continue
+            specs = attr.GetPropertyStack() if attr else []
+            holder = (specs[0].layer.realPath or specs[0].layer.identifier) if specs else "another layer"
+            layer = edit.target.GetLayer()
+            written = author.layer_names.get(layer) or layer.realPath or layer.identifier
+            why = (f"its new UV scale is authored in {asset_ref(written)}, but the "
+                   f"texture-coordinate connection {asset_ref(holder)} holds is stronger and the stage keeps it, so "
+                   "the tile would show at the wrong scale (an st connection outside the variant that sets the "
+                   "file): connect st inside each variant, or write the edits into that layer")
+            result.not_written.append((node, why))
+            result.findings.append(Finding(Severity.ERROR, Codes.EDIT_NOT_COMPOSED, node, why))
+    finally:
+        if composed:
+            apply_selection(session, ())

@@ -8,6 +8,7 @@ from pxr import Ar, Sdf, Tf, Usd
 
 from seamless_usd.authoring.files import backup_once, check_layer, write_atomically
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult
+from seamless_usd.authoring.usdedits import check_uv_composed
 from seamless_usd.authoring.usdplan import _Author
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import marked_writable
@@ -97,6 +98,7 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
                              "save or reload it first")
     try:
         author.apply()
+        check_uv_composed(author, results, result)
         for layer in sorted(changed, key=lambda lay: lay.realPath):
             path = Path(layer.realPath)
             result.backups.append(backup_once(path))
