@@ -272,3 +272,56 @@ def test_a_second_run_for_other_materials_keeps_the_first_runs_edits(document: P
     assert "tileable/albedo_tile.png" not in values.values() and "tileable/rough_tile.png" in values.values()
     [lost] = [f for f in third.findings if f.code == "mtlx-edits-replaced"]
     assert "NG_brick/image_color" in lost.message and "tiled_rough" not in lost.message
+
+
+CONNECTED_TILING = """<?xml version="1.0"?>
+<materialx version="1.39">
+  <nodegraph name="NG">
+    <constant name="k" type="vector2">
+      <input name="value" type="vector2" value="2.0, 2.0" />
+    </constant>
+    <tiledimage name="brick_color" type="color3">
+      <input name="file" type="filename" value="textures/brick_albedo.png" colorspace="srgb_texture" />
+      <input name="uvtiling" type="vector2" nodename="k" />
+    </tiledimage>
+    <output name="out" type="color3" nodename="brick_color" />
+  </nodegraph>
+  <standard_surface name="SR" type="surfaceshader">
+    <input name="base_color" type="color3" nodegraph="NG" output="out" />
+  </standard_surface>
+  <surfacematerial name="M" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="SR" />
+  </surfacematerial>
+</materialx>
+"""
+
+
+def test_a_uvtiling_fed_by_another_node_is_scaled_by_a_multiply_after_it(tmp_path, capsys):
+    """A tiledimage whose uvtiling comes from a constant node: the UV scale multiplies that connection through a node
+    of its own (a value beside the connection was a second binding: an invalid document, and no scale applied); a
+    run on the new document updates that node instead of adding another."""
+    import json
+    import shutil
+
+    from seamless_usd_cli.main import main
+
+    shutil.copytree(Path(__file__).resolve().parents[1] / "sample_assets" / "textures", tmp_path / "textures")
+    (tmp_path / "doc.mtlx").write_text(CONNECTED_TILING)
+    args = ["--force", "--preset", "tiny", "--seeds", "1", "--max-size", "128", "--cache-dir", str(tmp_path / "cache"),
+            "--json"]
+    main(["process", str(tmp_path / "doc.mtlx"), *args])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(tmp_path / "doc.seamless.mtlx"))
+    library = mx.createDocument()
+    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), library)
+    doc.importLibrary(library)
+    assert doc.validate()[0], doc.validate()[1]
+    tiling = doc.getDescendant("NG/brick_color").getInput("uvtiling")
+    product = tiling.getConnectedNode()
+    assert product.getCategory() == "multiply" and product.getInput("in1").getNodeName() == "k"
+    factor = [float(v) for v in product.getInput("in2").getValueString().split(",")]
+    assert factor == pytest.approx(stack["uv_scale"], rel=1e-6) and not tiling.getValueString()
+    main(["process", str(tmp_path / "doc.seamless.mtlx"), "--in-place", *args])
+    capsys.readouterr()
+    assert (tmp_path / "doc.seamless.mtlx").read_text().count("<multiply") == 1

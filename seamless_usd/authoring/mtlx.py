@@ -326,6 +326,9 @@ class _MtlxAuthor(_PlaceUV):
             undo = prior or (1.0, 1.0)
             for name in (MtlxNames.UV_TILING, MtlxNames.UV_OFFSET):
                 inp = self._authored(node, name, MtlxNames.VECTOR2)
+                if isinstance(inp, mx.Input) and (inp.getNodeName() or inp.getNodeGraphString()):  # fed by a node
+                    self._scale_connected(inp, name, total)
+                    continue
                 where = inp.getNamePath()
                 value = vector2(inp.getValueString()) if inp.getValueString() else (
                     (1.0, 1.0) if name == MtlxNames.UV_TILING else (0.0, 0.0))

@@ -31,6 +31,7 @@ class MtlxNames:
     CONNECTION_ATTRS = ("nodename", "nodegraph", "output", "interfacename", "value")
     MARK_UV = "seamless_uvtransform"  # "true" on the scale place2d seamless-usd inserted, "turn" on its turn
     MARK_TURN = "turn"
+    MARK_TILING = "tiling"  # on the multiply node that scales a tiledimage's connected uvtiling / uvoffset
     UV_TURN_NODE = "seamless_uv_turn"
     ROTATE = "rotate"
     FLOAT = "float"

@@ -110,6 +110,29 @@ class _PlaceUV:
             self._plan(f"add texcoord {prim_ref(reader.getNamePath())} (UV0) for the inserted place2d")
         return reader
 
+    def _scale_connected(self, inp: mx.Input, name: str, total) -> None:
+        """A ``tiledimage``'s ``uvtiling`` / ``uvoffset`` fed by another node (a constant, a graph): a ``multiply``
+        node after that connection by the total UV scale (a value beside the connection would be a second binding,
+        which MaterialX refuses); a run before's multiply node gets the new total."""
+        upstream = inp.getConnectedNode()
+        if upstream is not None and upstream.getAttribute(MtlxNames.MARK_UV) == MtlxNames.MARK_TILING:
+            factor = upstream.getInput("in2") or upstream.addInput("in2", MtlxNames.VECTOR2)
+            if _pair(upstream, "in2", (1.0, 1.0)) != tuple(total):
+                set_vector2(factor, tuple(total))
+                self._plan(f"set {prim_ref(factor.getNamePath())} = {fmt(tuple(total))}")
+            return
+        scope = inp.getParent().getParent()
+        product = scope.addNode("multiply", scope.createValidChildName(f"seamless_{name}"), MtlxNames.VECTOR2)
+        product.setAttribute(MtlxNames.MARK_UV, MtlxNames.MARK_TILING)
+        first = product.addInput("in1", MtlxNames.VECTOR2)
+        for attr in MtlxNames.CONNECTION_ATTRS:
+            if inp.hasAttribute(attr) and attr != "value":
+                first.setAttribute(attr, inp.getAttribute(attr))
+                inp.removeAttribute(attr)
+        set_vector2(product.addInput("in2", MtlxNames.VECTOR2), tuple(total))
+        inp.setNodeName(product.getName())
+        self._plan(f"add multiply {prim_ref(product.getNamePath())} = {name} x {fmt(tuple(total))}")
+
     def _new_turn(self, parent: mx.Element, connection: tuple, degrees: float, aspect: float) -> mx.Node:
         """A turn place2d in ``parent`` fed as ``connection`` says."""
         turned = parent.addNode(MtlxNames.PLACE_2D, parent.createValidChildName(MtlxNames.UV_TURN_NODE),
