@@ -325,3 +325,24 @@ def test_a_uvtiling_fed_by_another_node_is_scaled_by_a_multiply_after_it(tmp_pat
     main(["process", str(tmp_path / "doc.seamless.mtlx"), "--in-place", *args])
     capsys.readouterr()
     assert (tmp_path / "doc.seamless.mtlx").read_text().count("<multiply") == 1
+
+
+def test_the_users_comments_are_kept_in_the_document_edited_in_place_and_the_new_one(tmp_path, capsys):
+    """A document's comments (a header before its root, a note inside it) survive an in-place edit and the new
+    document a run writes beside it; MaterialX drops them unless asked to read them."""
+    import shutil
+
+    from seamless_usd_cli.main import main
+
+    shutil.copytree(Path(__file__).resolve().parents[1] / "sample_assets" / "textures", tmp_path / "textures")
+    text = CONNECTED_TILING.replace('<?xml version="1.0"?>\n', '<?xml version="1.0"?>\n<!-- asset brick v3 -->\n')
+    text = text.replace('  <nodegraph name="NG">', '  <!-- approved by lookdev: keep the roughness -->\n  <nodegraph name="NG">')
+    args = ["--force", "--preset", "tiny", "--seeds", "1", "--max-size", "128", "--cache-dir", str(tmp_path / "cache")]
+    for name, extra in (("new.mtlx", ()), ("edited.mtlx", ("--in-place",))):
+        (tmp_path / name).write_text(text)
+        main(["process", str(tmp_path / name), *args, *extra])
+        capsys.readouterr()
+        written = tmp_path / (name if extra else name.replace(".mtlx", ".seamless.mtlx"))
+        out = written.read_text()
+        assert "<!-- asset brick v3 -->" in out and "<!-- approved by lookdev: keep the roughness -->" in out, out
+        assert out.index("<!-- asset brick v3 -->") < out.index("<materialx")

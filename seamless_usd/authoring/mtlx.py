@@ -19,6 +19,7 @@ import MaterialX as mx
 from seamless_usd.authoring.mtlxinputs import MtlxNames, UnauthoredInput, fmt, gltf_identity, set_vector2, vector2
 from seamless_usd.authoring.mtlxuv import _PlaceUV
 from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset_path, write_atomically
+from seamless_usd.authoring.mtlxtext import read_options, with_leading_comments
 from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn,
                                           WriteMode, shared_with)
 from seamless_usd.textures import Origin
@@ -62,7 +63,7 @@ def author_mtlx(
     if from_source:
         doc = mx.createDocument()
         try:
-            mx.readFromXmlFile(doc, str(src))
+            mx.readFromXmlFile(doc, str(src), mx.FileSearchPath(), read_options())
         except Exception as exc:  # MaterialX raises its own ExceptionFileMissing / ExceptionParseError
             raise InputError(f"{asset_ref(src)}: cannot be read as a MaterialX document ({exc})") from None
     author = _MtlxAuthor(doc, src, out, result)
@@ -97,7 +98,7 @@ def author_mtlx(
         return result
     # Written through Python: MaterialX's own file writer ignores write errors (a full disk gives
     # an empty document), Python raises them.
-    text = mx.writeToXmlString(doc)
+    text = with_leading_comments(mx.writeToXmlString(doc), src)
     with layer_lock(src):
         if mode is WriteMode.IN_PLACE:
             result.backups.append(backup_once(src))
@@ -115,7 +116,7 @@ def _earlier_output(src: Path, out: Path, source_hash: str) -> tuple[mx.Document
         return None, []
     earlier = mx.createDocument()
     try:
-        mx.readFromXmlFile(earlier, str(out))
+        mx.readFromXmlFile(earlier, str(out), mx.FileSearchPath(), read_options())
     except Exception:  # not a document any more: it is replaced
         return None, []
     if source_hash and earlier.getAttribute(MtlxNames.MADE_FROM) == source_hash:
