@@ -579,3 +579,76 @@ def test_dry_run_before_tiles_exist(scene: Path):
     shutil.rmtree(root / "tileable")
     result = author_usd(scene, [brick_result(root)], mode=WriteMode.DRY_RUN)
     assert not result.findings and result.plan and not (root / "tileable").exists()
+
+
+MTLX_IMAGE_WITHOUT_TEXCOORD = """#usda 1.0
+(
+    defaultPrim = "World"
+)
+
+def Xform "World"
+{
+    def Mesh "Floor" (
+        prepend apiSchemas = ["MaterialBindingAPI"]
+    )
+    {
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(0, 0, 0), (4, 0, 0), (4, 0, 4), (0, 0, 4)]
+        texCoord2f[] primvars:st = [(0, 0), (4, 0), (4, 4), (0, 4)] (
+            interpolation = "vertex"
+        )
+        rel material:binding = </World/Looks/B>
+    }
+
+    def Scope "Looks"
+    {
+        def Material "B"
+        {
+            token outputs:mtlx:surface.connect = </World/Looks/B/SR.outputs:out>
+
+            def Shader "SR"
+            {
+                uniform token info:id = "ND_standard_surface_surfaceshader"
+                color3f inputs:base_color.connect = </World/Looks/B/Img.outputs:out>
+                token outputs:out
+            }
+
+            def Shader "Img"
+            {
+                uniform token info:id = "ND_image_color3"
+                asset inputs:file = @./textures/brick_albedo.png@
+                color3f outputs:out
+            }
+        }
+    }
+}
+"""
+
+
+def test_a_materialx_image_in_usd_with_no_texcoord_gets_its_uv_scale_through_a_uv0_reader(tmp_path, capsys):
+    """An ND_image shader with no texcoord input reads UV0; its UV scale goes through a place2d that reads UV0 through
+    an ND_texcoord node (a place2d's own default texcoord is a constant), so the tile keeps the source's texel
+    density instead of being stretched over the UV square with a warning and a passed status."""
+    import json
+    import shutil
+
+    from seamless_usd_cli.main import main
+
+    shutil.copytree(Path(__file__).resolve().parents[1] / "sample_assets" / "textures", tmp_path / "textures")
+    (tmp_path / "scene.usda").write_text(MTLX_IMAGE_WITHOUT_TEXCOORD)
+    main(["process", str(tmp_path / "scene.usda"), "--force", "--preset", "tiny", "--seeds", "1", "--max-size", "128",
+          "--cache-dir", str(tmp_path / "cache"), "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    [stack] = payload["stacks"]
+    assert not [f for f in payload["findings"] if f["code"] == "no-uv-input"], payload["findings"]
+    stage = Usd.Stage.Open(str(tmp_path / "scene.seamless.usda"))
+    image = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/B/Img"))
+    [place] = image.GetInput("texcoord").GetConnectedSources()[0]
+    place = UsdShade.Shader(place.source.GetPrim())
+    assert place.GetShaderId() == "ND_place2d_vector2"
+    scale = place.GetInput("scale").Get()
+    assert (1 / scale[0], 1 / scale[1]) == pytest.approx(stack["uv_scale"], rel=1e-5)
+    [reader] = place.GetInput("texcoord").GetConnectedSources()[0]
+    reader = UsdShade.Shader(reader.source.GetPrim())
+    assert reader.GetShaderId() == "ND_texcoord_vector2" and reader.GetInput("index").Get() == 0

@@ -25,6 +25,8 @@ class Names:
     USD_UV_TEXTURE = "UsdUVTexture"
     USD_TRANSFORM_2D = "UsdTransform2d"
     MX_PLACE_2D = "ND_place2d_vector2"
+    MX_TEXCOORD = "ND_texcoord_vector2"
+    UV_READER = "SeamlessUVReader"  # the texcoord node (UV0) a MaterialX image with no texcoord input gets
     MX_IMAGE_PREFIX = "ND_image_"
     MX_TILED_PREFIX = "ND_tiledimage_"
     MX_GLTF_IMAGE_PREFIX = "ND_gltf_"

@@ -60,19 +60,22 @@ class _UVPlanner:
             return (1.0, 1.0), 0.0
         uv_input = shader.GetInput(_uv_input_name(kind))
         source = _connected(uv_input)
-        if source is None:
+        place = kind != _Kind.USD_UV_TEXTURE
+        uv_path = prim.GetPath().AppendProperty(f"inputs:{_uv_input_name(kind)}")
+        if source is None and not place:
             self._find(Severity.WARNING, Codes.NO_UV, prim_ref(prim.GetPath()),
                        "texture coordinates are not connected; UVs not scaled")
             return (1.0, 1.0), 0.0
-        place = kind != _Kind.USD_UV_TEXTURE
-        if is_seamless_uv_transform(source.GetPrim()):
+        if source is not None and is_seamless_uv_transform(source.GetPrim()):
             return self._update_uv(UsdShade.Shader(source.GetPrim()), scale, from_source, turn, place)
-        source_attr = _connection_source_attr(uv_input)
-        key = (str(prim.GetPath().GetParentPath()), str(source_attr), scale, turn, place, self._selection)
-        node_path = self._uv_nodes.get(key)
-        target = self._target(prim, uv_input.GetAttr())
+        target = self._target(prim, uv_input.GetAttr() if uv_input else None)
         if target is None:
             return None
+        # a MaterialX image with no texcoord reads UV0; the place2d inserted before it reads it through a texcoord
+        # node (a place2d's own default is a constant (0, 0))
+        source_attr = _connection_source_attr(uv_input) if source is not None else self._uv0_reader(prim, target)
+        key = (str(prim.GetPath().GetParentPath()), str(source_attr), scale, turn, place, self._selection)
+        node_path = self._uv_nodes.get(key)
         if node_path is None:
             aspect = 1.0
             if turn is not None:
@@ -82,10 +85,33 @@ class _UVPlanner:
                                           {Names.SCALE: scale_node_value(scale, aspect, place)})
             self._uv_nodes[key] = node_path
         out_name = Names.OUT if place else Names.RESULT
-        self.edits.append(_Edit(target, _EditKind.CONNECT, uv_input.GetAttr().GetPath(),
-                                Sdf.ValueTypeNames.Float2,
+        self.edits.append(_Edit(target, _EditKind.CONNECT, uv_path, Sdf.ValueTypeNames.Float2,
                                 node_path.AppendProperty(f"outputs:{out_name}")))
         return scale, (turn.degrees if turn else 0.0)
+
+    def _uv0_reader(self, prim, target) -> Sdf.Path:
+        """The output of a MaterialX ``texcoord`` node (index 0) beside ``prim``, made once per material and
+        selection: what a MaterialX image with no texcoord input reads."""
+        parent = prim.GetPath().GetParentPath()
+        key = (str(parent), "uv0", self._selection)
+        if key not in self._uv_nodes:
+            path = parent.AppendChild(Names.UV_READER)
+            n = 0
+            while self.stage.GetPrimAtPath(path) or (path, self._selection) in self._reserved:
+                n += 1
+                path = parent.AppendChild(f"{Names.UV_READER}_{n}")
+            self._reserved.add((path, self._selection))
+            target = self._sibling_target(prim, target)
+            self.edits += [
+                _Edit(target, _EditKind.DEFINE, path, value=f"{Names.MX_TEXCOORD} node"),
+                _Edit(target, _EditKind.VALUE, path.AppendProperty(Names.INFO_ID), Sdf.ValueTypeNames.Token,
+                      Names.MX_TEXCOORD, Sdf.VariabilityUniform),
+                _Edit(target, _EditKind.VALUE, path.AppendProperty("inputs:index"), Sdf.ValueTypeNames.Int, 0),
+                _Edit(target, _EditKind.VALUE, path.AppendProperty(f"outputs:{Names.OUT}"), Sdf.ValueTypeNames.Float2,
+                      None),
+            ]
+            self._uv_nodes[key] = path.AppendProperty(f"outputs:{Names.OUT}")
+        return self._uv_nodes[key]
 
     def _update_uv(self, node: UsdShade.Shader, scale, from_source: bool, turn: UVTurn | None, place: bool):
         """Update the UV scale node a run before inserted (and the turn before it, adding one where a turn is
