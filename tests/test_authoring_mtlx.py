@@ -346,3 +346,18 @@ def test_the_users_comments_are_kept_in_the_document_edited_in_place_and_the_new
         out = written.read_text()
         assert "<!-- asset brick v3 -->" in out and "<!-- approved by lookdev: keep the roughness -->" in out, out
         assert out.index("<!-- asset brick v3 -->") < out.index("<materialx")
+
+
+def test_a_dry_run_names_the_tiledimage_uvtiling_edit(tmp_path, capsys):
+    import json
+    import shutil
+
+    from seamless_usd_cli.main import main
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("mtlx", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    assert main(["process", str(tmp_path / "mtlx" / "tiled.mtlx"), "--dry-run", "--preset", "tiny", "--cache-dir",
+                 str(tmp_path / "cache"), "--json"]) == 0
+    plan = json.loads(capsys.readouterr().out)["plan"]
+    assert any("uvtiling> = 2.0, 2.0 x the tile's UV scale" in line for line in plan), plan

@@ -345,6 +345,8 @@ class _MtlxAuthor(_PlaceUV):
                 if any(abs(new[i] - value[i]) > 1e-9 for i in range(2)):
                     set_vector2(inp, new)
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {fmt(new)}")
+                elif self.result.dry_run and name == MtlxNames.UV_TILING:  # the scale is known once the tile is made
+                    self._plan(f"set {prim_ref(inp.getNamePath())} = {fmt(value)} x the tile's UV scale")
         elif category.startswith(MtlxNames.GLTF_PREFIX) and not gltf_identity(node):
             self.result.findings.append(Finding(
                 Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(node_path),
