@@ -182,7 +182,11 @@ def test_in_place_every_edit_of_a_texture_goes_where_its_file_is(tmp_path, overr
 
     shot = _library_and_shot(tmp_path, override)
     library = (tmp_path / "lib" / "mat.usda").read_bytes()
+    planned = author_usd(shot, stand_ins(shot), mode=WriteMode.DRY_RUN, plan_mode=WriteMode.IN_PLACE)
     result = author_usd(shot, stand_ins(shot), mode=WriteMode.IN_PLACE)
+    # the dry run warns as the run does
+    assert [f.code for f in planned.findings if f.code == "shared-layer-edited"] == [
+        f.code for f in result.findings if f.code == "shared-layer-edited"]
     stage = Usd.Stage.Open(str(shot))
     tex = stage.GetPrimAtPath("/World/M/diffuseColorTex")
     assert "_tile" in tex.GetAttribute("inputs:file").Get().path

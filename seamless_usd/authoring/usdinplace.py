@@ -82,9 +82,6 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
                                            "every texture already has these edits; nothing saved"))
         return result
-    if dry_run:
-        author.apply()  # records the plan only
-        return result
     changed = {edit.target.GetLayer() for edit in author.edits}
     own = set(stage.GetLayerStack(includeSessionLayers=False))
     for layer in sorted(changed - own, key=lambda lay: lay.identifier):  # a library's: other stages change too
@@ -92,6 +89,9 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
             Severity.WARNING, Codes.SHARED_LAYER_EDITED, asset_ref(layer.realPath or layer.identifier),
             f"edited in place, though {asset_ref(stage_path)} only references or loads it: every stage that uses it "
             "shows the tiles now, from the tiles folder of this stage (leave out --in-place for a layer of its own)"))
+    if dry_run:  # the plan, with the same warnings as the run
+        author.apply()  # records the plan only
+        return result
     for layer in changed:
         if layers.get(layer):
             raise InputError(f"{asset_ref(layer.identifier)} has unsaved changes in this process; "
