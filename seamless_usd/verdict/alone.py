@@ -184,7 +184,8 @@ def left_unread(m: FileMap) -> str:
     except InputError:
         return ""  # the reading names why it cannot be read
     parts = image_count(m.path)
-    names = info.channel_names if len(info.channel_names) == info.channels else tuple(str(i) for i in range(info.channels))
+    names = (info.channel_names if len(info.channel_names) == info.channels
+             else tuple(str(i) for i in range(info.channels)))
     alpha = alpha_channel(info) if info.channels > 1 else None
     if alpha is not None and names[alpha].lower() not in ("a", "alpha", str(alpha)):
         alpha = None  # a named channel that is not alpha (an OpenEXR's Z): one more channel
