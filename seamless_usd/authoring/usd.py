@@ -25,7 +25,7 @@ from pxr import Sdf, Tf, Usd
 from seamless_usd.authoring.files import check_layer, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.fileio import source_sha256
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode
-from seamless_usd.authoring.usdedits import check_uv_composed
+from seamless_usd.authoring.usdedits import check_uv_composed, not_composed, strongest_layer
 from seamless_usd.authoring.usdinplace import _author_in_place, _open_layer
 from seamless_usd.authoring.usdnodes import Names, uv_affine
 from seamless_usd.authoring.usdplan import _Author, _layer_name
@@ -282,13 +282,10 @@ def _check_composed(stage: Usd.Stage, edits, results: Sequence[StackResult], res
         if got is not None and got.path == edit.value.path:
             continue
         node = prim_ref(nodes.get(edit.path, str(edit.path.GetPrimPath())).strip("<>"))
-        specs = attr.GetPropertyStack() if attr else []
-        holder = (specs[0].layer.realPath or specs[0].layer.identifier) if specs else "another layer"
-        why = (f"its new file is authored in {asset_ref(_layer_name(edit.target.GetLayer()))} but "
-               f"{asset_ref(holder)} holds a stronger value, which the stage keeps; author into that layer or a "
-               "stronger one (for edits in a layer of their own, open a new root layer that sublayers the scene)")
-        if node not in result.unwritten_nodes():
-            result.not_written.append((node, why))
-            result.findings.append(Finding(Severity.ERROR, Codes.EDIT_NOT_COMPOSED, node, why))
+        not_composed(result, node, (
+            f"its new file is authored in {asset_ref(_layer_name(edit.target.GetLayer()))} but "
+            f"{asset_ref(strongest_layer(attr))} holds a stronger value, which the stage keeps; author into that "
+            "layer or a stronger one (for edits in a layer of their own, open a new root layer that sublayers the "
+            "scene)"))
 
 

@@ -13,7 +13,8 @@ from seamless_usd.authoring.usdnodes import Names
 from seamless_usd.textures import TextureStack, describe_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
-__all__ = ["variant_edit_target", "variant_not_composed", "check_uv_composed"]
+__all__ = ["variant_edit_target", "variant_not_composed", "check_uv_composed", "not_composed",
+           "strongest_layer"]
 
 
 class _EditKind:
@@ -197,16 +198,27 @@ def check_uv_composed(author, results: Sequence[StackResult], result: AuthoringR
             attr = author.stage.GetAttributeAtPath(edit.path)
             if attr and edit.value in attr.GetConnections():
                 continue
-            specs = attr.GetPropertyStack() if attr else []
-            holder = (specs[0].layer.realPath or specs[0].layer.identifier) if specs else "another layer"
             layer = edit.target.GetLayer()
             written = author.layer_names.get(layer) or layer.realPath or layer.identifier
-            why = (f"its new UV scale is authored in {asset_ref(written)}, but the "
-                   f"texture-coordinate connection {asset_ref(holder)} holds is stronger and the stage keeps it, so "
-                   "the tile would show at the wrong scale (an st connection outside the variant that sets the "
-                   "file): connect st inside each variant, or write the edits into that layer")
-            result.not_written.append((node, why))
-            result.findings.append(Finding(Severity.ERROR, Codes.EDIT_NOT_COMPOSED, node, why))
+            not_composed(result, node, (
+                f"its new UV scale is authored in {asset_ref(written)}, but the texture-coordinate connection "
+                f"{asset_ref(strongest_layer(attr))} holds is stronger and the stage keeps it, so the tile would show "
+                "at the wrong scale (an st connection outside the variant that sets the file): connect st inside "
+                "each variant, or write the edits into that layer"))
     finally:
         if composed:
             apply_selection(session, ())
+
+
+def strongest_layer(attr: Usd.Attribute | None) -> str:
+    """The file (or identifier) of the layer holding ``attr``'s strongest opinion, for a message."""
+    specs = attr.GetPropertyStack() if attr else []
+    return (specs[0].layer.realPath or specs[0].layer.identifier) if specs else "another layer"
+
+
+def not_composed(result: AuthoringResult, node: str, why: str) -> None:
+    """Record that the texture ``node``'s edits are not the ones the stage composes: not written, with an error
+    finding saying ``why`` (once a node)."""
+    if node not in result.unwritten_nodes():
+        result.not_written.append((node, why))
+        result.findings.append(Finding(Severity.ERROR, Codes.EDIT_NOT_COMPOSED, node, why))

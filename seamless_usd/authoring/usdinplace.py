@@ -57,7 +57,7 @@ def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None, layer: Sdf.Laye
     problem = _editable(layer)
     if problem is not None:
         return problem
-    if node is not None and node and layer in node.layerStack.layers and layer.GetPrimAtPath(node.path):
+    if node and layer in node.layerStack.layers and layer.GetPrimAtPath(node.path):
         return Usd.EditTarget(layer, node)
     for node in _prim_nodes(prim):
         if layer in node.layerStack.layers and layer.GetPrimAtPath(node.path):

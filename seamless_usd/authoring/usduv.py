@@ -95,17 +95,10 @@ class _UVPlanner:
         parent = prim.GetPath().GetParentPath()
         key = (str(parent), "uv0", self._selection)
         if key not in self._uv_nodes:
-            path = parent.AppendChild(Names.UV_READER)
-            n = 0
-            while self.stage.GetPrimAtPath(path) or (path, self._selection) in self._reserved:
-                n += 1
-                path = parent.AppendChild(f"{Names.UV_READER}_{n}")
-            self._reserved.add((path, self._selection))
+            path = self._free_sibling(prim, Names.UV_READER)
             target = self._sibling_target(prim, target)
             self.edits += [
-                _Edit(target, _EditKind.DEFINE, path, value=f"{Names.MX_TEXCOORD} node"),
-                _Edit(target, _EditKind.VALUE, path.AppendProperty(Names.INFO_ID), Sdf.ValueTypeNames.Token,
-                      Names.MX_TEXCOORD, Sdf.VariabilityUniform),
+                *_defined(target, path, Names.MX_TEXCOORD),
                 _Edit(target, _EditKind.VALUE, path.AppendProperty("inputs:index"), Sdf.ValueTypeNames.Int, 0),
                 _Edit(target, _EditKind.VALUE, path.AppendProperty(f"outputs:{Names.OUT}"), Sdf.ValueTypeNames.Float2,
                       None),
@@ -160,14 +153,7 @@ class _UVPlanner:
                      ) -> Sdf.Path:
         """A new UsdTransform2d (``place``: MaterialX place2d) named ``base`` (or ``base_N``) beside ``prim``,
         fed by ``source_attr``, holding ``inputs`` (name -> a float or a pair), marked as this tool's."""
-        parent = prim.GetPath().GetParentPath()
-        name, n = base, 0
-        while (self.stage.GetPrimAtPath(parent.AppendChild(name))
-               or (parent.AppendChild(name), self._selection) in self._reserved):
-            n += 1
-            name = f"{base}_{n}"
-        path = parent.AppendChild(name)
-        self._reserved.add((path, self._selection))
+        path = self._free_sibling(prim, base)
         target = self._sibling_target(prim, target)
         f2 = Sdf.ValueTypeNames.Float2
         if place:
@@ -175,9 +161,7 @@ class _UVPlanner:
         else:
             node_id, in_name, out_name = Names.USD_TRANSFORM_2D, Names.IN, Names.RESULT
         self.edits += [
-            _Edit(target, _EditKind.DEFINE, path, value=f"{node_id} node"),
-            _Edit(target, _EditKind.VALUE, path.AppendProperty(Names.INFO_ID), Sdf.ValueTypeNames.Token,
-                  node_id, Sdf.VariabilityUniform),
+            *_defined(target, path, node_id),
             _Edit(target, _EditKind.CONNECT, path.AppendProperty(f"inputs:{in_name}"), f2, source_attr),
         ]
         for input_name, value in inputs.items():
@@ -191,6 +175,17 @@ class _UVPlanner:
         ]
         return path
 
+    def _free_sibling(self, prim, base: str) -> Sdf.Path:
+        """A path beside ``prim`` named ``base`` (or ``base_N``) that no prim of the stage, nor a node planned under
+        this selection, holds; reserved."""
+        parent = prim.GetPath().GetParentPath()
+        path, n = parent.AppendChild(base), 0
+        while self.stage.GetPrimAtPath(path) or (path, self._selection) in self._reserved:
+            n += 1
+            path = parent.AppendChild(f"{base}_{n}")
+        self._reserved.add((path, self._selection))
+        return path
+
     def _sibling_target(self, prim, target: Usd.EditTarget) -> Usd.EditTarget:
         """Where a new sibling of ``prim`` is defined: ``target``'s layer, mapped through the
         parent's own prim-index node. A node's mapping may cover only its own prim (a material
@@ -202,6 +197,13 @@ class _UVPlanner:
         if isinstance(parent_target, Usd.EditTarget) and parent_target.GetLayer() == target.GetLayer():
             return parent_target
         return target
+
+
+def _defined(target: Usd.EditTarget, path: Sdf.Path, node_id: str) -> list[_Edit]:
+    """The edits that define a shader node of ``node_id`` at ``path``."""
+    return [_Edit(target, _EditKind.DEFINE, path, value=f"{node_id} node"),
+            _Edit(target, _EditKind.VALUE, path.AppendProperty(Names.INFO_ID), Sdf.ValueTypeNames.Token, node_id,
+                  Sdf.VariabilityUniform)]
 
 
 def _rotation(place: bool) -> str:

@@ -28,10 +28,10 @@ def chain_key(uv: UVChain, texture_node: str) -> str:
     connected = uv.connected_from
     if connected and ours(connected.rsplit(".", 1)[0]):
         connected = Recorded.MTLX_UV_NODE  # read through its values above, whichever scope holds it
-    reader = uv.reader
+    reader, primvar = uv.reader, uv.primvar
     if reader and reader.rsplit("/", 1)[-1] == Recorded.MTLX_UV_READER:
-        reader = None  # the UV0 reader it inserted, in whichever scope: the image's default UVs, as before
-    return json.dumps([uv.primvar if reader or uv.reader is None else None, reader, transforms, connected])
+        reader = primvar = None  # the UV0 reader it inserted, in whichever scope: the image's default UVs, as before
+    return json.dumps([primvar, reader, transforms, connected])
 
 
 def build_stacks(maps: list[TextureMap]) -> list[TextureStack]:

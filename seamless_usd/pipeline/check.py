@@ -161,24 +161,26 @@ def _alone(item: CheckItem, files: list) -> None:
     verdict, reading = judge_alone(files)
     item.verdict = verdict.as_dict()
     doubts = normal_doubts(files)  # a normal map that does not read as one: said, as process says it
+    headers = [_header(m) for m in files]  # each file's header, read once for the two questions below
     if item.name == item.source:  # a picture: what of its file the verdict did not read (alpha, layers, parts)
-        doubts += [f for f in (left_unread(m) for m in files) if f]
+        doubts += [f for f in (left_unread(m, h) for m, h in zip(files, headers)) if f]
     if doubts:
         item.note = "; ".join(([item.note] if item.note else []) + doubts)
-    uri, size, scale = thumbnail(reading, linear=_linear_light(files[0]))
+    # a float file's colour is linear light: shown through the sRGB transfer, as a viewer shows it
+    linear = headers[0] is not None and headers[0].dtype in ("half", "float") and not files[0].is_normal \
+        and len(files[0].channels) >= 3
+    uri, size, scale = thumbnail(reading, linear=linear)
     item.thumbnail = (uri, size, scale * reading.shape[1] / verdict.size[1])  # thumbnail px per full-size texel
 
 
-def _linear_light(m) -> bool:
-    """Whether a map judged on its own holds linear light (a float file's colour, not a normal map's vectors)."""
+def _header(m):
+    """The header of a map judged on its own (:func:`seamless_usd.imaging.io.read_info`), None when unreadable."""
     from seamless_usd.imaging.io import read_info
 
-    if m.is_normal or len(m.channels) < 3:
-        return False
     try:
-        return read_info(m.path, max_pixels=None).dtype in ("half", "float")
+        return read_info(m.path, max_pixels=None)
     except SeamlessUsdError:
-        return False
+        return None
 
 
 def _picture_groups(pictures: list[Path]) -> list[tuple[list[Path], list[dict | None]]]:

@@ -287,12 +287,11 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
             where = asset_ref(path)
             said = str(exc).removeprefix(f"{where}: ")  # the finding names the file once, as its place
             run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", where, said))
-    modes = authoring_module().WriteMode
     if modes.IN_PLACE in (run.options.mode, run.options.plan_mode if run.options.mode is modes.DRY_RUN else None):
         for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
             run.blocked.update(_locked_in_place(run, src))
     _check_patterns(run, sources)
-    if run.options.mode != authoring_module().WriteMode.DRY_RUN:
+    if run.options.mode != modes.DRY_RUN:
         for src in sources:  # a source whose tiles' folder cannot be made: its stacks fail with why, before any work
             problem = folder_problem(_output_dir(run.options, src.path))
             if problem:

@@ -173,15 +173,14 @@ def normal_doubts(maps: Sequence[FileMap]) -> list[str]:
     return out
 
 
-def left_unread(m: FileMap) -> str:
-    """What of ``m``'s file its reading (:func:`read_alone`) leaves out, in words, or "": its alpha when only colour
-    is read, channels beyond colour and alpha (an OpenEXR's other layers, a depth channel), and every part after the
-    first (a multi-part OpenEXR, a multi-page TIFF). ``check`` says so beside its answer."""
-    from seamless_usd.imaging.io import alpha_channel, image_count, read_info
+def left_unread(m: FileMap, info) -> str:
+    """What of ``m``'s file (``info``: its header, :func:`seamless_usd.imaging.io.read_info`; None when unreadable)
+    its reading (:func:`read_alone`) leaves out, in words, or "": its alpha when only colour is read, channels beyond
+    colour and alpha (an OpenEXR's other layers, a depth channel), and every part after the first (a multi-part
+    OpenEXR, a multi-page TIFF). ``check`` says so beside its answer."""
+    from seamless_usd.imaging.io import alpha_channel, image_count
 
-    try:
-        info = read_info(m.path, max_pixels=None)
-    except InputError:
+    if info is None:
         return ""  # the reading names why it cannot be read
     parts = image_count(m.path)
     names = (info.channel_names if len(info.channel_names) == info.channels
