@@ -73,7 +73,7 @@ def summary(payload: dict, seconds: float) -> dict:
                      "seconds": round(sum((stack.get("timings") or {}).values()), 1)})
     passed = sum(r["status"] == "passed" for r in rows)
     return {"stacks": len(rows), "passed": passed, "trained": sum(r["trained"] for r in rows),
-            "seconds": round(seconds, 1), "passed_per_hour": round(passed * 3600.0 / seconds, 1), "rows": rows}
+            "seconds": round(seconds, 2), "passed_per_hour": round(passed * 3600.0 / seconds, 1), "rows": rows}
 
 
 def markdown(s: dict, a: argparse.Namespace, load: tuple[float, float]) -> str:
