@@ -18,6 +18,7 @@ __all__ = [
     "ColorSpace",
     "Origin",
     "AuthoredAt",
+    "RecordedSource",
     "RoleUse",
     "UVTransform",
     "UVChain",
@@ -43,6 +44,16 @@ class ColorSpace(str, Enum):
 class Origin(str, Enum):
     USD = "usd"  # a shader prim in a composed USD stage
     MTLX = "mtlx"  # a node in a MaterialX document read with the MaterialX package
+
+
+@dataclass(frozen=True)
+class RecordedSource:
+    """The source a tile this tool wrote records (``seamless:sourceAsset``, MaterialX ``seamless_sourceasset``):
+    ``asset`` as authored, ``resolved`` its absolute path ("" when it is not there). A tile is made again from its
+    source, never from itself (a tile of a tile judged against the tile it was made from)."""
+
+    asset: str
+    resolved: str
 
 
 @dataclass(frozen=True)
@@ -204,6 +215,7 @@ class TextureMap:
     # UsdUVTexture scale.y < 0, or a MaterialX normalmap with a negative y scale
     selection: Selection = ()  # variant selection it was found under (() : the stage's own)
     recorded_passed: bool | None = None  # a tile this tool wrote: whether it passed when written (else None)
+    recorded_source: RecordedSource | None = None  # a tile this tool wrote: the source it records
 
     @property
     def is_normal(self) -> bool:

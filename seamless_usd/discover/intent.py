@@ -30,6 +30,7 @@ from enum import Enum
 
 from seamless_usd.discover.atlas import atlas_evidence
 from seamless_usd.discover.triagememo import TriageMemo
+from seamless_usd.findings import asset_ref
 from seamless_usd.textures import TextureStack
 from seamless_usd.verdict import Verdict
 
@@ -141,6 +142,14 @@ def _geometry_decision(stack: TextureStack, factor, stats, bound: int, explored:
     )
 
 
+def _changed_sources(stack: TextureStack) -> list[str]:
+    """The recorded sources of a stack's tiles that differ from the files the tiles record they were made from."""
+    from seamless_usd.imaging.tag import source_changed
+
+    return [m.recorded_source.resolved for m in stack.maps if m.recorded_source and m.recorded_source.resolved
+            and source_changed(m.resolved, m.recorded_source.resolved)]
+
+
 def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo, explored: int = 1) -> IntentDecision:
     """Class of one stack from its maps, its bound geometry's UV stats and the pixel measures (kept in ``memo``)."""
     clamped = [m for m in stack.maps if m.wrap_s in _CLAMPED or m.wrap_t in _CLAMPED]
@@ -157,6 +166,10 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo,
             return decision
     recorded = [m.recorded_passed for m in stack.maps]
     if all(r is not None for r in recorded):  # tiles this tool wrote: the verdict against their recorded source
+        changed = _changed_sources(stack)
+        if changed:
+            return IntentDecision(Intent.TILING, f"{decision.reason}; made by seamless-usd, and its source "
+                                                 f"{asset_ref(changed[0])} has changed since: made again from it")
         if all(recorded):
             return IntentDecision(Intent.ALREADY_TILEABLE,
                                   "made tileable by seamless-usd and passed by the verdict against its recorded source "

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from seamless_usd.discover.colorspace import Label, mismatch_finding, resolve_color_space
 from seamless_usd.discover.images import ImageReadError, is_package_path, read_image_info, udim_tiles
 from seamless_usd.discover.tokens import MIN_IMAGE_SIZE, Codes, ShaderIds, tile_token
-from seamless_usd.textures import AuthoredAt, ImageInfo, Origin, RoleUse, TextureMap, UVChain
+from seamless_usd.textures import AuthoredAt, ImageInfo, Origin, RecordedSource, RoleUse, TextureMap, UVChain
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["TextureUse", "build_maps", "HeaderCache"]
@@ -42,6 +42,7 @@ class TextureUse:
     normal_y_flip: bool = False
     selection: tuple = ()  # variant selection it was found under (VariantChoice; () : the stage's own)
     recorded_passed: bool | None = None  # a tile this tool wrote: whether it passed when written (else None)
+    recorded_source: RecordedSource | None = None  # a tile this tool wrote: the source it records
     animated: int = 0  # time samples of its file input (a texture swapped over time), 0 when none
 
     def key(self) -> tuple:
@@ -150,6 +151,7 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         normal_y_flip=first.normal_y_flip,
         selection=first.selection,
         recorded_passed=first.recorded_passed,
+        recorded_source=first.recorded_source,
     )
     if (
         tmap.is_normal

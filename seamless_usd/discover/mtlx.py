@@ -23,7 +23,7 @@ from seamless_usd.discover.tokens import (
     Terminals,
     Wrap,
 )
-from seamless_usd.textures import NORMAL_ROLES, Origin, RoleUse
+from seamless_usd.textures import NORMAL_ROLES, Origin, RecordedSource, RoleUse
 from seamless_usd.discover.uv import mtlx_uv_chain
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref
@@ -182,4 +182,14 @@ def _texture_use(material: str, tex: mx.Node, role: RoleUse, flip: bool, documen
         normal_y_flip=flip and role.role in NORMAL_ROLES,
         recorded_passed=(tex.getAttribute(Recorded.MTLX_PASSED) == "true"
                          if tex.hasAttribute(Recorded.MTLX_SOURCE) and tex.hasAttribute(Recorded.MTLX_PASSED) else None),
+        recorded_source=_recorded_source(tex, document),
     )
+
+
+def _recorded_source(tex: mx.Node, document: str) -> RecordedSource | None:
+    """The source the tile of ``tex`` records (relative to its document), or None when it is not this tool's tile."""
+    asset = tex.getAttribute(Recorded.MTLX_SOURCE) if tex.hasAttribute(Recorded.MTLX_SOURCE) else ""
+    if not asset:
+        return None
+    path = Path(document).parent / asset
+    return RecordedSource(asset, str(path.resolve()) if path.is_file() else "")

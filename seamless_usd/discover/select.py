@@ -6,11 +6,12 @@ import fnmatch
 from collections.abc import Sequence
 
 from seamless_usd.discover.intent import Intent
+from seamless_usd.discover.tokens import Codes
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "unmatched_patterns", "blocked_stacks", "set_aside_stacks",
-           "instanced_stacks", "left_alone_stacks",
+           "instanced_stacks", "left_alone_stacks", "from_recorded_sources",
            "unread_findings", "unread_materials", "unread_files"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
@@ -122,3 +123,42 @@ def unread_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[str
 def unread_files(skipped: Sequence[Finding]) -> str:
     """The files of :func:`unread_findings`' findings, each with why, for a message: ``@a.png@ (missing-file), ...``."""
     return ", ".join(f"{f.where.split(' ')[-1]} ({f.code})" for f in skipped)
+
+
+def from_recorded_sources(stacks: Sequence[TextureStack], source: str, left_alone: set[tuple[str, str]]
+                          ) -> tuple[list[TextureStack], list[Finding]]:
+    """The stacks a run works on, each tile this tool wrote replaced by the source it records, so that a stack is
+    made again from its source (a run again after ``--in-place``, or on the layer a run wrote), never from its
+    own tile: a tile of a tile, judged against the tile, passed what was never judged against the photo.
+    Stacks left alone stay as they are. A tile whose source is gone is made from the tile, with a warning."""
+    from dataclasses import replace
+
+    from seamless_usd.discover.images import ImageReadError, read_image_info
+
+    out, findings = [], []
+    for stack in stacks:
+        if (source, stack.id) in left_alone or not any(m.recorded_source for m in stack.maps):
+            out.append(stack)
+            continue
+        maps = []
+        for m in stack.maps:
+            recorded = m.recorded_source
+            if recorded is None:
+                maps.append(m)
+                continue
+            why = "is not there"
+            if recorded.resolved:
+                try:
+                    info = read_image_info(recorded.resolved)
+                except (OSError, ImageReadError) as exc:
+                    why = f"cannot be read ({exc})"
+                else:
+                    maps.append(replace(m, asset=recorded.asset, resolved=recorded.resolved, image=info))
+                    continue
+            findings.append(Finding(
+                Severity.WARNING, Codes.SOURCE_NOT_FOUND, f"{prim_ref(m.node.strip('<>'))} {asset_ref(m.asset)}",
+                f"the source this tile records, {asset_ref(recorded.asset)}, {why}: made tileable from the tile "
+                "itself", material=stack.material))
+            maps.append(m)
+        out.append(replace(stack, maps=tuple(maps)))
+    return out, findings

@@ -174,6 +174,7 @@ class Codes:
     COMPOSITION_ERROR = "composition-error"
     MTLX_UNREADABLE = "mtlx-unreadable"
     DISCOVERY_ERROR = "discovery-error"
+    SOURCE_NOT_FOUND = "source-not-found"  # a tile this tool wrote whose recorded source is gone
 
 
 MIN_CROP = 100  # px: the smallest crop SeamlessGAN samples (DESIGN: c_min); a smaller stack gets a cut tile only

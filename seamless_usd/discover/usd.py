@@ -9,6 +9,7 @@ through NodeGraphs, interface inputs, channel splitters and other nodes to textu
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from pxr import Ar, Sdf, Usd, UsdShade
 
@@ -28,7 +29,7 @@ from seamless_usd.discover.tokens import (
     Terminals,
     Wrap,
 )
-from seamless_usd.textures import NORMAL_ROLES, ColorSpace, Origin, RoleUse
+from seamless_usd.textures import NORMAL_ROLES, ColorSpace, Origin, RecordedSource, RoleUse
 from seamless_usd.discover.uv import usd_uv_chain
 from seamless_usd.findings import Finding, Severity, prim_ref
 
@@ -237,6 +238,7 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
         uv=usd_uv_chain(tex, sid),
         normal_y_flip=flip and role.role in NORMAL_ROLES,
         recorded_passed=_recorded_passed(tex),
+        recorded_source=_recorded_source(tex),
         animated=animated,
     )
 
@@ -247,6 +249,16 @@ def _recorded_passed(tex: Usd.Prim) -> bool | None:
     if not (source and source.HasAuthoredValue() and passed and passed.HasAuthoredValue()):
         return None
     return bool(passed.Get())
+
+
+def _recorded_source(tex: Usd.Prim) -> RecordedSource | None:
+    """The source the tile on ``tex`` records (its provenance), or None when it is not one of this tool's tiles."""
+    attr = tex.GetAttribute(Recorded.USD_SOURCE)
+    value = attr.Get() if attr and attr.HasAuthoredValue() else None
+    if not isinstance(value, Sdf.AssetPath) or not value.path:
+        return None
+    resolved = value.resolvedPath
+    return RecordedSource(value.path, resolved if resolved and Path(resolved).is_file() else "")
 
 
 def _anchor(attr: Usd.Attribute, asset: str) -> str:

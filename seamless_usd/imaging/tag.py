@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import os
 
-__all__ = ["TAG", "DESCRIPTION_PREFIX", "tag_attributes", "read_tag"]
+__all__ = ["TAG", "DESCRIPTION_PREFIX", "tag_attributes", "read_tag", "source_changed"]
 
 #: The header attribute holding the record, as JSON.
 TAG = "seamless:madefrom"
@@ -60,3 +60,17 @@ def read_tag(path: str | os.PathLike) -> dict | None:
         return None
     ok = isinstance(record, dict) and isinstance(record.get("source"), str) and isinstance(record.get("map"), dict)
     return record if ok and isinstance(record.get("made"), dict) else None
+
+
+def source_changed(tile: str | os.PathLike, source: str | os.PathLike) -> bool:
+    """Whether ``source`` differs from the file the tile ``tile`` records it was made from (a tile that records
+    nothing, written before tiles recorded their sources, cannot say: False)."""
+    from seamless_usd.fileio import source_sha256
+
+    record = read_tag(tile) if tile else None
+    if not record or not record.get("sha256"):
+        return False
+    try:
+        return source_sha256(source) != record["sha256"]
+    except OSError:
+        return True

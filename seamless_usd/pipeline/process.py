@@ -15,8 +15,8 @@ from pathlib import Path
 
 from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
-from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, instanced_stacks, select_stacks,
-                                          set_aside_stacks, unmatched_patterns)
+from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, from_recorded_sources, instanced_stacks,
+                                          select_stacks, set_aside_stacks, unmatched_patterns)
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
@@ -281,6 +281,8 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
             run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
             unread_rows(run, src.scan, str(src.path))
             run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
+            src.stacks, found = from_recorded_sources(src.stacks, str(src.path), run.left_alone)
+            run.report.findings += found
             sources.append(src)
         except InputError as exc:
             run.report.unreadable.append(str(path))
@@ -345,6 +347,8 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.set_aside.update(set_aside_stacks(scan, stacks, label))
     unread_rows(run, scan, label)
     run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))
+    stacks, found = from_recorded_sources(stacks, label, run.left_alone)
+    run.report.findings += found
     out_dir = _output_dir(run.options, source)
     if run.options.mode != authoring.WriteMode.DRY_RUN:
         _run_jobs(run, [(label, stacks, out_dir)])

@@ -35,6 +35,7 @@ def stack_sources(stage, stack) -> tuple[tuple[list, object] | None, str]:
     the source was levelled or evened before it was cut), "") when every map is a tile this tool wrote, into the USD
     ``stage`` (``SeamlessTileAPI``) or into a MaterialX document (its ``seamless_*`` attributes), and its source is
     still the file it was made from; else (None, why: "" for a map that is no tile of this tool's)."""
+    from seamless_usd.imaging.tag import source_changed
     from seamless_usd.textures import Origin
 
     sources, prov = [], None
@@ -45,26 +46,11 @@ def stack_sources(stage, stack) -> tuple[tuple[list, object] | None, str]:
         if not resolved:
             return None, (f"the source recorded for {asset_ref(m.asset)}, {asset_ref(prov.source_asset)}, is not there: "
                           "judged against itself")
-        if _changed_since(m.resolved, resolved):
+        if source_changed(m.resolved, resolved):
             return None, (f"its source {asset_ref(Path(resolved))} has changed since the tile was made: judged against "
                           "itself (process again)")
         sources.append(dataclasses.replace(m, resolved=resolved, asset=prov.source_asset))
     return (sources, prov), ""
-
-
-def _changed_since(tile: str, source: str) -> bool:
-    """Whether ``source`` differs from the file the tile ``tile`` records it was made from (a tile that records
-    nothing, written before tiles recorded their sources, cannot say: False)."""
-    from seamless_usd.fileio import source_sha256
-    from seamless_usd.imaging.tag import read_tag
-
-    record = read_tag(tile) if tile else None
-    if not record or not record.get("sha256"):
-        return False
-    try:
-        return source_sha256(source) != record["sha256"]
-    except OSError:
-        return True
 
 
 def _usd_source(stage, m) -> tuple[str, object]:

@@ -1,0 +1,111 @@
+"""A run again over tiles this tool wrote (after ``--in-place``, or on the layer a run wrote) makes each stack
+again from the source its tiles record, never from the tiles themselves: a tile of a tile was judged against
+the tile it was made from and could be called passed though it was never judged against the photo."""
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+from pxr import Usd, UsdShade
+
+from seamless_usd_cli.main import main
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
+WOOD = "library/materials/wood.usda"
+
+
+def _library(root: Path) -> Path:
+    for name in ("library", "textures"):
+        shutil.copytree(SAMPLES / name, root / name)
+    return root / WOOD
+
+
+def _run(scene: Path, capsys, *extra: str) -> dict:
+    code = main(["process", str(scene), "--preset", "tiny", "--max-size", "192", "--in-place",
+                 "--cache-dir", str(scene.parents[2] / "cache"), "--json", *extra])
+    report = json.loads(capsys.readouterr().out)
+    assert code == report["exit_code"]
+    return report
+
+
+def _file_inputs(scene: Path) -> dict[str, tuple[str, str, tuple | None]]:
+    """Texture prim -> (the file it reads, the source it records, the UV scale of the node before it)."""
+    stage = Usd.Stage.Open(str(scene))
+    out = {}
+    for prim in stage.Traverse():
+        shader = UsdShade.Shader(prim)
+        if not shader or shader.GetIdAttr().Get() != "UsdUVTexture":
+            continue
+        source = prim.GetAttribute("seamless:sourceAsset").Get()
+        st = shader.GetInput("st").GetConnectedSources()[0]
+        node = UsdShade.Shader(st[0].source.GetPrim())
+        scale = node.GetInput("scale").Get() if node.GetIdAttr().Get() == "UsdTransform2d" else None
+        out[str(prim.GetPath())] = (shader.GetInput("file").Get().resolvedPath, source.path if source else "",
+                                    tuple(scale) if scale is not None else None)
+    return out
+
+
+def _pixels(path: str) -> np.ndarray:
+    return oiio.ImageBuf(path).get_pixels(oiio.FLOAT)
+
+
+def test_a_not_passed_tile_run_again_in_place_is_made_again_from_its_source(tmp_path, capsys):
+    scene = _library(tmp_path)
+    first = _run(scene, capsys)
+    [stack] = first["stacks"]
+    assert stack["status"] == "not-passed" and stack["origin"] == "trained"
+    made = _file_inputs(scene)
+    assert all(source.endswith(("wood_color.png", "wood_roughness.png")) for _, source, _ in made.values())
+
+    again = _run(scene, capsys)
+    [stack2] = again["stacks"]
+    # the same source, so the same model and tile from the cache and the same verdict: not a tile of the tile
+    assert stack2["origin"] == "cache", stack2["origin"]
+    assert stack2["status"] == "not-passed" and stack2["verdict"] == stack["verdict"]
+    assert [m["asset"] for m in stack2["maps"]] == [m["asset"] for m in stack["maps"]]  # the sources, as authored
+    remade = _file_inputs(scene)
+    for prim, (tile, source, scale) in made.items():
+        tile2, source2, scale2 = remade[prim]
+        assert source2 == source and scale2 == scale  # the UV scale against the source, not scaled twice
+        assert np.array_equal(_pixels(tile2), _pixels(tile))
+
+    # check judges the stage's tiles against the sources they record, and agrees
+    assert main(["check", str(scene), "--json"]) == 1
+    [item] = json.loads(capsys.readouterr().out)["items"]
+    assert item["passed"] is False and not item["note"], item
+
+    # the recorded source gone: the tile itself is made tileable, and the run says so
+    (tmp_path / "textures" / "wood_color.png").unlink()
+    gone = _run(scene, capsys)
+    found = [f for f in gone["findings"] if f["code"] == "source-not-found"]
+    assert len(found) == 1 and "wood_color.png" in found[0]["message"] and "from the tile itself" in found[0]["message"]
+    assert gone["stacks"][0]["status"] in ("passed", "not-passed")
+
+
+def test_a_passed_tile_whose_source_changed_is_made_again_from_it(tmp_path, capsys):
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene = tmp_path / "brick" / "scene.usda"
+    run = ["process", str(scene), "--preset", "tiny", "--max-size", "128", "--in-place", "--cache-dir",
+           str(tmp_path / "cache"), "--json"]
+    main(run)
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    assert stack["status"] == "passed"
+    tiles = _file_inputs(scene)
+    main(run)  # unchanged: left alone
+    assert json.loads(capsys.readouterr().out)["stacks"][0]["status"] == "left-alone"
+
+    albedo = tmp_path / "textures" / "brick_albedo.png"
+    flipped = oiio.ImageBufAlgo.flop(oiio.ImageBuf(str(albedo)))  # a source edited since, say
+    assert flipped.write(str(albedo))
+    main(run)
+    [again] = json.loads(capsys.readouterr().out)["stacks"]
+    assert again["intent"] == "tiling" and "brick_albedo.png@ has changed since: made again from it" in again["intent_reason"]
+    assert again["origin"] in ("trained", "cut") and again["status"] in ("passed", "not-passed")  # made, not cached
+    now = _file_inputs(scene)
+    prim = next(p for p in now if p.endswith("Albedo"))
+    assert now[prim][0] != tiles[prim][0] and now[prim][1] == tiles[prim][1]  # a new tile, the same recorded source
+    assert not np.array_equal(_pixels(now[prim][0]), _pixels(tiles[prim][0]))
