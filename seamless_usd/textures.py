@@ -100,6 +100,7 @@ class UVTransform:
     pivot: tuple[float, float] = (0.0, 0.0)
     operation_order: int = 0
     authored: tuple[tuple[str, AuthoredAt], ...] = ()
+    ours: bool = False  # the UV scale or turn node this tool inserted
 
 
 @dataclass(frozen=True)
@@ -116,12 +117,24 @@ class UVChain:
     reader: str | None
     transforms: tuple[UVTransform, ...] = ()
     connected_from: str | None = None
+    #: (primvar, reader, connected_from) as the chain was before the nodes this tool inserted (its UV scale and
+    #: turn, the UV0 reader of an image that read its default UVs); None when it holds none of them
+    before_ours: tuple[str | None, str | None, str | None] | None = None
 
     @property
     def key(self) -> str:
         return json.dumps(
             [self.primvar, self.reader, [t.node for t in self.transforms], self.connected_from]
         )
+
+    @property
+    def origin_key(self) -> str:
+        """``key`` of the chain as it was before this tool's own nodes: the same before and after a run's edits,
+        so a stack keeps its id (and its tiles their names) when it is run again over those edits."""
+        if self.before_ours is None:
+            return self.key
+        primvar, reader, connected = self.before_ours
+        return json.dumps([primvar, reader, [t.node for t in self.transforms if not t.ours], connected])
 
 
 @dataclass(frozen=True)
@@ -268,7 +281,7 @@ class TextureStack:
         """Stable id of this stack within a scan: material plus UV chain (plus the variant
         selection, when the stack was found under another than the stage's own)."""
         variant = f"|{describe_selection(self.selection)}" if self.selection else ""
-        h = hashlib.sha1(f"{self.material}|{self.uv.key}{variant}".encode()).hexdigest()[:10]
+        h = hashlib.sha1(f"{self.material}|{self.uv.origin_key}{variant}".encode()).hexdigest()[:10]
         return f"{self.material.strip('<>').strip('/').replace('/', '_') or 'material'}-{h}"
 
     @property

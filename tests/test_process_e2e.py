@@ -177,7 +177,7 @@ def test_second_run_on_the_output_is_clean(processed_copy, model_cache, capsys):
     assert {Path(m["asset"]).name for m in stack["maps"]} == {"brick_albedo.png", "brick_normal.png", "brick_roughness.png"}
     albedo = stage.GetPrimAtPath("/World/Looks/Brick/Albedo")
     new_file = UsdShade.Shader(albedo).GetInput("file").Get().resolvedPath
-    assert new_file != first_file and Path(new_file).is_file()
+    assert new_file == first_file and Path(new_file).is_file()  # the same stack (its id kept): its tile replaced
     source = albedo.GetAttribute("seamless:sourceAsset").Get()
     assert Path(source.resolvedPath).name == "brick_albedo.png"  # provenance keeps the original
 

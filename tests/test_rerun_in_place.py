@@ -48,6 +48,16 @@ def _file_inputs(scene: Path) -> dict[str, tuple[str, str, tuple | None]]:
     return out
 
 
+def test_the_scan_reads_the_names_the_authoring_gives_its_own_nodes():
+    from seamless_usd.authoring.mtlxinputs import MtlxNames
+    from seamless_usd.authoring.schema import Schema
+    from seamless_usd.authoring.usdnodes import Names
+    from seamless_usd.discover.tokens import Recorded
+
+    assert (Recorded.USD_UV_API, Recorded.USD_UV_READER) == (Schema.UV_TRANSFORM_API, Names.UV_READER)
+    assert (Recorded.MTLX_UV_MARK, Recorded.MTLX_UV_READER) == (MtlxNames.MARK_UV, MtlxNames.UV_READER)
+
+
 def _pixels(path: str) -> np.ndarray:
     return oiio.ImageBuf(path).get_pixels(oiio.FLOAT)
 
@@ -66,11 +76,9 @@ def test_a_not_passed_tile_run_again_in_place_is_made_again_from_its_source(tmp_
     assert stack2["origin"] == "cache", stack2["origin"]
     assert stack2["status"] == "not-passed" and stack2["verdict"] == stack["verdict"]
     assert [m["asset"] for m in stack2["maps"]] == [m["asset"] for m in stack["maps"]]  # the sources, as authored
-    remade = _file_inputs(scene)
-    for prim, (tile, source, scale) in made.items():
-        tile2, source2, scale2 = remade[prim]
-        assert source2 == source and scale2 == scale  # the UV scale against the source, not scaled twice
-        assert np.array_equal(_pixels(tile2), _pixels(tile))
+    # the stack keeps its id over the UV node the first run inserted: the same tiles, the layer not written again
+    assert _file_inputs(scene) == made
+    assert "every texture already has these edits" in json.dumps(again["findings"])
 
     # check judges the stage's tiles against the sources they record, and agrees
     assert main(["check", str(scene), "--json"]) == 1
@@ -109,3 +117,23 @@ def test_a_passed_tile_whose_source_changed_is_made_again_from_it(tmp_path, caps
     prim = next(p for p in now if p.endswith("Albedo"))
     assert now[prim][0] != tiles[prim][0] and now[prim][1] == tiles[prim][1]  # a new tile, the same recorded source
     assert not np.array_equal(_pixels(now[prim][0]), _pixels(tiles[prim][0]))
+
+
+def test_a_stack_keeps_its_id_over_the_uv_nodes_a_run_inserted(tmp_path, capsys):
+    """The UV scale node (and, for a MaterialX image that read its default UVs, the UV0 reader) a run inserts
+    leave a stack's id as it was: a run again in place names the same tiles instead of writing new ones."""
+    import seamless_usd
+
+    for name in ("transform2d", "usd_mtlx", "mtlx", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    # after a transform of the asset's own, in USD and in a MaterialX shader in USD; an image that read its default UVs
+    for scene in ("transform2d/scene.usda", "usd_mtlx/scene.usda", "mtlx/prefixed.mtlx"):
+        path = tmp_path / scene
+        before = sorted((s.material, s.id) for s in seamless_usd.scan(path).stacks)
+        code = main(["process", str(path), "--preset", "tiny", "--max-size", "100", "--refine", "off", "--in-place",
+                     "--force", "--cache-dir", str(tmp_path / "cache")])
+        capsys.readouterr()
+        assert code in (0, 1) and path.with_name(path.name + ".bak").is_file()
+        after = seamless_usd.scan(path)
+        assert all(s.uv.before_ours for s in after.stacks)
+        assert sorted((s.material, s.id) for s in after.stacks) == before, scene

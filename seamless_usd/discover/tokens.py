@@ -200,4 +200,7 @@ class Recorded:
     MTLX_SOURCE = "seamless_sourceasset"
     MTLX_PASSED = "seamless_passed"
     MTLX_UV_NODE = "seamless_uv"  # the place2d the authoring inserts: one per nodegraph scope, the same values
+    USD_UV_API = "SeamlessUVTransformAPI"  # on the UsdTransform2d / place2d nodes (UV scale, turn) the authoring inserts
+    USD_UV_READER = "SeamlessUVReader"  # the texcoord node (UV0) a MaterialX image with no texcoord gets in USD
+    MTLX_UV_MARK = "seamless_uvtransform"  # on the place2d nodes (UV scale, turn) the authoring inserts
     MTLX_UV_READER = "seamless_uv_texcoord"  # the texcoord node (UV0) it reads where the image read its default

@@ -8,11 +8,13 @@ authored on an interface input are listed in ``UVTransform.authored`` so authori
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import MaterialX as mx
 from pxr import Usd, UsdShade
 
 from seamless_usd.discover import mtlxgraph, usdgraph
-from seamless_usd.discover.tokens import Inputs, MtlxCategories, MtlxInputs, ShaderIds, TransformKinds
+from seamless_usd.discover.tokens import Inputs, MtlxCategories, MtlxInputs, Recorded, ShaderIds, TransformKinds
 from seamless_usd.textures import AuthoredAt, UVChain, UVTransform
 
 __all__ = ["usd_uv_chain", "mtlx_uv_chain"]
@@ -95,12 +97,16 @@ def usd_uv_chain(texture: Usd.Prim, sid: str) -> UVChain | None:
     prim, out_name, _ = sources[0]
     connected_from = f"{prim.GetPath()}.outputs:{out_name}"
     primvar = reader = None
+    before = _BeforeOurs(connected_from)
     for _ in range(_MAX_CHAIN):
         node_id = usdgraph.shader_id(prim)
         if node_id == ShaderIds.TRANSFORM_2D or node_id.startswith(ShaderIds.ND_PLACE2D):
-            nearest.append(_usd_transform(prim, node_id))
+            ours = Recorded.USD_UV_API in prim.GetPrimTypeInfo().GetAppliedAPISchemas() or (
+                Recorded.USD_UV_API in prim.GetAppliedSchemas())
+            nearest.append(replace(_usd_transform(prim, node_id), ours=ours))
             nxt = UsdShade.Shader(prim).GetInput(Inputs.IN if node_id == ShaderIds.TRANSFORM_2D else MtlxInputs.TEXCOORD)
             ups = usdgraph.producing_outputs(nxt) if nxt else []
+            before.step(ours, f"{ups[0][0].GetPath()}.outputs:{ups[0][1]}" if ups else None)
             if not ups:
                 break
             prim = ups[0][0]
@@ -116,7 +122,9 @@ def usd_uv_chain(texture: Usd.Prim, sid: str) -> UVChain | None:
             index, _ = usdgraph.input_value(prim, MtlxInputs.INDEX, 0)
             primvar = "st" if int(index) == 0 else f"st{int(index)}"
         break
-    return UVChain(primvar=primvar, reader=reader, transforms=tuple(reversed(nearest)), connected_from=connected_from)
+    ours_reader = bool(reader) and reader.rsplit("/", 1)[-1].startswith(Recorded.USD_UV_READER)
+    return UVChain(primvar=primvar, reader=reader, transforms=tuple(reversed(nearest)), connected_from=connected_from,
+                   before_ours=before.chain(primvar, reader, ours_reader))
 
 
 def _mx_pair(value, default=(0.0, 0.0)) -> tuple[float, float]:
@@ -170,11 +178,14 @@ def mtlx_uv_chain(texture: mx.Node, document: str) -> UVChain:
     node, out_name = up
     connected_from = f"{node.getNamePath()}.{out_name}"
     primvar = reader = None
+    before = _BeforeOurs(connected_from)
     for _ in range(_MAX_CHAIN):
         category = node.getCategory()
         if category == MtlxCategories.PLACE2D:
-            nearest.append(_mx_place2d(node, document))
+            ours = node.hasAttribute(Recorded.MTLX_UV_MARK)
+            nearest.append(replace(_mx_place2d(node, document), ours=ours))
             nxt = mtlxgraph.upstream(node.getInput(MtlxInputs.TEXCOORD))
+            before.step(ours, f"{nxt[0].getNamePath()}.{nxt[1]}" if nxt else None)
             if nxt is None:
                 break
             node = nxt[0]
@@ -187,4 +198,28 @@ def mtlx_uv_chain(texture: mx.Node, document: str) -> UVChain:
             value, _ = mtlxgraph.input_value(node, MtlxInputs.GEOMPROP, "", document)
             primvar = str(value) or None
         break
-    return UVChain(primvar=primvar, reader=reader, transforms=tuple(reversed(nearest)), connected_from=connected_from)
+    ours_reader = bool(reader) and reader.rsplit("/", 1)[-1].startswith(Recorded.MTLX_UV_READER)
+    return UVChain(primvar=primvar, reader=reader, transforms=tuple(reversed(nearest)), connected_from=connected_from,
+                   before_ours=before.chain(primvar, reader, ours_reader))
+
+
+class _BeforeOurs:
+    """Walks a UV chain from the texture with :func:`usd_uv_chain` / :func:`mtlx_uv_chain` and keeps what the texture
+    read before the nodes this tool inserts, which always sit nearest the texture (``UVChain.before_ours``)."""
+
+    def __init__(self, connected_from: str | None) -> None:
+        self.connected = connected_from
+        self.ours = False  # any of this tool's nodes seen
+        self._theirs = False  # a node of the asset's own seen: nothing nearer the reader is this tool's
+
+    def step(self, ours: bool, upstream: str | None) -> None:
+        """A transform node, ``ours`` or not, reading ``upstream`` (None: nothing connected)."""
+        if ours and not self._theirs:
+            self.ours, self.connected = True, upstream
+        else:
+            self._theirs = True
+
+    def chain(self, primvar, reader, ours_reader: bool) -> tuple | None:
+        if ours_reader and not self._theirs:  # the UV0 reader this tool inserted: the image read its default UVs
+            return (None, None, None)
+        return (primvar, reader, self.connected) if self.ours else None
