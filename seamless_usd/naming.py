@@ -12,6 +12,15 @@ _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 _OWN_TILE = re.compile(r"\.[A-Za-z0-9_.-]+-[0-9a-f]{10}(\.[0-9a-f]{8})?(\.[rgba]{1,4}[0-9]*)?\.tile$")
 
 
+def is_tile_name(path: str) -> bool:
+    """Whether ``path`` is named as :func:`tile_filename` names a tile.
+
+    >>> is_tile_name("tileable/albedo.Looks_M-abcdef0123.0badf00d.tile.png"), is_tile_name("albedo.png")
+    (True, False)
+    """
+    return bool(_OWN_TILE.search(Path(path.replace("\\", "/")).stem))
+
+
 def slug(text: str, limit: int = 48) -> str:
     """A file-name-safe form of ``text`` (prim paths, material names)."""
     cleaned = _UNSAFE.sub("_", text.strip("<>/")).strip("._") or "x"

@@ -67,7 +67,7 @@ def document(tmp_path: Path) -> Path:
     for name in ("brick albedo é.png", "rough.png"):
         (tmp_path / "textures" / name).write_bytes(b"source")
     (tmp_path / "tileable").mkdir()
-    for name in ("albedo_tile.png", "rough_tile.png"):
+    for name in ("albedo.M_brick-0123456789.tile.png", "rough.M_brick-0123456789.tile.png"):
         (tmp_path / "tileable" / name).write_bytes(b"tile")
     return path
 
@@ -90,9 +90,9 @@ def results(doc: Path) -> list[StackResult]:
     out = doc.parent / "tileable"
     return [
         StackResult(TextureStack("M_brick", albedo.uv, (albedo,)),
-                    [MapResult(albedo, out / "albedo_tile.png")], SCALE, prov),
+                    [MapResult(albedo, out / "albedo.M_brick-0123456789.tile.png")], SCALE, prov),
         StackResult(TextureStack("M_brick", rough.uv, (rough,)),
-                    [MapResult(rough, out / "rough_tile.png")], SCALE, prov),
+                    [MapResult(rough, out / "rough.M_brick-0123456789.tile.png")], SCALE, prov),
     ]
 
 
@@ -137,10 +137,10 @@ def test_new_document_with_paths_address_modes_and_uv(document: Path):
     # files resolve (through fileprefix) to the tiles, relative to the new document
     albedo_file = new.getDescendant("NG_brick/albedo_file")
     assert (result.output.parent / albedo_file.getResolvedValueString()).resolve() == \
-        (document.parent / "tileable" / "albedo_tile.png").resolve()
+        (document.parent / "tileable" / "albedo.M_brick-0123456789.tile.png").resolve()
     rough_file = new.getDescendant("NG_brick/tiled_rough").getInput("file")
     assert (result.output.parent / rough_file.getResolvedValueString()).resolve() == \
-        (document.parent / "tileable" / "rough_tile.png").resolve()
+        (document.parent / "tileable" / "rough.M_brick-0123456789.tile.png").resolve()
     image = new.getDescendant("NG_brick/image_color")
     assert image.getInputValue("uaddressmode") == "periodic"
     assert image.getInputValue("vaddressmode") == "periodic"
@@ -201,13 +201,13 @@ def test_new_document_in_another_folder_rebases_paths(document: Path):
     result = author_mtlx(document, results(document), output_path=out)
     new = read(out)
     image_file = new.getDescendant("NG_brick/albedo_file").getResolvedValueString()
-    assert (out.parent / image_file).resolve() == (document.parent / "tileable" / "albedo_tile.png").resolve()
+    assert (out.parent / image_file).resolve() == (document.parent / "tileable" / "albedo.M_brick-0123456789.tile.png").resolve()
     assert result.layers_written == [out]
 
 
 def test_rerun_on_processed_tiles_composes_without_a_second_place2d(document: Path):
     first = author_mtlx(document, results(document))
-    tiles = {"NG_brick/image_color": "albedo_tile.png", "NG_brick/tiled_rough": "rough_tile.png"}
+    tiles = {"NG_brick/image_color": "albedo.M_brick-0123456789.tile.png", "NG_brick/tiled_rough": "rough.M_brick-0123456789.tile.png"}
     from dataclasses import replace
 
     # the pipeline processed the tiles themselves this time, with a UV scale of (2, 1)
@@ -238,7 +238,7 @@ def test_address_modes_through_interface_inputs_and_missing_tile(document: Path)
         '<input name="albedo_file" type="filename" value="brick albedo é.png" />\n'
         '    <input name="wrap" type="string" value="clamp" />')
     document.write_text(text, encoding="utf-8")
-    (document.parent / "tileable" / "rough_tile.png").unlink()
+    (document.parent / "tileable" / "rough.M_brick-0123456789.tile.png").unlink()
     result = author_mtlx(document, results(document))
     assert [f.code for f in result.findings] == ["missing-output"]
     new = read(result.output)
@@ -258,10 +258,10 @@ def test_a_second_run_for_other_materials_keeps_the_first_runs_edits(document: P
     it is made again from it, and the edits lost are named."""
     albedo, rough = results(document)
     first = author_mtlx(document, [albedo])
-    assert "tileable/albedo_tile.png" in _file_values(first.output).values()
+    assert "tileable/albedo.M_brick-0123456789.tile.png" in _file_values(first.output).values()
     second = author_mtlx(document, [rough])
     values = _file_values(second.output)
-    assert "tileable/albedo_tile.png" in values.values() and "tileable/rough_tile.png" in values.values()
+    assert "tileable/albedo.M_brick-0123456789.tile.png" in values.values() and "tileable/rough.M_brick-0123456789.tile.png" in values.values()
     assert not [f for f in second.findings if f.code == "mtlx-edits-replaced"]
     again = author_mtlx(document, [albedo, rough])  # nothing new: nothing written
     assert not again.layers_written
@@ -269,7 +269,7 @@ def test_a_second_run_for_other_materials_keeps_the_first_runs_edits(document: P
                         encoding="utf-8")
     third = author_mtlx(document, [rough])
     values = _file_values(third.output)
-    assert "tileable/albedo_tile.png" not in values.values() and "tileable/rough_tile.png" in values.values()
+    assert "tileable/albedo.M_brick-0123456789.tile.png" not in values.values() and "tileable/rough.M_brick-0123456789.tile.png" in values.values()
     [lost] = [f for f in third.findings if f.code == "mtlx-edits-replaced"]
     assert "NG_brick/image_color" in lost.message and "tiled_rough" not in lost.message
 

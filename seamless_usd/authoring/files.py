@@ -118,3 +118,25 @@ def relative_asset_path(target: Path, anchor_dir: Path) -> str:
         return target.as_posix()
     rel = rel.replace(os.sep, "/")
     return rel if rel.startswith("../") else f"./{rel}"
+
+
+#: What an output this tool wrote earlier holds, set by hand, is left as it is (:func:`set_by_hand`).
+SET_BY_HAND = ("its file is set{where} to {asset}, neither its source nor a tile of this tool's (set by hand?): left "
+               "as it is; remove that value from the {kind} to have it replaced")
+
+
+def set_by_hand(current: str, scanned: str) -> bool:
+    """Whether the file ``current`` a texture reads in an output an earlier run wrote (a new layer or document the
+    run edits again) was set there by hand: a file that is neither the one the scan read (``scanned``: the stage or
+    document without that output) nor a tile of this tool's. A file that is not there is simply replaced."""
+    from seamless_usd.imaging.tag import read_tag
+    from seamless_usd.naming import is_tile_name
+
+    if not current or not os.path.isfile(current):
+        return False
+    try:
+        if scanned and os.path.samefile(current, scanned):
+            return False
+    except OSError:
+        pass
+    return not (is_tile_name(current) or read_tag(current))

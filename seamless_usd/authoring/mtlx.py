@@ -18,7 +18,8 @@ import MaterialX as mx
 
 from seamless_usd.authoring.mtlxinputs import MtlxNames, UnauthoredInput, fmt, gltf_identity, set_vector2, vector2
 from seamless_usd.authoring.mtlxuv import _PlaceUV
-from seamless_usd.authoring.files import backup_once, layer_lock, relative_asset_path, write_atomically
+from seamless_usd.authoring.files import (SET_BY_HAND, backup_once, layer_lock, relative_asset_path, set_by_hand,
+                                          write_atomically)
 from seamless_usd.authoring.mtlxtext import read_options, with_leading_comments
 from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn,
                                           WriteMode, shared_with)
@@ -90,7 +91,7 @@ def author_mtlx(
             f"and the earlier edits of {', '.join(prim_ref(n) for n in lost)} are not kept: process the stages that "
             "use them again"))
     if not author.changed:
-        if checked and not result.findings:
+        if checked and not result.findings and not result.not_written:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(src),
                                            "every texture already has these edits; nothing written"))
         return result
@@ -316,6 +317,11 @@ class _MtlxAuthor(_PlaceUV):
             owner.getInput(at.attribute) if owner is not None and hasattr(owner, "getInput") else None)
         if file_input is None:
             file_input = self._authored(node, MtlxNames.FILE, MtlxNames.FILENAME)
+        current = file_input.getResolvedValueString()
+        if current and set_by_hand(str(self.out.parent / current), tex_map.resolved):
+            self.result.not_written.append((prim_ref(node_path), SET_BY_HAND.format(
+                where=f" in {asset_ref(self.out)}", asset=asset_ref(file_input.getValueString()), kind="document")))
+            return
         self._set_file(file_input, relative_asset_path(out_file, self.out.parent))
         category = node.getCategory()
         self._periodic(node)

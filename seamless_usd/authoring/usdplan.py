@@ -7,7 +7,7 @@ from typing import Iterable
 
 from pxr import Gf, Sdf, Usd, UsdShade
 
-from seamless_usd.authoring.files import relative_asset_path
+from seamless_usd.authoring.files import SET_BY_HAND, relative_asset_path, set_by_hand
 from seamless_usd.authoring.schema import PROPERTIES, Q_PROPERTIES, Schema, has_applied, read_provenance, schemas_known
 from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult,
                                           shared_with)
@@ -239,6 +239,10 @@ class _Author(_UVPlanner):
         current = attr.Get()
         if isinstance(current, Sdf.AssetPath) and _same_file(current, out):
             return True
+        by_hand = _set_by_hand(attr, current, tex_map.resolved, self.layer_names)
+        if by_hand:
+            self._refused = by_hand
+            return False
         target = self._target(attr.GetPrim(), attr)
         if target is None:
             return False
@@ -336,3 +340,14 @@ class _Author(_UVPlanner):
 def _layer_name(layer: Sdf.Layer) -> str:
     return layer.realPath or layer.identifier
 
+
+
+def _set_by_hand(attr: Usd.Attribute, current, scanned: str, layer_names: dict) -> str | None:
+    """Why the file value ``current`` the stage composes is left as it is, or None. It differs from the value the
+    scan read (``scanned``, the stage without the layer being edited) only where that layer (a new layer an earlier
+    run wrote) holds a value of its own: a tile of this tool's is replaced, any other file was set there by hand."""
+    if not isinstance(current, Sdf.AssetPath) or not set_by_hand(current.resolvedPath, scanned):
+        return None
+    stack = attr.GetPropertyStack(Usd.TimeCode.Default())
+    where = f" in {asset_ref(layer_names.get(stack[0].layer) or _layer_name(stack[0].layer))}" if stack else ""
+    return SET_BY_HAND.format(where=where, asset=asset_ref(current.path), kind="layer")
