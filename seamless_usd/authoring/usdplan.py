@@ -341,7 +341,6 @@ def _layer_name(layer: Sdf.Layer) -> str:
     return layer.realPath or layer.identifier
 
 
-
 def _set_by_hand(attr: Usd.Attribute, current, scanned: str, layer_names: dict) -> str | None:
     """Why the file value ``current`` the stage composes is left as it is, or None. It differs from the value the
     scan read (``scanned``, the stage without the layer being edited) only where that layer (a new layer an earlier
