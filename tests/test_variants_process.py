@@ -215,8 +215,9 @@ def test_a_dry_run_plan_names_the_variant_each_edit_goes_into(tmp_path, capsys):
 def test_in_place_edits_of_a_texture_whose_file_each_variant_sets_stay_inside_each_variant(tmp_path, capsys):
     """The prop's floor texture is defined once, its file set inside each variant of ``finish`` (cloth, wood) in the
     same layer: in place, each variant's new file goes inside that variant, so each selection shows its own tile
-    (the edits went to the texture's definition, above every variant, and both showed the cloth's tile). Its UV
-    scale cannot be composed there (below), and the stacks are failed saying why."""
+    (the edits went to the texture's definition, above every variant, and both showed the cloth's tile). Its ``st``
+    is connected once, outside the variants (a connection inside one would lose to it): the UV scale node goes
+    there, and each variant's own scale inside that variant."""
     for name in ("prop", "textures"):
         shutil.copytree(SAMPLES / name, tmp_path / name)
     scene = tmp_path / "prop" / "prop.usda"
@@ -226,21 +227,36 @@ def test_in_place_edits_of_a_texture_whose_file_each_variant_sets_stay_inside_ea
     floor = {s["variant"]: s for s in payload["stacks"] if s["material"] == "</Prop/Materials/M_floor>"}
     stage = Usd.Stage.Open(str(scene), Usd.Stage.LoadAll)
     finish = stage.GetPrimAtPath("/Prop").GetVariantSets().GetVariantSet("finish")
+    assert len(floor) == 2 and all(s["status"] in ("passed", "not-passed") for s in floor.values()), floor
+    scales = {}
     for selection, source in (("cloth", "cloth"), ("wood", "wood_color")):
         finish.SetVariantSelection(selection)
         value = _file(stage, "/Prop/Materials/M_floor/diffuseColorTex")
         assert value is not None and Path(value).name.startswith(f"{source}.Prop_Materials_M_floor-"), (selection, value)
-    assert len(floor) == 2
-    # its st connection is authored once, outside the variants, and is stronger than the UV scale's connection inside
-    # each: the tile would show at the wrong scale, and the run says so instead of passed
-    assert all(s["status"] == "failed" and "wrong scale" in s["message"] for s in floor.values()), floor
-    assert payload["exit_code"] == 1 and any(f["code"] == "edit-not-composed" for f in payload["findings"])
+        [stack] = [s for s in floor.values() if Path(s["maps"][0]["asset"]).stem == source]
+        scales[selection] = _uv_scale(stage, "/Prop/Materials/M_floor/diffuseColorTex")
+        assert scales[selection] == pytest.approx(stack["uv_scale"], rel=1e-5), (selection, scales)
+    assert scales["cloth"] != pytest.approx(scales["wood"]), scales  # each variant's own
+    assert not [f for f in payload["findings"] if f["code"] == "edit-not-composed"]
+    # check reads each variant's tile against that variant's recorded source, and agrees with the run
+    main(["check", "--json", str(scene)])
+    items = {i["name"]: i for i in json.loads(capsys.readouterr().out)["items"] if "M_floor" in i["name"]}
+    for variant, stack in floor.items():
+        item = items["</Prop/Materials/M_floor>" + (f" in {variant}" if variant else "")]
+        assert not item["note"] and item["passed"] == (stack["status"] == "passed"), (item, stack["status"])
 
 
-def test_a_uv_scale_a_stronger_st_connection_hides_fails_the_stack_in_a_new_layer(tmp_path, capsys):
+def _uv_scale(stage: Usd.Stage, prim: str) -> tuple:
+    """The scale of the UV node this tool inserted before the texture ``prim``, as the stage composes it."""
+    st = UsdShade.Shader(stage.GetPrimAtPath(prim)).GetInput("st").GetConnectedSources()[0][0].source.GetPrim()
+    assert st.GetName().startswith("SeamlessUV") and "SeamlessUVTransformAPI" in st.GetAppliedSchemas(), st
+    return tuple(UsdShade.Shader(st).GetInput("scale").Get())
+
+
+def test_a_uv_scale_where_st_is_connected_outside_the_variant_is_composed_in_a_new_layer(tmp_path, capsys):
     """A material whose texture file is set inside variants while its ``st`` connection is authored outside them, in
-    the root layer: the new layer's edits go inside the variant, where the root layer's own ``st`` connection is
-    stronger, so the tile would show at the wrong scale. The stack is failed naming the layer, not passed."""
+    the root layer: a connection made inside the variant would lose to it (the tile at the wrong scale), so the new
+    layer connects ``st`` outside the variant and sets the scale inside it."""
     shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
     (tmp_path / "scene.usda").write_text('''#usda 1.0
 (
@@ -299,4 +315,7 @@ def Xform "World"
                  str(tmp_path / "cache"), "--json", str(tmp_path / "scene.usda")])
     payload = json.loads(capsys.readouterr().out)
     [stack] = payload["stacks"]
-    assert stack["status"] == "failed" and "wrong scale" in stack["message"] and code == 1, stack
+    assert stack["status"] in ("passed", "not-passed") and code == payload["exit_code"], stack
+    stage = Usd.Stage.Open(str(tmp_path / "scene.seamless.usda"))
+    assert _uv_scale(stage, "/World/Looks/Base/Albedo") == pytest.approx(stack["uv_scale"], rel=1e-5)
+    assert stack["uv_scale"] != pytest.approx([1.0, 1.0])

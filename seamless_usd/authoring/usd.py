@@ -25,7 +25,7 @@ from pxr import Sdf, Tf, Usd
 from seamless_usd.authoring.files import check_layer, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.fileio import source_sha256
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode
-from seamless_usd.authoring.usdedits import check_uv_composed, not_composed, strongest_layer
+from seamless_usd.authoring.usdedits import check_uv_composed, keep_whole_stacks, not_composed, strongest_layer
 from seamless_usd.authoring.usdinplace import _author_in_place, _open_layer
 from seamless_usd.authoring.usdnodes import Names, uv_affine
 from seamless_usd.authoring.usdplan import _Author, _layer_name
@@ -145,10 +145,15 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
                         "every texture already has these edits; no layer written")
             )
         return result
+    author.owners += [""] * (len(author.edits) - len(author.owners))  # the retargeted references: no stack's
+    before, planned = ({} if result.dry_run else {overrides: overrides.ExportToString()}), len(result.plan)
     author.apply()
     if result.dry_run:
         return result
     check_uv_composed(author, results, result)
+    keep_whole_stacks(author, results, result, before, planned)
+    if overrides.ExportToString() == before[overrides]:  # every stack's edits refused: nothing to write
+        return result
     del author, stage, source  # the relative sublayer path below would not resolve from memory
     saved = Sdf.Layer.CreateAnonymous(".usda")
     saved.TransferContent(overrides)
@@ -196,33 +201,8 @@ def author_usd_stage(
     author.apply()
     if not result.dry_run:
         _check_composed(stage, author.edits, results, result)
-        _keep_whole_stacks(author, results, result, before, planned)
+        keep_whole_stacks(author, results, result, before, planned)
     return result
-
-
-def _keep_whole_stacks(author, results: Sequence[StackResult], result: AuthoringResult, before: dict, planned: int
-                       ) -> None:
-    """A stack one of whose maps' edits the stage does not compose keeps none of its edits (its maps would no
-    longer line up): the layers go back to what they held and the other stacks' edits are made again."""
-    unwritten = result.unwritten_nodes()
-    failed = {r.stack.id for r in results for m in r.maps if prim_ref(m.map.node.strip("<>")) in unwritten}
-    if not failed:
-        return
-    for layer, text in before.items():
-        layer.ImportFromString(text)
-    author.edits = [e for e, owner in zip(author.edits, author.owners) if owner not in failed]
-    author.owners = [o for o in author.owners if o not in failed]
-    del result.plan[planned:]
-    result.edited_prims = [p for p in result.edited_prims if p not in {
-        prim_ref(m.map.node.strip("<>")) for r in results if r.stack.id in failed for m in r.maps}]
-    author.apply()
-    for r in results:
-        if r.stack.id in failed:
-            for m in r.maps:
-                node = prim_ref(m.map.node.strip("<>"))
-                if node not in result.unwritten_nodes():
-                    result.not_written.append((node, "another map of its stack cannot be edited here, so none of "
-                                                     "its edits are kept (its maps would no longer line up)"))
 
 
 def _earlier_layer(out: Path, stage_path: Path, made_from: str) -> tuple[Sdf.Layer, list[str]]:

@@ -13,7 +13,7 @@ from seamless_usd.authoring.usdnodes import Names
 from seamless_usd.textures import TextureStack, describe_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
-__all__ = ["variant_edit_target", "variant_not_composed", "check_uv_composed", "not_composed",
+__all__ = ["variant_edit_target", "variant_not_composed", "check_uv_composed", "keep_whole_stacks", "not_composed",
            "strongest_layer"]
 
 
@@ -222,3 +222,28 @@ def not_composed(result: AuthoringResult, node: str, why: str) -> None:
     if node not in result.unwritten_nodes():
         result.not_written.append((node, why))
         result.findings.append(Finding(Severity.ERROR, Codes.EDIT_NOT_COMPOSED, node, why))
+
+
+def keep_whole_stacks(author, results: Sequence[StackResult], result: AuthoringResult, before: dict, planned: int
+                       ) -> None:
+    """A stack one of whose maps' edits the stage does not compose keeps none of its edits (its maps would no
+    longer line up): the layers go back to what they held and the other stacks' edits are made again."""
+    unwritten = result.unwritten_nodes()
+    failed = {r.stack.id for r in results for m in r.maps if prim_ref(m.map.node.strip("<>")) in unwritten}
+    if not failed:
+        return
+    for layer, text in before.items():
+        layer.ImportFromString(text)
+    author.edits = [e for e, owner in zip(author.edits, author.owners) if owner not in failed]
+    author.owners = [o for o in author.owners if o not in failed]
+    del result.plan[planned:]
+    result.edited_prims = [p for p in result.edited_prims if p not in {
+        prim_ref(m.map.node.strip("<>")) for r in results if r.stack.id in failed for m in r.maps}]
+    author.apply()
+    for r in results:
+        if r.stack.id in failed:
+            for m in r.maps:
+                node = prim_ref(m.map.node.strip("<>"))
+                if node not in result.unwritten_nodes():
+                    result.not_written.append((node, "another map of its stack cannot be edited here, so none of "
+                                                     "its edits are kept (its maps would no longer line up)"))

@@ -8,7 +8,7 @@ from pxr import Ar, Sdf, Tf, Usd
 
 from seamless_usd.authoring.files import backup_once, check_layer, write_atomically
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult
-from seamless_usd.authoring.usdedits import check_uv_composed
+from seamless_usd.authoring.usdedits import check_uv_composed, keep_whole_stacks
 from seamless_usd.authoring.usdplan import _Author
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import marked_writable
@@ -97,9 +97,13 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
             raise InputError(f"{asset_ref(layer.identifier)} has unsaved changes in this process; "
                              "save or reload it first")
     try:
+        before, planned = {layer: layer.ExportToString() for layer in changed}, len(result.plan)
         author.apply()
         check_uv_composed(author, results, result)
+        keep_whole_stacks(author, results, result, before, planned)
         for layer in sorted(changed, key=lambda lay: lay.realPath):
+            if layer.ExportToString() == before[layer]:  # only a stack that kept none of its edits touched it
+                continue
             path = Path(layer.realPath)
             result.backups.append(backup_once(path))
             args = _format_args(layer)

@@ -10,7 +10,7 @@ from pxr import Gf, Sdf, Usd, UsdShade
 
 from seamless_usd.authoring.schema import Schema, is_seamless_uv_transform
 from seamless_usd.authoring.types import Codes, UVTurn
-from seamless_usd.authoring.usdedits import _Edit, _EditKind
+from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target
 from seamless_usd.authoring.usdnodes import (
     Names,
     _connected,
@@ -74,20 +74,46 @@ class _UVPlanner:
         # a MaterialX image with no texcoord reads UV0; the place2d inserted before it reads it through a texcoord
         # node (a place2d's own default is a constant (0, 0))
         source_attr = _connection_source_attr(uv_input) if source is not None else self._uv0_reader(prim, target)
-        key = (str(prim.GetPath().GetParentPath()), str(source_attr), scale, turn, place, self._selection)
+        outside = self._outside_variant(prim, uv_input.GetAttr(), target) if source is not None and not turn else None
+        if outside is not None:  # one node where the connection is; each variant's scale inside that variant
+            key = (str(prim.GetPath().GetParentPath()), str(source_attr), None, None, place, "outside")
+        else:
+            key = (str(prim.GetPath().GetParentPath()), str(source_attr), scale, turn, place, self._selection)
         node_path = self._uv_nodes.get(key)
+        value = {Names.SCALE: scale_node_value(scale, turn.aspect if turn else 1.0, place)}
         if node_path is None:
-            aspect = 1.0
             if turn is not None:
                 source_attr = self._new_turn_node(prim, target, source_attr, turn.degrees, turn.aspect, place)
-                aspect = turn.aspect
-            node_path = self._new_uv_node(prim, target, source_attr, Names.UV_NODE, place,
-                                          {Names.SCALE: scale_node_value(scale, aspect, place)})
+            node_path = self._new_uv_node(prim, outside or target, source_attr, Names.UV_NODE, place,
+                                          {} if outside else value)
             self._uv_nodes[key] = node_path
+        if outside is not None:
+            self.edits.append(_Edit(_sibling_in_variant(prim, target), _EditKind.VALUE,
+                                    node_path.AppendProperty(f"inputs:{Names.SCALE}"), Sdf.ValueTypeNames.Float2,
+                                    Gf.Vec2f(*value[Names.SCALE])))
         out_name = Names.OUT if place else Names.RESULT
-        self.edits.append(_Edit(target, _EditKind.CONNECT, uv_path, Sdf.ValueTypeNames.Float2,
+        self.edits.append(_Edit(outside or target, _EditKind.CONNECT, uv_path, Sdf.ValueTypeNames.Float2,
                                 node_path.AppendProperty(f"outputs:{out_name}")))
         return scale, (turn.degrees if turn else 0.0)
+
+    def _outside_variant(self, prim, uv_attr: Usd.Attribute, target: Usd.EditTarget) -> Usd.EditTarget | None:
+        """Where the texture-coordinate connection ``uv_attr`` is authored, when the texture's edits go inside a
+        variant (its file is set there) and the connection outside it: an ``st`` connected once for every variant.
+        A connection made inside the variant would lose to it, so the UV scale node goes where the connection is, and
+        each variant's scale inside that variant (the node holds no scale of its own: a variant that does not set
+        one reads the identity). None when the connection is edited with the rest."""
+        def in_variant(t) -> bool:
+            return t.MapToSpecPath(prim.GetPath()).ContainsPrimVariantSelection()
+
+        if not in_variant(target) or not uv_attr or not uv_attr.GetPropertyStack(Usd.TimeCode.Default()):
+            return None
+        if self.variant_layer is not None:
+            outside = variant_edit_target(self.variant_layer, prim, uv_attr)
+        elif self.one_layer:
+            outside = self.target_for(prim, uv_attr)
+        else:
+            return None
+        return outside if isinstance(outside, Usd.EditTarget) and not in_variant(outside) else None
 
     def _uv0_reader(self, prim, target) -> Sdf.Path:
         """The output of a MaterialX ``texcoord`` node (index 0) beside ``prim``, made once per material and
@@ -197,6 +223,21 @@ class _UVPlanner:
         if isinstance(parent_target, Usd.EditTarget) and parent_target.GetLayer() == target.GetLayer():
             return parent_target
         return target
+
+
+def _sibling_in_variant(prim: Usd.Prim, target: Usd.EditTarget) -> Usd.EditTarget:
+    """An edit target for a sibling of ``prim`` inside the variant ``target`` edits ``prim`` in: mapped through the
+    parent's prim-index node at the same site (a target mapped through ``prim``'s own node may not reach its
+    siblings), or ``target`` itself."""
+    site = target.MapToSpecPath(prim.GetPath()).GetParentPath()
+    index = prim.GetParent().GetPrimIndex() if prim.GetParent() else None
+    nodes = [index.rootNode] if index and index.IsValid() else []
+    while nodes:
+        node = nodes.pop()
+        if node.path == site and target.GetLayer() in node.layerStack.layers:
+            return Usd.EditTarget(target.GetLayer(), node)
+        nodes += list(node.children)
+    return target
 
 
 def _defined(target: Usd.EditTarget, path: Sdf.Path, node_id: str) -> list[_Edit]:

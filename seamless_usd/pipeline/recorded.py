@@ -34,7 +34,22 @@ def stack_sources(stage, stack) -> tuple[tuple[list, object] | None, str]:
     """((the maps' recorded sources, the provenance recorded with them: its UV scale, straightening turn, and how far
     the source was levelled or evened before it was cut), "") when every map is a tile this tool wrote, into the USD
     ``stage`` (``SeamlessTileAPI``) or into a MaterialX document (its ``seamless_*`` attributes), and its source is
-    still the file it was made from; else (None, why: "" for a map that is no tile of this tool's)."""
+    still the file it was made from; else (None, why: "" for a map that is no tile of this tool's). A stack found
+    under another variant selection reads its provenance under that selection."""
+    if stage is None or not stack.selection:
+        return _stack_sources(stage, stack)
+    from seamless_usd.discover.variants import apply_selection
+
+    session = stage.GetSessionLayer()
+    held = session.ExportToString()
+    apply_selection(session, stack.selection)
+    try:
+        return _stack_sources(stage, stack)
+    finally:
+        session.ImportFromString(held)
+
+
+def _stack_sources(stage, stack) -> tuple[tuple[list, object] | None, str]:
     from seamless_usd.imaging.tag import source_changed
     from seamless_usd.textures import Origin
 
