@@ -19,7 +19,7 @@ __all__ = ["variant_edit_target", "variant_not_composed", "check_uv_composed", "
 
 class _EditKind:
     VALUE = "value"  # set an attribute's default value (None: declare the attribute only)
-    CONNECT = "connect"  # replace an input's connections with one source
+    CONNECT = "connect"  # replace an input's connections with one source (None: with none)
     DEFINE = "define"  # define a Shader prim
     SCHEMA = "schema"  # prepend an applied API schema
     RETARGET = "retarget"  # delete a reference and prepend one to another file (value: (old, new))
@@ -52,6 +52,8 @@ class _Edit:
         if self.kind == _EditKind.VALUE:
             shown = asset_ref(self.value.path) if isinstance(self.value, Sdf.AssetPath) else self.value
             return f"set {prim_ref(self.path)} = {shown} {where}"
+        if self.kind == _EditKind.CONNECT and self.value is None:
+            return f"disconnect {prim_ref(self.path)} {where}"
         if self.kind == _EditKind.CONNECT:
             return f"connect {prim_ref(self.path)} -> {prim_ref(self.value)} {where}"
         if self.kind == _EditKind.DEFINE:
@@ -86,6 +88,8 @@ class _Edit:
         if self.kind == _EditKind.VALUE:
             if self.value is not None:
                 attr_spec.default = self.value
+        elif self.value is None:
+            attr_spec.connectionPathList.ClearEditsAndMakeExplicit()  # an explicit empty list: no connection
         else:
             # connection paths never hold variant selections, even when authored inside a variant
             attr_spec.connectionPathList.explicitItems = [

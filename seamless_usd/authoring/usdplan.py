@@ -243,6 +243,17 @@ class _Author(_UVPlanner):
         if by_hand:
             self._refused = by_hand
             return False
+        own = shader.GetInput(Names.FILE)
+        if attr.GetPrim() != prim and own and _other_readers(prim, attr):
+            # an input of the material (or a node graph) that other textures read as well (a decal left alone, a
+            # node reading another channel): this texture's own file is set, and its connection to it cut
+            target = self._target(prim, own.GetAttr())
+            if target is None:
+                return False
+            self.edits += [_Edit(target, _EditKind.VALUE, own.GetAttr().GetPath(), own.GetAttr().GetTypeName(),
+                                 Sdf.AssetPath(self._asset_path(out, target))),
+                           _Edit(target, _EditKind.CONNECT, own.GetAttr().GetPath(), own.GetAttr().GetTypeName())]
+            return True
         target = self._target(attr.GetPrim(), attr)
         if target is None:
             return False
@@ -339,6 +350,19 @@ class _Author(_UVPlanner):
 
 def _layer_name(layer: Sdf.Layer) -> str:
     return layer.realPath or layer.identifier
+
+
+def _other_readers(prim: Usd.Prim, attr: Usd.Attribute) -> list[Usd.Prim]:
+    """The texture nodes other than ``prim`` whose file value comes from ``attr`` (an input of the material or of a
+    node graph), under the material that holds ``prim``."""
+    material = prim.GetParent()
+    while material and not material.IsA(UsdShade.Material):
+        material = material.GetParent()
+    if not material:
+        return []
+    return [p for p in Usd.PrimRange(material) if p != prim and p.IsA(UsdShade.Shader)
+            and (reader := _producing_attr(UsdShade.Shader(p).GetInput(Names.FILE))) is not None
+            and reader.GetPath() == attr.GetPath()]
 
 
 def _set_by_hand(attr: Usd.Attribute, current, scanned: str, layer_names: dict) -> str | None:
