@@ -94,6 +94,7 @@ def load_stack_pixels(
     policy: WorkingResolution | None = None,
     *,
     max_pixels: int | None = DEFAULT_MAX_PIXELS,
+    encodings: Sequence[MapEncoding] | None = None,
 ) -> StackPixels:
     """Read, decode and resample the maps of one stack (see the module docstring).
 
@@ -105,6 +106,9 @@ def load_stack_pixels(
         The working-resolution policy; default :meth:`WorkingResolution.native`.
     max_pixels
         Per-file header limit, as in :func:`~seamless_usd.imaging.io.read_info`.
+    encodings
+        Per map, the encoding to decode it with instead of its own (a tile read as its source was: a float
+        file's fitted range is its source's, not one fitted to the tile's own values).
 
     Returns
     -------
@@ -121,8 +125,8 @@ def load_stack_pixels(
     if not maps:
         raise ValueError("load_stack_pixels needs at least one map")
     findings: list[Finding] = []
-    infos, encodings, decoded = [], [], []
-    for m in maps:
+    given, infos, encodings, decoded = encodings, [], [], []
+    for i, m in enumerate(maps):
         if not m.resolved:
             raise InputError(f"{asset_ref(m.asset)}: unresolved texture of {prim_ref(m.node)}; fix the asset path")
         pixels, info = read_image(m.resolved, max_pixels=max_pixels)
@@ -138,7 +142,7 @@ def load_stack_pixels(
                 )
             )
         try:
-            encoding = MapEncoding.for_map(m, info, pixels)
+            encoding = given[i] if given is not None else MapEncoding.for_map(m, info, pixels)
         except ValueError as exc:
             raise InputError(f"{prim_ref(m.node)} {asset_ref(m.asset)}: {exc}; fix its scale/bias") from exc
         findings.extend(

@@ -265,16 +265,20 @@ def _judged(item: CheckItem, judge) -> None:
 def _against_source(item: CheckItem, tile_maps: list, src_maps: list, prov) -> None:
     """``item`` judged as ``process`` judged it: the tiles ``tile_maps`` against their sources ``src_maps`` made as
     the provenance ``prov`` records (straightened, levelled, evened) and brought to the tiles' texel grid."""
+    from seamless_usd.discover.images import read_image_info
     from seamless_usd.imaging import WorkingResolution, load_stack_pixels
     from seamless_usd.pipeline.madefrom import made_values, on_tile_grid
     from seamless_usd.verdict import judge
 
     normals = [m.is_normal for m in tile_maps]
-    tiles = list(load_stack_pixels(tile_maps).values)
+    info = read_image_info(tile_maps[0].resolved)
     uv = prov.uv_scale
-    grid = (round(tiles[0].shape[0] * uv[1]), round(tiles[0].shape[1] * uv[0]))
+    grid = (round(info.height * uv[1]), round(info.width * uv[0]))
     # the source on the tile's grid, resampled as process resampled it (its working-resolution policy)
-    sources = list(load_stack_pixels(src_maps, WorkingResolution(max_size=max(grid))).values)
+    made = load_stack_pixels(src_maps, WorkingResolution(max_size=max(grid)))
+    sources = list(made.values)
+    # the tiles read as process read them: with their sources' encodings (a float file's fitted range)
+    tiles = list(load_stack_pixels(tile_maps, encodings=made.encodings).values)
     # made from the source straightened, levelled or evened as recorded: judged against it made so
     h, w = sources[0].shape[:2]
     sources = made_values(sources, normals, prov.straightened, bool(prov.levelled), bool(prov.evened),
