@@ -105,9 +105,11 @@ def write_map(
 
 
 #: Header attributes a tile keeps from its source file: the embedded colour profile (how an image editor reads its
-#: colours; renderers go by the stage's colour space).
-KEPT_ATTRIBUTES = ("ICCProfile",)
-_PROFILE_FORMATS = (".png", ".tif", ".tx")  # the output formats that hold an ICC profile
+#: colours; renderers go by the stage's colour space), and an OpenEXR file's primaries and colour space (an ACEScg
+#: map stays ACEScg: relabelled Rec.709, a reader of the header shifts its hues).
+KEPT_ATTRIBUTES = ("ICCProfile", "chromaticities", "colorInteropID", "oiio:ColorSpace")
+_KEPT_BY_FORMAT = {".png": ("ICCProfile",), ".tif": ("ICCProfile",), ".tx": ("ICCProfile",),
+                   ".exr": ("chromaticities", "colorInteropID", "oiio:ColorSpace")}
 
 
 def kept_attributes(source: str | os.PathLike) -> list[tuple[str, object, object]]:
@@ -121,6 +123,16 @@ def kept_attributes(source: str | os.PathLike) -> list[tuple[str, object, object
         return [(pv.name, pv.type, pv.value) for pv in inp.spec().extra_attribs if pv.name in KEPT_ATTRIBUTES]
     finally:
         inp.close()
+
+
+def _same_encoding(name: str, color_space: ColorSpace) -> bool:
+    """Whether a source's colour-space name says the encoding ``color_space`` does (linear or sRGB-encoded)."""
+    low = name.lower().replace(" ", "")
+    if low.startswith("lin") or any(k in low for k in ("linear", "acescg", "aces2065", "raw")):
+        return ColorSpace(color_space) is ColorSpace.RAW
+    if "srgb" in low or "g22" in low:
+        return ColorSpace(color_space) is ColorSpace.SRGB
+    return False  # a name not known here: the tile's own is written
 
 
 def write_pixels(
@@ -187,8 +199,14 @@ def write_pixels(
         spec.attribute("oiio:UnassociatedAlpha", 1)  # values are straight alpha, store as is
         if ext in (".tif", ".tx"):
             spec.attribute("compression", "zip")
-    if keep_from is not None and norm_ext(ext) in _PROFILE_FORMATS:
-        for name, kind, value in kept_attributes(keep_from):
+    if keep_from is not None:
+        kept = kept_attributes(keep_from)
+        named = {name: value for name, _, value in kept if name in ("colorInteropID", "oiio:ColorSpace")}
+        for name, kind, value in kept:
+            if name not in _KEPT_BY_FORMAT.get(norm_ext(ext), ()):
+                continue
+            if name in named and not _same_encoding(str(value), ColorSpace(color_space)):
+                continue  # a name for another encoding than the tile's values are in: the tile's own is written
             spec.attribute(name, kind, value)
     if record is not None:
         from seamless_usd.imaging.tag import tag_attributes
