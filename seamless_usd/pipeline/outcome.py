@@ -161,8 +161,27 @@ def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, p
         peak_rss_mb=_peak_rss_mb(),
         previews=previews,
         findings=list(pixels.findings) + _turn_refused(straightened)
-        + _coarser(stack, record["tile_size"], source_uv_scale(meta["uv_scale"], straightened), pixels.original_sizes),
+        + _coarser(stack, record["tile_size"], source_uv_scale(meta["uv_scale"], straightened), pixels.original_sizes)
+        + _unread_channels(stack, pixels),
     )
+
+
+def _unread_channels(stack: TextureStack, pixels) -> list[Finding]:
+    """A warning for each map whose file holds channels no input of the material reads (a packed mask wired by its
+    red channel alone): the tile holds each such channel as the source's mean, not its values."""
+    from seamless_usd.findings import Severity, asset_ref, prim_ref
+
+    out = []
+    for m, info, encoding in zip(pixels.maps, pixels.infos, pixels.encodings):
+        unread = [i for i in range(encoding.file_channels) if i not in encoding.channels and i != encoding.alpha]
+        if unread:
+            names = [info.channel_names[i] if i < len(info.channel_names) else str(i) for i in unread]
+            out.append(Finding(Severity.WARNING, "unread-channels", f"{prim_ref(m.node.strip('<>'))} {asset_ref(m.asset)}",
+                               f"{'channels' if len(names) > 1 else 'channel'} {', '.join(names)} of the file "
+                               f"{'are' if len(names) > 1 else 'is'} read by no input of the material, so the tile "
+                               f"holds {'each' if len(names) > 1 else 'it'} as the source's mean, not its values "
+                               "(connect it, or keep the source for whatever else reads it)", stack.material))
+    return out
 
 
 #: A tile holding less than this share of its source's texels per UV unit is named coarser than the source.
