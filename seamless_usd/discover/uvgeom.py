@@ -3,10 +3,10 @@
 For tiling intent (``intent.py``): a texture whose UVs span several periods is meant to repeat;
 one whose UVs stay inside one period as unwrapped islands is a UV atlas of that model.
 
-Bindings are read from ``material:binding`` relationships (direct bindings, inherited down
-namespace, per-face ``GeomSubset`` bindings), not through ``UsdShade.Material``: a material
-composed from a ``.mtlx`` reference is not a Material prim under usd-core, but meshes still bind
-to its path. UV islands are the connected components of faces that share a welded UV vertex
+Bindings are resolved as UsdShade resolves them, for each render purpose (direct and collection
+bindings, inherited down namespace, ``strongerThanDescendants``, per-face ``GeomSubset`` bindings), and the
+winning relationship's target is read rather than a ``UsdShade.Material``: a material composed from a
+``.mtlx`` reference is not a Material prim under usd-core, but meshes still bind to its path. UV islands are the connected components of faces that share a welded UV vertex
 (same mesh point and same UV value).
 """
 from __future__ import annotations
@@ -18,7 +18,6 @@ from pxr import Usd, UsdGeom
 
 __all__ = ["MeshUse", "UVStats", "material_bindings", "uv_stats"]
 
-_BINDING_RELS = ("material:binding", "material:binding:full", "material:binding:preview")
 _UV_FALLBACKS = ("st", "st0", "UVMap", "uv", "map1")
 _WELD_DIGITS = 6  # UV values equal to 1e-6 are one UV vertex
 
@@ -49,52 +48,70 @@ class UVStats:
         return (self.hi[0] - self.lo[0], self.hi[1] - self.lo[1])
 
 
-def _direct_binding(prim: Usd.Prim) -> str | None:
-    for name in _BINDING_RELS:
-        rel = prim.GetRelationship(name)
-        if rel:
-            targets = rel.GetForwardedTargets()
-            if targets:
-                return str(targets[0])
-    return None
+#: The purposes a renderer binds for: each mesh counts for the material each of them resolves to.
+_PURPOSES = ("full", "preview")
+
+
+def _winners(prims: list, purpose: str) -> list:
+    """The winning binding relationship of each prim for ``purpose`` (or None), as UsdShade resolves it: collection
+    bindings, ``bindMaterialAs = strongerThanDescendants`` on an ancestor, a purpose's own binding over the
+    all-purpose one. Its material need not exist as a Material prim (one composed from a ``.mtlx`` reference is
+    not one under usd-core): the relationship's target is what is read."""
+    from pxr import Tf, UsdShade
+
+    if not prims:
+        return []
+    with Tf.DiagnosticTrap() as trap:  # bindings on prims without MaterialBindingAPI still count, without a warning
+        _, rels = UsdShade.MaterialBindingAPI.ComputeBoundMaterials(prims, purpose)
+        trap.Clear()
+    return [rel if rel else None for rel in rels]
+
+
+def _target(rel) -> str | None:
+    """The material a winning binding relationship binds: its target (a collection binding's last)."""
+    targets = rel.GetForwardedTargets() if rel is not None else []
+    return str(targets[-1]) if targets else None
 
 
 def material_bindings(stage: Usd.Stage) -> dict[str, list[MeshUse]]:
-    """``"<material path>"`` -> the mesh uses bound to it, over the composed stage."""
-    inherited: dict[str, str | None] = {}
+    """``"<material path>"`` -> the mesh uses bound to it, over the composed stage, for every render purpose."""
     out: dict[str, list[MeshUse]] = {}
-
-    def binding_of(prim: Usd.Prim) -> str | None:
-        key = str(prim.GetPath())
-        if key not in inherited:
-            own = _direct_binding(prim)
-            parent = prim.GetParent()
-            inherited[key] = own if own else (binding_of(parent) if parent and not parent.IsPseudoRoot() else None)
-        return inherited[key]
-
-    for prim in stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
-        if not prim.IsA(UsdGeom.Mesh):
-            continue
-        mesh = UsdGeom.Mesh(prim)
-        taken: set[int] = set()
-        for subset in UsdGeom.Subset.GetAllGeomSubsets(mesh):
-            target = _direct_binding(subset.GetPrim())
-            indices = subset.GetIndicesAttr().Get()
-            if not target or indices is None or subset.GetElementTypeAttr().Get() != UsdGeom.Tokens.face:
+    meshes = [prim for prim in stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate))
+              if prim.IsA(UsdGeom.Mesh)]
+    subsets = {str(m.GetPath()): [s for s in UsdGeom.Subset.GetAllGeomSubsets(UsdGeom.Mesh(m))
+                                  if s.GetElementTypeAttr().Get() == UsdGeom.Tokens.face
+                                  and s.GetIndicesAttr().Get() is not None] for m in meshes}
+    every_subset = [s.GetPrim() for m in meshes for s in subsets[str(m.GetPath())]]
+    for purpose in _PURPOSES:
+        whole = dict(zip((str(m.GetPath()) for m in meshes), _winners(meshes, purpose)))
+        parts = dict(zip((str(p.GetPath()) for p in every_subset), _winners(every_subset, purpose)))
+        for prim in meshes:
+            path = str(prim.GetPath())
+            own, taken = _target(whole[path]), set()
+            for subset in subsets[path]:
+                rel = parts[str(subset.GetPath())]
+                target = _target(rel)
+                if target is None or (target == own and rel.GetPrim() != subset.GetPrim()):
+                    continue  # the mesh's own material reaches it
+                faces = tuple(int(i) for i in subset.GetIndicesAttr().Get())
+                taken.update(faces)
+                _add(out, target, MeshUse(path, faces))
+            if own is None:
                 continue
-            faces = tuple(int(i) for i in indices)
-            taken.update(faces)
-            out.setdefault(f"<{target}>", []).append(MeshUse(str(prim.GetPath()), faces))
-        target = binding_of(prim)
-        if target:
             if taken:
-                counts = mesh.GetFaceVertexCountsAttr().Get() or []
+                counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get() or []
                 rest = tuple(i for i in range(len(counts)) if i not in taken)
                 if rest:
-                    out.setdefault(f"<{target}>", []).append(MeshUse(str(prim.GetPath()), rest))
+                    _add(out, own, MeshUse(path, rest))
             else:
-                out.setdefault(f"<{target}>", []).append(MeshUse(str(prim.GetPath())))
+                _add(out, own, MeshUse(path))
     return out
+
+
+def _add(out: dict[str, list[MeshUse]], material: str, use: MeshUse) -> None:
+    uses = out.setdefault(f"<{material}>", [])
+    if use not in uses:  # the same use under both purposes counts once
+        uses.append(use)
 
 
 def _primvar(mesh: UsdGeom.Mesh, name: str | None) -> UsdGeom.Primvar | None:
