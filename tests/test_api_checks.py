@@ -99,3 +99,24 @@ def test_check_in_python_gives_the_command_lines_answer_and_refuses_what_is_not_
     for bad in (None, 3):
         with pytest.raises(UsageError, match="takes an open Usd.Stage"):
             seamless_usd.scan(bad)
+
+
+def test_an_open_stage_with_its_payloads_unloaded_says_so(tmp_path):
+    """A hook's stage opened with LoadNone: the materials inside its payloads are not composed, and the scan and
+    the run say so instead of finding nothing without a word."""
+    import shutil
+
+    from pxr import Usd
+
+    import seamless_usd
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("prop", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    stage = Usd.Stage.Open(str(tmp_path / "prop" / "prop.usda"), Usd.Stage.LoadNone)
+    scan = seamless_usd.scan(stage)
+    [found] = [f for f in scan.findings if f.code == "unloaded-payload"]
+    assert "payload not loaded" in found.message and "stage.Load()" in found.message
+    stage.Load()
+    assert not [f for f in seamless_usd.scan(stage).findings if f.code == "unloaded-payload"]
+    assert seamless_usd.scan(stage).stacks

@@ -210,6 +210,13 @@ def scan_stage(stage: Usd.Stage, triage_dir: Path | None = None, keep_triage: bo
     scan = _Scan(triage_dir, keep_triage)
     layer = stage.GetRootLayer()
     scan.add_stage(stage, layer.realPath or layer.identifier)
+    unloaded = sorted(set(stage.FindLoadable()) - set(stage.GetLoadSet()))
+    if unloaded:  # an export hook's stage opened with LoadNone: what is inside those payloads is not composed
+        more = f" and {len(unloaded) - 1} more" if len(unloaded) > 1 else ""
+        scan.result.findings.append(Finding(
+            Severity.WARNING, Codes.UNLOADED_PAYLOAD, prim_ref(unloaded[0]),
+            f"payload not loaded{more}: the materials inside are not scanned or processed (load them first: "
+            "stage.Load(), or open the stage with Usd.Stage.LoadAll)"))
     return scan.finish()
 
 
