@@ -27,6 +27,7 @@ from seamless_usd.fileio import source_sha256
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode
 from seamless_usd.authoring.usdedits import check_uv_composed, keep_whole_stacks, not_composed, strongest_layer
 from seamless_usd.authoring.usdinplace import _author_in_place, _open_layer
+from seamless_usd.authoring.mtlx import default_output_document
 from seamless_usd.authoring.usdnodes import Names, uv_affine
 from seamless_usd.authoring.usdplan import _Author, _layer_name
 from seamless_usd.textures import Origin
@@ -44,6 +45,16 @@ __all__ = [
 
 # ---------------------------------------------------------------------------------------------
 # Public entry points
+
+
+def referenced_output(document: Path, layer: Path) -> Path:
+    """The new document of a MaterialX document a stage references, for the stage's new layer ``layer``: beside the
+    document when it is in the layer's folder (``look.seamless.mtlx``), else beside the layer and named for it
+    (``look.scene.seamless.mtlx``), so that two stages referencing one library document each get their own (the
+    second rewrote the first's, and the first stage's layer showed the second's tiles)."""
+    if document.resolve().parent == layer.resolve().parent:
+        return default_output_document(document)
+    return layer.with_name(f"{document.stem}.{layer.stem}.mtlx")
 
 
 def default_output_layer(stage_path: Path) -> Path:
@@ -93,7 +104,9 @@ def author_usd(
 
         documents = list(dict.fromkeys(
             m.map.document for r in results for m in r.maps if m.map.origin is Origin.MTLX and m.map.document))
-        doc_results = [author_mtlx(doc, results, mode=mode, plan_mode=plan_mode) for doc in documents]
+        doc_results = [author_mtlx(doc, results, mode=mode, plan_mode=plan_mode,
+                                   output_path=None if in_place else referenced_output(Path(doc), out))
+                       for doc in documents]
         with Tf.DiagnosticTrap() as trap:
             if in_place:
                 result = _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
