@@ -41,6 +41,7 @@ def test_a_tx_source_gets_a_tx_tile(tmp_path, capsys):
     spec = oiio.ImageInput.open(str(tile)).spec()
     assert spec.tile_width > 0 and spec.getattribute("textureformat") and str(spec.format) == "uint8"
     assert spec.getattribute("oiio:ColorSpace").lower().startswith("srgb") and _levels(tile) > 3
+    assert spec.get_string_attribute("wrapmodes") == "periodic,periodic"  # a tile: made to repeat (maketx: black)
     stage = Usd.Stage.Open(str(tmp_path / "brick" / "scene.seamless.usda"))
     authored = stage.GetPrimAtPath("/World/Looks/Brick/Albedo").GetAttribute("inputs:file").Get().resolvedPath
     assert Path(authored).resolve() == tile.resolve()

@@ -242,6 +242,7 @@ def _write_texture(tmp: Path, target: Path, data: np.ndarray, spec: oiio.ImageSp
         raise InputError(f"{asset_ref(target)}: the tile's pixels cannot be set ({buf.geterror()})")
     config = oiio.ImageSpec()
     config.attribute("maketx:filtername", "lanczos3")
+    config.attribute("wrapmodes", "periodic,periodic")  # a tile repeats: its header says so, its MIP levels wrap
     if not oiio.ImageBufAlgo.make_texture(oiio.MakeTxTexture, buf, str(tmp), config):
         raise InputError(f"{asset_ref(target)}: writing the texture failed ({' '.join(oiio.geterror().split())}); "
                          "check free disk space and permissions")
