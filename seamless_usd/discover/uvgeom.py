@@ -6,8 +6,8 @@ one whose UVs stay inside one period as unwrapped islands is a UV atlas of that 
 Bindings are resolved as UsdShade resolves them, for each render purpose (direct and collection
 bindings, inherited down namespace, ``strongerThanDescendants``, per-face ``GeomSubset`` bindings), and the
 winning relationship's target is read rather than a ``UsdShade.Material``: a material composed from a
-``.mtlx`` reference is not a Material prim under usd-core, but meshes still bind to its path. UV islands are the connected components of faces that share a welded UV vertex
-(same mesh point and same UV value).
+``.mtlx`` reference is not a Material prim under usd-core, but meshes still bind to its path. UV islands
+are the connected components of faces that share a welded UV vertex (same mesh point and same UV value).
 """
 from __future__ import annotations
 
@@ -75,7 +75,7 @@ def _target(rel) -> str | None:
 
 def material_bindings(stage: Usd.Stage) -> dict[str, list[MeshUse]]:
     """``"<material path>"`` -> the mesh uses bound to it, over the composed stage, for every render purpose."""
-    out: dict[str, list[MeshUse]] = {}
+    out: dict[str, dict[MeshUse, None]] = {}  # ordered sets: the same use under both purposes counts once
     meshes = [prim for prim in stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate))
               if prim.IsA(UsdGeom.Mesh)]
     subsets = {str(m.GetPath()): [s for s in UsdGeom.Subset.GetAllGeomSubsets(UsdGeom.Mesh(m))
@@ -105,13 +105,11 @@ def material_bindings(stage: Usd.Stage) -> dict[str, list[MeshUse]]:
                     _add(out, own, MeshUse(path, rest))
             else:
                 _add(out, own, MeshUse(path))
-    return out
+    return {material: list(uses) for material, uses in out.items()}
 
 
-def _add(out: dict[str, list[MeshUse]], material: str, use: MeshUse) -> None:
-    uses = out.setdefault(f"<{material}>", [])
-    if use not in uses:  # the same use under both purposes counts once
-        uses.append(use)
+def _add(out: dict[str, dict[MeshUse, None]], material: str, use: MeshUse) -> None:
+    out.setdefault(f"<{material}>", {})[use] = None
 
 
 def _primvar(mesh: UsdGeom.Mesh, name: str | None) -> UsdGeom.Primvar | None:
