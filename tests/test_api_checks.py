@@ -120,3 +120,26 @@ def test_an_open_stage_with_its_payloads_unloaded_says_so(tmp_path):
     stage.Load()
     assert not [f for f in seamless_usd.scan(stage).findings if f.code == "unloaded-payload"]
     assert seamless_usd.scan(stage).stacks
+
+
+def test_an_open_stage_referencing_a_materialx_document_gets_its_edits(tmp_path):
+    """process_stage on a stage whose material comes from a referenced .mtlx: the document gets a new document
+    beside the edit layer, and the reference is pointed at it there (nothing was authored, and the run said
+    passed); saved, the stage shows the tiles and check agrees."""
+    from pxr import Usd
+
+    import seamless_usd
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("mtlx", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    stage = Usd.Stage.Open(str(tmp_path / "mtlx" / "scene.usda"))
+    report = seamless_usd.process_stage(stage, seamless_usd.Options(preset="tiny", max_size=128,
+                                                                    cache_dir=tmp_path / "cache"))
+    [stack] = report.stacks
+    assert str(tmp_path / "mtlx" / "tiled.seamless.mtlx") in map(str, report.layers_written)
+    assert "./tiled.seamless.mtlx" in stage.GetRootLayer().ExportToString()
+    stage.GetRootLayer().Save()
+    checked = seamless_usd.check([tmp_path / "mtlx" / "scene.usda"])
+    [item] = checked.items
+    assert not item.note and item.passed == (stack.status.value == "passed") and item.maps[0].startswith("tileable/")

@@ -207,15 +207,47 @@ def author_usd_stage(
     # variant or a reference is used as it is)
     plain = target.GetMapFunction().isIdentity
     author.plan_all(results, lambda prim, prop=None: target, variant_layer=layer if plain else None)
+    _plan_documents(author, results, target, anchor_dir)
     author.owners += [""] * (len(author.edits) - len(author.owners))
     layers = {edit.target.GetLayer() for edit in author.edits}
     before = {lay: lay.ExportToString() for lay in layers} if not result.dry_run else {}
     planned = len(result.plan)
-    author.apply()
+    with Tf.DiagnosticTrap() as trap:
+        author.apply()
+        # usd-core cannot compose the .mtlx references the stage now points at (discovery reads them itself)
+        trap.EraseMatching(lambda d: ".mtlx" in str(d.commentary).lower())
     if not result.dry_run:
         _check_composed(stage, author.edits, results, result)
         keep_whole_stacks(author, results, result, before, planned)
     return result
+
+
+def _plan_documents(author, results: Sequence[StackResult], target: Usd.EditTarget, anchor_dir) -> None:
+    """For an open stage: each MaterialX document it references gets a new document (written, as the tiles are),
+    beside the layer the edits go to (``anchor_dir``), and the stage's references are pointed at it there. A layer
+    with no folder yet cannot anchor one: those maps are not written, saying why."""
+    from seamless_usd.authoring.mtlx import author_mtlx
+    from seamless_usd.authoring.mtlxinputs import MtlxNames
+
+    result = author.result
+    documents = list(dict.fromkeys(
+        m.map.document for r in results for m in r.maps if m.map.origin is Origin.MTLX and m.map.document))
+    for document in map(Path, documents):
+        nodes = [prim_ref(m.map.node.strip("<>")) for r in results for m in r.maps if m.map.document == str(document)]
+        if anchor_dir is None:
+            result.not_written += [(node, f"its MaterialX document {asset_ref(document)} gets a new document beside "
+                                          "the layer the edits go to, which has no folder yet: save that layer first")
+                                   for node in nodes]
+            continue
+        folder = Path(anchor_dir)
+        stem = Path(target.GetLayer().identifier).stem
+        out = (default_output_document(document) if document.resolve().parent == folder.resolve()
+               else folder / f"{document.stem}.{stem}{MtlxNames.OUTPUT_SUFFIX}.mtlx")
+        made = author_mtlx(document, results, mode=WriteMode.NEW_LAYER, output_path=out)
+        for name in ("layers_written", "findings", "plan", "not_written", "not_written_for", "edited_prims"):
+            getattr(result, name).extend(getattr(made, name))
+        if out.is_file():
+            author.plan_retarget(document, out, target)
 
 
 def _earlier_layer(out: Path, stage_path: Path, made_from: str) -> tuple[Sdf.Layer, list[str]]:
