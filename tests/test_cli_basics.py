@@ -11,16 +11,32 @@ def test_unknown_command_is_a_usage_error(capsys):
     assert "invalid choice" in capsys.readouterr().err
 
 
-def test_options_refuse_unknown_refine_and_tile_size_modes():
+def test_options_refuse_what_the_command_line_would_when_they_are_made():
+    """Every value the command line would refuse is a UsageError when the options are made (a mode it does not
+    know, when the run starts, before any tile is written): it was a ValueError, a TypeError part-way through a
+    run, or accepted (a seed of 1.7)."""
     import pytest
 
-    from seamless_usd import Options
+    from seamless_usd import Options, process_paths, process_stage
+    from seamless_usd.errors import UsageError
 
     assert Options(refine="gan").refine == "gan"
-    with pytest.raises(ValueError, match="Options.refine must be one of on, gan, off; got 'yes'"):
+    with pytest.raises(UsageError, match="Options.refine must be one of on, gan, off; got 'yes'"):
         Options(refine="yes")
-    with pytest.raises(ValueError, match="Options.tile_size must be one of source, paper"):
+    with pytest.raises(UsageError, match="Options.tile_size must be one of source, paper"):
         Options().with_(tile_size="2x")
+    for bad in ({"seed": 1.7}, {"seed": "abc"}, {"max_size": "128"}, {"jobs": 0}, {"iterations": True},
+                {"progress": 5}):
+        with pytest.raises(UsageError):
+            Options(**bad)
+    with pytest.raises(UsageError, match="Options.mode / plan_mode must be a WriteMode"):
+        process_paths(["nothing.usda"], Options(mode="dry_run"))
+    with pytest.raises(UsageError, match="process_stage"):
+        process_paths(None)
+    with pytest.raises(UsageError, match="open Usd.Stage"):
+        process_stage("scene.usda")
+    with pytest.raises(UsageError, match="seamless_usd.Options"):
+        process_paths(["nothing.usda"], {"preset": "tiny"})
 
 
 def test_an_output_folder_that_cannot_be_made_is_refused_before_any_work(tmp_path, capsys):

@@ -67,18 +67,26 @@ class Options:
     progress: Callable[[ProgressEvent], None] | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
+        """The command line's rules, for the API and the hooks: a value it would refuse is a UsageError here, when
+        the options are made, not a TypeError part-way through a run."""
         for name, valid in (("refine", REFINE_MODES), ("tile_size", TILE_SIZES)):
             if getattr(self, name) not in valid:
-                raise ValueError(f"Options.{name} must be one of {', '.join(valid)}; got {getattr(self, name)!r}")
+                raise UsageError(f"Options.{name} must be one of {', '.join(valid)}; got {getattr(self, name)!r}")
         for name in ("materials", "force_materials"):  # one pattern given as itself, not as its letters
             if isinstance(getattr(self, name), str):
                 object.__setattr__(self, name, (getattr(self, name),))
-        if not 0 <= int(self.seed) <= MAX_SEED:
-            raise UsageError(f"seed {self.seed}: must be from 0 to {MAX_SEED}")
-        for name in ("seeds", "iterations", "max_pixels"):  # the command line's rules, for the API and the hooks
+        for name in ("seed", "seeds", "iterations", "max_pixels", "max_size", "jobs"):
             value = getattr(self, name)
-            if value is not None and int(value) < 1:
+            if value is not None and (isinstance(value, bool) or not isinstance(value, int)):
+                raise UsageError(f"Options.{name} must be a whole number; got {value!r}")
+        if not 0 <= self.seed <= MAX_SEED:
+            raise UsageError(f"seed {self.seed}: must be from 0 to {MAX_SEED}")
+        for name in ("seeds", "iterations", "max_pixels", "jobs"):
+            value = getattr(self, name)
+            if value is not None and value < 1:
                 raise UsageError(f"{name} {value}: must be at least 1")
+        if self.progress is not None and not callable(self.progress):
+            raise UsageError(f"Options.progress must be a function of one progress event; got {self.progress!r}")
 
     def with_(self, **changes: Any) -> "Options":
         return replace(self, **changes)

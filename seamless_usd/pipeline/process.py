@@ -8,6 +8,7 @@ process afterwards, one source at a time. One failing stack or source is reporte
 from __future__ import annotations
 
 import itertools
+import os
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -182,7 +183,16 @@ def _report_paths(asked: Path) -> tuple[Path, Path]:
 
 
 def _new_run(options: Options) -> Run:
+    if not isinstance(options, Options):
+        raise UsageError(f"options must be seamless_usd.Options; got {type(options).__name__}")
     authoring = authoring_module()
+    try:  # a mode it does not know is refused before any work (it failed once every tile was written)
+        options = options.with_(mode=authoring.WriteMode(options.mode or authoring.WriteMode.NEW_LAYER),
+                                plan_mode=None if options.plan_mode is None else authoring.WriteMode(options.plan_mode))
+    except ValueError:
+        modes = ", ".join(repr(m.value) for m in authoring.WriteMode)
+        raise UsageError(f"Options.mode / plan_mode must be a WriteMode ({modes}); got {options.mode!r} / "
+                         f"{options.plan_mode!r}") from None
     from seamless_usd.synthesis import get_preset
 
     try:
@@ -208,8 +218,6 @@ def _new_run(options: Options) -> Run:
         problem = folder_problem(options.output_dir)
         if problem:
             raise UsageError(f"--output-dir: {problem}")
-    if options.mode is None:
-        options = options.with_(mode=authoring.WriteMode.NEW_LAYER)
     return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
 
 
@@ -259,9 +267,14 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
     after another. An unreadable input is reported (exit code 2) and the other inputs go on.
     """
     started = time.perf_counter()
+    if isinstance(paths, (str, os.PathLike)):
+        paths = [paths]  # one path given as itself
+    if not isinstance(paths, (list, tuple)) or not all(isinstance(p, (str, os.PathLike)) for p in paths):
+        raise UsageError(f"process_paths() takes a path or a list of paths, not {type(paths).__name__} "
+                         "(an open stage: process_stage())")
     run = _new_run(options or Options())
     sources = []
-    inputs = expand_inputs([paths] if isinstance(paths, (str, Path)) else paths)  # one path given as itself
+    inputs = expand_inputs(paths)
     modes = authoring_module().WriteMode
     packages = [p for p in inputs if p.suffix.lower() == ".usdz"]
     if packages and modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
@@ -326,6 +339,11 @@ def process_stage(stage, options: Options | None = None) -> Report:
     edits are authored into the stage's current edit target; the stage is not saved.
     """
     started = time.perf_counter()
+    from pxr import Usd
+
+    if not isinstance(stage, Usd.Stage):
+        raise UsageError(f"process_stage() takes an open Usd.Stage, not {type(stage).__name__} "
+                         "(a file on disk: process_paths())")
     run = _new_run(options or Options())
     authoring = authoring_module()
     root = stage.GetRootLayer()
