@@ -375,3 +375,21 @@ def test_an_output_layer_usd_cannot_write_is_refused_before_any_work(assets, tmp
         assert _process(str(scene), "-o", str(tmp_path / name), cache=tmp_path / "cache") == 2
         assert ".usda, .usdc or .usd" in capsys.readouterr().err
     assert not (scene.parent / "tileable").exists() and not list(tmp_path.glob("over.*"))
+
+
+def test_an_output_layer_that_is_the_input_or_a_file_of_the_users_is_refused_before_any_work(assets, tmp_path, capsys):
+    """-o naming the input, another stage, or a document the scene references: refused with exit 2 before any tile
+    is made (such a file was replaced without a backup, or the run failed after its work); a layer this tool wrote
+    is written again."""
+    scene = assets / "brick" / "scene.usda"
+    for other in (scene, assets / "chess" / "piece.usda", assets / "mtlx" / "tiled.mtlx"):
+        before = other.read_bytes()
+        extra = [str(assets / "mtlx" / "prefixed.mtlx")] if other.suffix == ".mtlx" else [str(scene)]
+        assert _process(*extra, "-o", str(other), cache=tmp_path / "cache") == 2
+        err = capsys.readouterr().err
+        assert "-o/--output-layer" in err and ("is the input itself" in err or "is not replaced" in err), err
+        assert other.read_bytes() == before
+    assert not (assets / "brick" / "tileable").exists() and not (assets / "mtlx" / "tileable").exists()
+    out = tmp_path / "over.usda"
+    assert _process(str(scene), "--max-size", "128", "-o", str(out), cache=tmp_path / "cache") == 0
+    assert _process(str(scene), "--max-size", "128", "-o", str(out), cache=tmp_path / "cache") == 0  # ours: again

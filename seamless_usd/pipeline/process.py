@@ -258,6 +258,36 @@ def _check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
     if output.suffix.lower() not in MTLX_SUFFIXES and output.suffix.lower() not in _LAYER_SUFFIXES:
         raise UsageError(f"-o/--output-layer {output}: a new layer is written as .usda, .usdc or .usd (a .usdz "
                          "package cannot be written in place of a layer); name one of those")
+    if inputs and output.resolve() == inputs[0].resolve():
+        raise UsageError(f"-o/--output-layer {asset_ref(output)} is the input itself; name a new file (or use "
+                         "--in-place to edit the input, with a backup)")
+    if output.exists() and not _own_output(output):
+        raise UsageError(f"-o/--output-layer {asset_ref(output)} exists and is not a layer or document this tool "
+                         "wrote: it is not replaced; name a new file, or move that one away")
+
+
+def _own_output(path: Path) -> bool:
+    """Whether ``path`` is a new layer or document this tool wrote (it records what it was made from)."""
+    if path.suffix.lower() in MTLX_SUFFIXES:
+        import MaterialX as mx
+
+        from seamless_usd.authoring.mtlxinputs import MtlxNames
+
+        doc = mx.createDocument()
+        try:
+            mx.readFromXmlFile(doc, str(path))
+        except Exception:  # noqa: BLE001 - not a document (any more): not one of ours either
+            return False
+        return bool(doc.getAttribute(MtlxNames.MADE_FROM))
+    from pxr import Sdf, Tf
+
+    from seamless_usd.authoring.usdnodes import Names
+
+    try:
+        layer = Sdf.Layer.OpenAsAnonymous(str(path))
+    except Tf.ErrorException:
+        return False
+    return bool(layer and Names.MADE_FROM in dict(layer.customLayerData))
 
 
 def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | None = None) -> Report:
