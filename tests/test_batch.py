@@ -436,3 +436,12 @@ def test_a_stage_in_a_folder_of_the_users_named_tileable_is_walked(tmp_path):
     (lib / "brick0" / "scene.seamless.usda").write_text("#usda 1.0\n")
     found = {str(p.relative_to(lib)) for p in expand_inputs([lib])}
     assert found == {"brick0/scene.usda", "looks/two.usda", "tileable/floor.usda"}
+
+
+def test_a_glob_leaves_out_the_layers_its_stages_compose_as_a_folder_walk_does(tmp_path):
+    """``process 'prop/*.usda'``: the prop's payload and materials layers go through the prop, not again on their
+    own (with no geometry bound, its UV atlas read as tiling and was tiled)."""
+    shutil.copytree(SAMPLES / "prop", tmp_path / "prop")
+    assert expand_inputs([str(tmp_path / "prop" / "*.usda")]) == expand_inputs([tmp_path / "prop"])
+    assert [p.name for p in expand_inputs([str(tmp_path / "prop" / "*.usda")])] == ["prop.usda"]
+    assert [p.name for p in expand_inputs([tmp_path / "prop" / "prop_mtl.usda"])] == ["prop_mtl.usda"]  # named

@@ -77,8 +77,8 @@ def expand_inputs(items: Sequence[str | Path], outputs: bool = False) -> list[Pa
     Folder walks and globs leave out this tool's own outputs (``*.seamless.usda``,
     ``*.seamless.mtlx``, ``.bak`` copies, ``tileable/`` folders) so a re-run does not process
     them; ``outputs`` (``check``): a folder walk takes each scene as this tool left it instead (its new layer or
-    document where there is one; see :func:`_walk`). A file named explicitly is always taken. Duplicates are
-    removed, order is kept.
+    document where there is one; see :func:`_walk`). A glob, like a folder walk, leaves out the layers its matched
+    stages compose. A file named explicitly is always taken. Duplicates are removed, order is kept.
     A glob that matches nothing is a usage error; a missing file is left for the caller to
     report (it is unreadable input, not a usage error).
 
@@ -98,7 +98,8 @@ def expand_inputs(items: Sequence[str | Path], outputs: bool = False) -> list[Pa
             ]
             if not matches:
                 raise UsageError(f"the pattern {text!r} matches no USD or MaterialX file")
-            out.extend(matches)
+            used = _composed_by(matches)  # as a folder walk: a layer a matched stage composes goes through it
+            out.extend([m for m in matches if m.resolve() not in used] or matches)
         else:
             out.append(path)
     seen: set[Path] = set()
