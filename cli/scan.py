@@ -45,14 +45,18 @@ def _inputs(paths: list[str]) -> list[Path]:
 
 
 def run(args: argparse.Namespace) -> int:
-    result = scan_paths(_inputs(args.paths))
+    unreadable: list[str] = []  # named as errors; the other inputs are scanned (exit code 2)
+    result = scan_paths(_inputs(args.paths), unreadable=unreadable)
+    for f in result.findings:
+        if f.code == "unreadable-input":
+            print(f"seamless-usd: error: {f.where}: {f.message}", file=sys.stderr)
     if args.json:
         print(json.dumps(result.to_dict(), indent=2))
     else:
         # A pipe or file gets a wide table rather than rich's 80-column fallback.
         width = None if sys.stdout.isatty() else 160
         render(result, Console(file=sys.stdout, width=width, soft_wrap=False))
-    return 0
+    return 2 if unreadable else 0
 
 
 def _uv_text(uv: UVChain) -> str:

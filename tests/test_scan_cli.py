@@ -132,3 +132,23 @@ def test_two_stages_whose_materials_share_a_path_are_scanned_apart(tmp_path, cap
     assert main(["scan", *paths]) == 0
     out = capsys.readouterr().out
     assert "of a/scene.usda" in out and "of b/scene.usda" in out
+
+
+def test_a_library_with_one_broken_stage_is_still_scanned_and_json_names_it(tmp_path, capsys):
+    """One stage that cannot be opened in a folder: the others are scanned and --json still prints the scan, the
+    broken one an error finding (nothing was printed at all), with exit code 2 and its one line on stderr."""
+    import shutil
+
+    from seamless_usd_cli.main import main
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "broken.usda").write_text("#usda 1.0\ndef broken {\n")
+    assert main(["scan", "--json", str(tmp_path)]) == 2
+    out, err = capsys.readouterr()
+    result = json.loads(out)
+    assert [s["material"] for s in result["stacks"]] == ["</World/Looks/Brick>"]
+    [found] = [f for f in result["findings"] if f["code"] == "unreadable-input"]
+    assert "broken.usda" in found["where"] and "broken.usda" in err

@@ -227,20 +227,30 @@ def scan_mtlx(path: str | Path, triage_dir: Path | None = None, keep_triage: boo
     return scan.finish()
 
 
-def scan_paths(paths: Sequence[str | Path]) -> ScanResult:
+def scan_paths(paths: Sequence[str | Path], unreadable: list | None = None) -> ScanResult:
     """Scan USD stages and ``.mtlx`` documents by path, into one result.
 
-    Raises InputError (naming the file) for a stage or document that cannot be opened.
+    Raises InputError (naming the file) for a stage or document that cannot be opened; with ``unreadable`` (a
+    list), that file is appended to it instead, with an error finding, and the other inputs are scanned.
     """
     merged = ScanResult()
     first_by_content: dict[str, str] = {}
     for path in paths:  # each on its own: materials of two stages that share a prim path are two materials
         scan = _Scan()
-        if str(path).lower().endswith(MTLX_SUFFIX):
-            scan.add_document(path)
-        else:
-            stage = open_stage(path)
-            scan.add_stage(stage, str(Path(path).resolve()))
+        try:
+            if str(path).lower().endswith(MTLX_SUFFIX):
+                scan.add_document(path)
+            else:
+                stage = open_stage(path)
+                scan.add_stage(stage, str(Path(path).resolve()))
+        except InputError as exc:
+            if unreadable is None:
+                raise
+            unreadable.append(str(path))
+            where = asset_ref(path)
+            merged.findings.append(Finding(Severity.ERROR, "unreadable-input", where,
+                                           str(exc).removeprefix(f"{where}: ")))
+            continue
         found = scan.finish()
         for stack in found.stacks:
             earlier = first_by_content.setdefault(stack.content_key, stack.id)
