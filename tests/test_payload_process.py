@@ -89,6 +89,21 @@ def test_force_processes_the_atlas_too(assets, cache, capsys):
     assert label["status"] == "left-alone"
 
 
+def test_a_material_forced_but_left_out_by_materials_is_named(assets, cache, capsys):
+    """--force-materials naming only a material --materials leaves out: not processed, and the run says so (the
+    option was silently ignored); one --materials selects too is processed, without the warning."""
+    root = str(assets / "prop" / "prop.usda")
+    code, payload = _process(root, "--dry-run", "--materials", "M_floor", "--force-materials", "M_body", cache=cache,
+                             capsys=capsys)
+    [found] = [f for f in payload["findings"] if f["where"] == "--force-materials"]
+    assert "M_body names only materials --materials leaves out" in found["message"]
+    assert not [s for s in payload["stacks"] if s["material"] == "</Prop/Materials/M_body>"]
+    code, payload = _process(root, "--dry-run", "--materials", "M_floor", "--materials", "M_body",
+                             "--force-materials", "M_body", cache=cache, capsys=capsys)
+    assert not [f for f in payload["findings"] if f["where"] == "--force-materials"]
+    assert [s["status"] for s in payload["stacks"] if s["material"] == "</Prop/Materials/M_body>"] == ["planned"]
+
+
 def test_mtlx_look_through_a_payload_is_processed_and_referenced(assets, cache, capsys):
     root = assets / "chess" / "piece.usda"
     code, payload = _process(str(root), cache=cache, capsys=capsys)

@@ -242,6 +242,18 @@ def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
         if option == "--materials" and len(unmatched) == len(patterns) and sources:
             raise UsageError(said)
         run.report.findings.append(Finding(Severity.WARNING, "pattern-unmatched", option, said))
+    if run.options.materials:  # a material forced but not selected is not processed at all: said, not ignored
+        def matches(material: str, patterns) -> bool:
+            return len(unmatched_patterns([material], patterns)) < len(patterns)
+
+        chosen = [m for m in seen if matches(m, run.options.materials)]
+        left = [p for p in run.options.force_materials
+                if not unmatched_patterns(seen, [p]) and not any(matches(m, [p]) for m in chosen)]
+        if left:
+            run.report.findings.append(Finding(
+                Severity.WARNING, "pattern-unmatched", "--force-materials",
+                f"--force-materials {' '.join(left)} names only materials --materials leaves out, so they are not "
+                "processed at all; add them to --materials"))
 
 
 _LAYER_SUFFIXES = (".usda", ".usdc", ".usd")  # the layers a new layer can be written as (not a .usdz package)
