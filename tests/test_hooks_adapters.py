@@ -117,6 +117,28 @@ def test_maya_disabled_by_chaser_arg(maya_chaser, recorder, tmp_path):
     assert recorder.calls == []
 
 
+def test_maya_strict_post_export_returns_false_and_bad_arguments_do_not_stop_an_export(maya_chaser, monkeypatch,
+                                                                                         tmp_path):
+    """docs/maya.md: with strict, PostExport returns false when a stack fails (it raised); chaser arguments that
+    cannot be used are said, and the export goes on unless strict (the chaser's constructor raised)."""
+    from pxr import Usd
+
+    module, _, _ = maya_chaser
+
+    def failing(stage, options):
+        return SimpleNamespace(stacks=[SimpleNamespace(status=SimpleNamespace(value="failed"), material="</M>",
+                                                       message="boom", maps=[])], findings=[], exit_code=1,
+                               unreadable=[])
+
+    monkeypatch.setattr(common, "_default_process", failing)
+    stage = Usd.Stage.CreateNew(str(tmp_path / "scene.usda"))
+    assert module.SeamlessUsdChaser(_factory_context(stage, {"strict": "1"})).PostExport() is False
+    assert module.SeamlessUsdChaser(_factory_context(stage, {"strict": "0"})).PostExport() is True
+    for strict, goes_on in (("0", True), ("1", False)):
+        chaser = module.SeamlessUsdChaser(_factory_context(stage, {"max_size": "128px", "strict": strict}))
+        assert chaser.PostExport() is goes_on
+
+
 # --- Houdini ------------------------------------------------------------------------------------
 
 

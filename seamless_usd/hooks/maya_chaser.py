@@ -23,8 +23,9 @@ import logging
 
 import mayaUsd.lib as mayaUsdLib
 
+from seamless_usd.errors import SeamlessUsdError
 from seamless_usd.hooks import common
-from seamless_usd.hooks.common import HookSettings, Level, LogLine
+from seamless_usd.hooks.common import HookError, HookSettings, Level, LogLine
 
 __all__ = ["CHASER_NAME", "JOB_CONTEXT", "SeamlessUsdChaser", "settings_from_job_args", "register", "unregister"]
 
@@ -52,7 +53,12 @@ class SeamlessUsdChaser(mayaUsdLib.ExportChaser):
     def __init__(self, factoryContext, *args, **kwargs):
         super().__init__(factoryContext, *args, **kwargs)
         self._stage = factoryContext.GetStage()
-        self._settings = settings_from_job_args(factoryContext.GetJobArgs())
+        self._bad_args = None  # arguments the chaser cannot use: said in PostExport, the export goes on unless strict
+        try:
+            self._settings = settings_from_job_args(factoryContext.GetJobArgs())
+        except SeamlessUsdError as exc:
+            self._bad_args, self._settings = str(exc), None
+            self._strict = _strict_argument(factoryContext.GetJobArgs())
 
     def ExportDefault(self):
         return True
@@ -61,8 +67,26 @@ class SeamlessUsdChaser(mayaUsdLib.ExportChaser):
         return True
 
     def PostExport(self):
-        run = common.run_hook(self._stage, self._settings, emit=_emit)
+        """True when the export may go on; false (mayaUSD then reports the export as failed) with ``strict`` when a
+        stack failed or the chaser's arguments cannot be used, as docs/maya.md says; never an exception."""
+        if self._bad_args is not None:
+            _emit(LogLine(Level.ERROR, f"seamless-usd: chaser arguments not used, textures left as exported: "
+                                       f"{self._bad_args}"))
+            return not self._strict
+        try:
+            run = common.run_hook(self._stage, self._settings, emit=_emit)
+        except HookError:  # strict: already logged; mayaUSD reports a chaser's false as a failed export
+            return False
         return run.ok or not self._settings.strict
+
+
+def _strict_argument(job_args) -> bool:
+    """Whether the chaser's own ``strict`` argument asks for it, read alone (the others could not be used)."""
+    raw = dict((getattr(job_args, "allChaserArgs", None) or {}).get(CHASER_NAME, {}))
+    try:
+        return common.parse_bool(raw.get("strict", "0"))
+    except SeamlessUsdError:
+        return False
 
 
 def _job_context_enabler():
