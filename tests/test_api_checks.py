@@ -143,3 +143,23 @@ def test_an_open_stage_referencing_a_materialx_document_gets_its_edits(tmp_path)
     checked = seamless_usd.check([tmp_path / "mtlx" / "scene.usda"])
     [item] = checked.items
     assert not item.note and item.passed == (stack.status.value == "passed") and item.maps[0].startswith("tileable/")
+
+
+def test_a_relative_output_dir_of_an_open_stage_is_the_stage_folders(tmp_path, monkeypatch):
+    """A DCC's working folder is anywhere: process_stage takes a relative output_dir from the stage's root layer
+    folder, as the hooks do (it wrote into the working folder and authored ../ paths to it)."""
+    from pxr import Usd
+
+    import seamless_usd
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    stage = Usd.Stage.Open(str(tmp_path / "brick" / "scene.usda"))
+    report = seamless_usd.process_stage(stage, seamless_usd.Options(preset="tiny", max_size=128, output_dir="tiles",
+                                                                    cache_dir=tmp_path / "cache"))
+    [stack] = report.stacks
+    assert all(Path(m.output).parent == tmp_path / "brick" / "tiles" for m in stack.maps)
+    assert not list((tmp_path / "elsewhere").iterdir())

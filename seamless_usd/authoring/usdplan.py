@@ -267,9 +267,10 @@ class _Author(_UVPlanner):
         if anchor is None and not layer.anonymous and layer.realPath:
             anchor = Path(layer.realPath).parent
         if anchor is None:
-            self._find(Severity.WARNING, Codes.ANONYMOUS_ANCHOR, asset_ref(out),
-                       "the edit layer has no folder yet; wrote an absolute asset path "
-                       "(pass anchor_dir to get relative ones)")
+            if not any(f.code == Codes.ANONYMOUS_ANCHOR for f in self.result.findings):  # once, not for every map
+                self._find(Severity.WARNING, Codes.ANONYMOUS_ANCHOR, asset_ref(layer.identifier),
+                           "the layer the edits go to has no file yet, so the tiles' asset paths are absolute (save "
+                           "it to a file first, or author into a layer that has one, for relative paths)")
             return Path(out).as_posix()
         return relative_asset_path(Path(out), anchor)
 

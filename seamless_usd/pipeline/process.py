@@ -377,8 +377,9 @@ def _locked_in_place(run: Run, src: _Source) -> dict[tuple[str, str], str]:
 def process_stage(stage, options: Options | None = None) -> Report:
     """Process an open stage in memory, as DCC export hooks receive it.
 
-    Tiles are written to ``options.output_dir`` (default ``<root layer dir>/tileable``) and the
-    edits are authored into the stage's current edit target; the stage is not saved.
+    Tiles are written to ``options.output_dir`` (default ``<root layer dir>/tileable``; a relative one is taken
+    from the root layer's folder, not the working folder) and the edits are authored into the stage's current edit
+    target; the stage is not saved.
     """
     started = time.perf_counter()
     from pxr import Usd
@@ -386,10 +387,14 @@ def process_stage(stage, options: Options | None = None) -> Report:
     if not isinstance(stage, Usd.Stage):
         raise UsageError(f"process_stage() takes an open Usd.Stage, not {type(stage).__name__} "
                          "(a file on disk: process_paths())")
-    run = _new_run(options or Options())
-    authoring = authoring_module()
+    options = options or Options()
     root = stage.GetRootLayer()
     source = None if root.anonymous else Path(root.realPath)
+    if options.output_dir is not None and not Path(options.output_dir).is_absolute() and source is not None:
+        # a DCC's working folder is anywhere: a relative folder is the stage's, as the hooks take it
+        options = options.with_(output_dir=source.parent / options.output_dir)
+    run = _new_run(options)
+    authoring = authoring_module()
     label = root.identifier
     run.report.sources.append(label)
     scan = scan_stage(stage, *_triage(run.options))
