@@ -163,3 +163,27 @@ def test_a_relative_output_dir_of_an_open_stage_is_the_stage_folders(tmp_path, m
     [stack] = report.stacks
     assert all(Path(m.output).parent == tmp_path / "brick" / "tiles" for m in stack.maps)
     assert not list((tmp_path / "elsewhere").iterdir())
+
+
+def test_a_file_with_unsaved_changes_in_this_process_is_not_read_as_if_on_disk(tmp_path):
+    """process_stage authored into a stage and did not save it: process_paths and check on that file name the
+    unsaved changes instead of reading the edited layer held in memory as if it were the file."""
+    from pxr import Usd
+
+    import seamless_usd
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    scene = tmp_path / "brick" / "scene.usda"
+    stage = Usd.Stage.Open(str(scene))
+    options = seamless_usd.Options(preset="tiny", max_size=128, cache_dir=tmp_path / "cache")
+    seamless_usd.process_stage(stage, options)
+    assert stage.GetRootLayer().dirty
+    report = seamless_usd.process_paths([scene], options)
+    assert report.exit_code == 2 and "unsaved changes" in report.findings[-1].message
+    checked = seamless_usd.check([scene])
+    assert checked.exit_code != 0 and "unsaved changes" in (checked.items[0].error if checked.items else
+                                                              str(checked.to_dict()))
+    stage.GetRootLayer().Save()
+    assert seamless_usd.check([scene]).exit_code == 0

@@ -38,6 +38,10 @@ def open_stage(path: str | Path) -> Usd.Stage:
         raise InputError(f"{asset_ref(path)}: cannot open the USD stage: {_tf_message(str(exc))}") from None
     if stage is None:
         raise InputError(f"{asset_ref(path)}: cannot open the USD stage")
+    dirty = [layer for layer in stage.GetUsedLayers() if layer.dirty and not layer.anonymous]
+    if dirty:  # held open and edited in this process (a stage process_stage authored into, not saved)
+        raise InputError(f"{asset_ref(dirty[0].realPath or dirty[0].identifier)} has unsaved changes in this process, "
+                         f"so it is not the file on disk: save or reload it first")
     return stage
 
 
