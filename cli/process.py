@@ -33,8 +33,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="USD stages (.usd/.usda/.usdc/.usdz), .mtlx documents, folders (walked) or glob patterns")
     p.add_argument("--preset", default="default",
                    help="synthesis preset: default (CPU), long (4x the default's training, for structured stacks), "
-                        "draft (minutes; often not faithful), paper (GPU) "
-                        "(default: %(default)s)")
+                        "draft (minutes; often not faithful), paper (GPU), tiny (seconds: plumbing checks, "
+                        "not for tiles to ship) (default: %(default)s)")
     p.add_argument("--materials", action="append", default=[], metavar="GLOB",
                    help="only materials whose path or name matches (repeatable)")
     p.add_argument("--dry-run", action="store_true",
