@@ -191,8 +191,14 @@ def test_make_executor_validates_names():
 def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, cache, capsys, monkeypatch):
     lib = _library(tmp_path)
     report = tmp_path / "out" / "library.html"
+    _, planned = _run(str(lib), "--dry-run", "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
     code, first = _run(str(lib), "--cache-dir", str(tmp_path / "cold"), "--report", str(report), capsys=capsys)
     _assert_all_written(code, first)
+
+    def outputs(payload):
+        return {(s["source"], s["id"]): [m.get("output") for m in s["maps"]] for s in payload["stacks"]}
+
+    assert outputs(planned) == outputs(first)  # the dry run plans the very files the run writes
     jsonschema.validate(first, json_schema("report"))
     assert len(first["sources"]) == 4
     # brick x3 (one unique stack) + brick and wood albedo in two.usda: the brick albedo alone is another
@@ -445,3 +451,25 @@ def test_a_glob_leaves_out_the_layers_its_stages_compose_as_a_folder_walk_does(t
     assert expand_inputs([str(tmp_path / "prop" / "*.usda")]) == expand_inputs([tmp_path / "prop"])
     assert [p.name for p in expand_inputs([str(tmp_path / "prop" / "*.usda")])] == ["prop.usda"]
     assert [p.name for p in expand_inputs([tmp_path / "prop" / "prop_mtl.usda"])] == ["prop_mtl.usda"]  # named
+
+
+def test_a_dry_run_plans_the_tiles_a_duplicate_in_the_same_folder_reuses(tmp_path, capsys):
+    """Two materials of one stage reading the same maps: the run writes the first's tiles once and points both at
+    them; the dry run planned tiles of the second's own, which the run never writes."""
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene = tmp_path / "brick" / "scene.usda"
+    text = scene.read_text()
+    start = text.index('        def Material "Brick"')
+    end = text.index("\n        }\n", text.index('def Shader "Roughness"')) + len("\n        }\n")
+    twin = text[start:end].replace('"Brick"', '"Twin"').replace("/World/Looks/Brick/", "/World/Looks/Twin/")
+    scene.write_text(text[:end] + twin + text[end:])
+    args = (str(scene), "--max-size", "128", "--cache-dir", str(tmp_path / "cache"))
+    _, planned = _run(*args, "--dry-run", capsys=capsys)
+    _, done = _run(*args, capsys=capsys)
+    assert len(done["stacks"]) == 2 and {s["origin"] for s in done["stacks"]} >= {"duplicate"}
+
+    def outputs(payload):
+        return {s["id"]: sorted(m.get("output") for m in s["maps"]) for s in payload["stacks"]}
+
+    assert outputs(planned) == outputs(done)

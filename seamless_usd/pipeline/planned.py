@@ -23,11 +23,13 @@ def wrap_only_result(stack: TextureStack):
     return StackResult(stack=stack, maps=maps, uv_scale=(1.0, 1.0), provenance=prov, wrap_only=True)
 
 
-def planned_result(stack: TextureStack, out_dir: Path, options: Options):
+def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_of: str | None = None):
     """What a dry run shows authoring: the tile paths that would be written, and the UV scale if the
     first candidate passes Q: a source-sized refined tile keeps the UVs (scale 1); the paper's tile
     of the whole texture (c = working size) halves them. A dry run reads no pixels, so it cannot
-    tell a repeating stack whose written tile will be a lattice cut (smaller, with a larger scale)."""
+    tell a repeating stack whose written tile will be a lattice cut (smaller, with a larger scale).
+    ``tiles_of``: the id of an identical stack planned earlier into the same folder, whose tiles this one reuses
+    (as the run does)."""
     from seamless_usd.authoring import MapResult, Provenance, StackResult, uv_scale_for
     from seamless_usd.imaging import WorkingResolution, output_extension
 
@@ -38,7 +40,7 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options):
     else:
         uv, crop = uv_scale_for(working, working), working
     read = [m for m in stack.maps if m.image is not None]
-    names = stack_tile_filenames(read, stack.id, [output_extension(m.image) for m in read])
+    names = stack_tile_filenames(read, tiles_of or stack.id, [output_extension(m.image) for m in read])
     maps = [MapResult(map=m, output_path=out_dir / name) for m, name in zip(read, names)]
     prov = Provenance(
         source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=None,

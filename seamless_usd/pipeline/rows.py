@@ -44,6 +44,7 @@ class Run:
     left_alone: set[tuple[str, str]] = field(default_factory=set)  # (source, stack id) not meant to tile, not forced
     placed: dict[tuple[str, Path], StackOutcome | Exception] = field(default_factory=dict)  # (key, dir) -> tiles there
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
+    planned_first: dict[tuple[str, Path], str] = field(default_factory=dict)  # dry run: (key, dir) -> first stack id
     total: int = 0
     index: int = 0
     _settings: JobSettings | None = field(default=None, init=False, repr=False)
@@ -95,7 +96,8 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
         elif dry:
             report.status = StackStatus.PLANNED
-            planned = planned_result(stack, out_dir, run.options)
+            planned = planned_result(stack, out_dir, run.options, tiles_of=run.planned_first.setdefault(
+                (stack.content_key, out_dir), stack.id))
             report.maps = [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps]
             report.uv_scale = planned.uv_scale
             report.duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
