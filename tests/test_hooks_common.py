@@ -354,6 +354,17 @@ def test_process_layer_anchors_an_anonymous_layer_at_its_save_path(tmp_path):
     assert seen["output_dir"] is None  # library default: <save dir>/tileable
     assert layer.GetAttributeAtPath("/Looks/M/Tex.inputs:file").default.path == "./tileable/a.png"
     assert not save.exists()  # nothing saved: the DCC saves the layer
+    # a layer of that name open already (a node loading the last save): relative paths still resolve from its
+    # folder (they resolved from nowhere, and every map was missing)
+    save.parent.mkdir()
+    save.write_text("#usda 1.0\n")
+    held = Sdf.Layer.FindOrOpen(str(save))
+    _keep2, layer2 = _texture_layer("./textures/a.png")
+    run = common.process_layer(layer2, save, HookSettings(), emit=lambda _: None, process=process)
+    assert run.ok and held and Path(seen["identifier"]).parent == save.resolve().parent
+    assert Path(seen["resolved"]) == save.resolve().parent / "textures" / "a.png"
+    assert layer2.GetAttributeAtPath("/Looks/M/Tex.inputs:file").default.path == "./tileable/a.png"
+    assert [p.name for p in save.parent.iterdir()] == ["scene.usda"]  # the scratch layer is never saved
 
 
 def test_process_layer_skips_layers_without_textures(tmp_path):

@@ -244,14 +244,14 @@ def process_layer(
         return run_hook(Usd.Stage.Open(layer), settings, emit=emit, process=process)
     save_path = Path(save_path).resolve()
     fmt = Sdf.FileFormat.FindByExtension(save_path.suffix.lstrip(".") or "usda") or Sdf.FileFormat.FindById("usda")
+    name = save_path
     if Sdf.Layer.Find(str(save_path)):
-        # A layer with that identifier is open already: work on the anonymous layer, anchored
-        # only through an explicit output folder from the save path.
-        settings = settings.with_(
-            output_dir=str(resolve_output_dir(settings.output_dir, layer_dir=None, export_path=save_path))
-        )
-        return run_hook(Usd.Stage.Open(layer), settings, export_path=save_path, emit=emit, process=process)
-    scratch = Sdf.Layer.New(fmt, str(save_path))
+        # A layer with that identifier is open already (a node that loads the last save): a scratch layer of
+        # another name in the same folder, so relative paths still resolve from there (never saved)
+        import uuid
+
+        name = save_path.with_name(f".{save_path.stem}.{uuid.uuid4().hex}{save_path.suffix}")
+    scratch = Sdf.Layer.New(fmt, str(name))
     scratch.TransferContent(layer)
     run = run_hook(Usd.Stage.Open(scratch), settings, export_path=save_path, emit=emit, process=process)
     if run.report is not None:
