@@ -26,6 +26,7 @@ from seamless_usd.findings import Finding, Severity, asset_ref
 from seamless_usd.pipeline.cache import JobIndex, StackCache, job_fingerprint
 from seamless_usd.pipeline.executors import InProcessExecutor, make_executor
 from seamless_usd.pipeline.options import Options, check_device
+from seamless_usd.pipeline.outputlayer import check_output_layer
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.pipeline.outcome import StackOutcome
 from seamless_usd.pipeline.rows import (Run, authoring_module, check_written, error_message, record_authoring,
@@ -182,9 +183,16 @@ def _report_paths(asked: Path) -> tuple[Path, Path]:
         raise UsageError(f"--report: {exc}") from None
 
 
-def _new_run(options: Options) -> Run:
+def _as_options(options) -> Options:
+    """``options``, or the defaults for None; anything else is a usage error."""
+    if options is None:
+        return Options()
     if not isinstance(options, Options):
         raise UsageError(f"options must be seamless_usd.Options; got {type(options).__name__}")
+    return options
+
+
+def _new_run(options: Options) -> Run:
     authoring = authoring_module()
     try:  # a mode it does not know is refused before any work (it failed once every tile was written)
         options = options.with_(mode=authoring.WriteMode(options.mode or authoring.WriteMode.NEW_LAYER),
@@ -256,52 +264,6 @@ def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
                 "processed at all; add them to --materials"))
 
 
-_LAYER_SUFFIXES = (".usda", ".usdc", ".usd")  # the layers a new layer can be written as (not a .usdz package)
-
-
-def _check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
-    """-o/--output-layer names the one layer or document written: one input, of its kind."""
-    if len(inputs) > 1:
-        raise UsageError("-o/--output-layer names one layer or document, but several inputs were given; leave it out "
-                         "(each stage then gets its own <name>.seamless.usda, each document <name>.seamless.mtlx)")
-    if inputs and (inputs[0].suffix.lower() in MTLX_SUFFIXES) != (output.suffix.lower() in MTLX_SUFFIXES):
-        kind = "a MaterialX document (.mtlx)" if inputs[0].suffix.lower() in MTLX_SUFFIXES else "a USD layer"
-        raise UsageError(f"-o/--output-layer {output}: the input {inputs[0].name} is edited in {kind}; name one")
-    if output.suffix.lower() not in MTLX_SUFFIXES and output.suffix.lower() not in _LAYER_SUFFIXES:
-        raise UsageError(f"-o/--output-layer {output}: a new layer is written as .usda, .usdc or .usd (a .usdz "
-                         "package cannot be written in place of a layer); name one of those")
-    if inputs and output.resolve() == inputs[0].resolve():
-        raise UsageError(f"-o/--output-layer {asset_ref(output)} is the input itself; name a new file (or use "
-                         "--in-place to edit the input, with a backup)")
-    if output.exists() and not _own_output(output):
-        raise UsageError(f"-o/--output-layer {asset_ref(output)} exists and is not a layer or document this tool "
-                         "wrote: it is not replaced; name a new file, or move that one away")
-
-
-def _own_output(path: Path) -> bool:
-    """Whether ``path`` is a new layer or document this tool wrote (it records what it was made from)."""
-    if path.suffix.lower() in MTLX_SUFFIXES:
-        import MaterialX as mx
-
-        from seamless_usd.authoring.mtlxinputs import MtlxNames
-
-        doc = mx.createDocument()
-        try:
-            mx.readFromXmlFile(doc, str(path))
-        except Exception:  # noqa: BLE001 - not a document (any more): not one of ours either
-            return False
-        return bool(doc.getAttribute(MtlxNames.MADE_FROM))
-    from pxr import Sdf, Tf
-
-    from seamless_usd.authoring.usdnodes import Names
-
-    try:
-        layer = Sdf.Layer.OpenAsAnonymous(str(path))
-    except Tf.ErrorException:
-        return False
-    return bool(layer and Names.MADE_FROM in dict(layer.customLayerData))
-
-
 def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | None = None) -> Report:
     """Process stages and MaterialX documents (files, folders, glob patterns); the report owns the exit code.
 
@@ -314,7 +276,7 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
     if not isinstance(paths, (list, tuple)) or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise UsageError(f"process_paths() takes a path or a list of paths, not {type(paths).__name__} "
                          "(an open stage: process_stage())")
-    run = _new_run(options or Options())
+    run = _new_run(_as_options(options))
     sources = []
     inputs = expand_inputs(paths)
     modes = authoring_module().WriteMode
@@ -326,7 +288,7 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
         if modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
             raise UsageError("-o/--output-layer names a new layer, but --in-place edits the source layers: use one "
                              "or the other")
-        _check_output_layer(Path(run.options.output_layer), inputs)
+        check_output_layer(Path(run.options.output_layer), inputs)
     for path in inputs:
         run.report.sources.append(str(path))
         try:
@@ -387,7 +349,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     if not isinstance(stage, Usd.Stage):
         raise UsageError(f"process_stage() takes an open Usd.Stage, not {type(stage).__name__} "
                          "(a file on disk: process_paths())")
-    options = options or Options()
+    options = _as_options(options)
     root = stage.GetRootLayer()
     source = None if root.anonymous else Path(root.realPath)
     if options.output_dir is not None and not Path(options.output_dir).is_absolute() and source is not None:
