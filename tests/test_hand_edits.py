@@ -63,3 +63,25 @@ def test_a_texture_set_by_hand_in_the_new_document_is_left_as_it_is(tmp_path, ca
     assert "its file is set in" in stack["message"] and "to @../textures/cloth.png@" in stack["message"]
     assert "remove that value from the document" in stack["message"]
     assert output.read_text() == edited
+
+
+def test_a_hand_edit_in_one_variant_fails_that_variant_s_stack_only(tmp_path, capsys):
+    """The prop's floor file is set inside each variant of ``finish``: a file set by hand in the new layer inside
+    the cloth variant fails the cloth stack; the wood stack, the same texture node under another selection, keeps
+    its status (a refusal was keyed by the node alone, and failed both)."""
+    for name in ("prop", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene = tmp_path / "prop" / "prop.usda"
+    code, first = _run(scene, capsys)
+    floor = {s["variant"]: s["status"] for s in first["stacks"] if s["material"] == "</Prop/Materials/M_floor>"}
+    assert "failed" not in floor.values() and len(floor) == 2
+    layer = scene.with_name("prop.seamless.usda")
+    text = layer.read_text()
+    start = text.index("./tileable/cloth.")
+    layer.write_text(text[:start] + "../textures/wood_tileable.jpg" + text[text.index("@", start):])
+    code, again = _run(scene, capsys)
+    now = {s["variant"]: s for s in again["stacks"] if s["material"] == "</Prop/Materials/M_floor>"}
+    [cloth] = [s for v, s in now.items() if "cloth" in v]
+    [wood] = [s for v, s in now.items() if "cloth" not in v]
+    assert cloth["status"] == "failed" and "set by hand" in cloth["message"]
+    assert wood["status"] == floor[wood["variant"]], wood["message"]

@@ -22,7 +22,7 @@ from seamless_usd.authoring.files import (SET_BY_HAND, backup_once, layer_lock, 
                                           write_atomically)
 from seamless_usd.authoring.mtlxtext import read_options, with_leading_comments
 from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn,
-                                          WriteMode, shared_with)
+                                          WriteMode, node_key, shared_with)
 from seamless_usd.textures import Origin
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import file_sha256
@@ -280,7 +280,7 @@ class _MtlxAuthor(_PlaceUV):
         if node is None or not isinstance(node, mx.Node):
             self.result.findings.append(Finding(Severity.ERROR, Codes.MISSING_PRIM,
                                                 prim_ref(node_path), "MaterialX node not found"))
-            self.result.not_written.append((prim_ref(node_path), "MaterialX node not found in the document"))
+            self.result.not_written.append((node_key(tex_map), "MaterialX node not found in the document"))
             return
         if wrap_only:
             if not self._periodic(node, dry=True):
@@ -293,7 +293,7 @@ class _MtlxAuthor(_PlaceUV):
             self.result.findings.append(Finding(
                 Severity.ERROR, Codes.MISSING_OUTPUT, asset_ref(out_file),
                 f"tileable file for {prim_ref(node_path)} not found; nothing written for it"))
-            self.result.not_written.append((prim_ref(node_path), f"tileable file {asset_ref(out_file)} not found"))
+            self.result.not_written.append((node_key(tex_map), f"tileable file {asset_ref(out_file)} not found"))
             return
         scale = (float(uv_scale[0]), float(uv_scale[1]))
         if node_path in self._done:
@@ -302,7 +302,7 @@ class _MtlxAuthor(_PlaceUV):
                     Severity.WARNING, Codes.SHARED_CONFLICT, prim_ref(node_path),
                     f"node shared by {self._done[node_path][2]} and {tex_map.material} with "
                     f"different results; kept {self._done[node_path][2]}'s"))
-                self.result.not_written_for.append((tex_map.material, prim_ref(node_path),
+                self.result.not_written_for.append((tex_map.material, node_key(tex_map),
                                                     shared_with(self._done[node_path][2])))
             return
         self._done[node_path] = (out_file, scale, tex_map.material)
@@ -319,7 +319,7 @@ class _MtlxAuthor(_PlaceUV):
             file_input = self._authored(node, MtlxNames.FILE, MtlxNames.FILENAME)
         current = file_input.getResolvedValueString()
         if current and set_by_hand(str(self.out.parent / current), tex_map.resolved):
-            self.result.not_written.append((prim_ref(node_path), SET_BY_HAND.format(
+            self.result.not_written.append((node_key(tex_map), SET_BY_HAND.format(
                 where=f" in {asset_ref(self.out)}", asset=asset_ref(file_input.getValueString()), kind="document")))
             return
         self._set_file(file_input, relative_asset_path(out_file, self.out.parent))

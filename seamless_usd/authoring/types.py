@@ -162,3 +162,14 @@ def shared_with(material: str) -> str:
     """Why a texture node's edits for one material were not made: another material shares it and keeps its tile."""
     return (f"the texture node is shared with {material}, which keeps its own tile there (this material's tile is "
             "written but not used); give each material its own texture node")
+
+
+def node_key(tex_map) -> str:
+    """How a texture node's edits are named where they are not written: the node, and the variant selection its
+    stack was found under (one node under two selections has two sets of edits, and one refused must not fail
+    the other)."""
+    from seamless_usd.findings import prim_ref
+    from seamless_usd.textures import describe_selection
+
+    node = prim_ref(tex_map.node.strip("<>"))
+    return f"{node} in {describe_selection(tex_map.selection)}" if tex_map.selection else node

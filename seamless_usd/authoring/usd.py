@@ -24,7 +24,7 @@ from pxr import Sdf, Tf, Usd
 
 from seamless_usd.authoring.files import check_layer, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.fileio import source_sha256
-from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode
+from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode, node_key
 from seamless_usd.authoring.usdedits import check_uv_composed, keep_whole_stacks, not_composed, strongest_layer
 from seamless_usd.authoring.usdinplace import _author_in_place, _open_layer
 from seamless_usd.authoring.mtlx import default_output_document
@@ -233,7 +233,7 @@ def _plan_documents(author, results: Sequence[StackResult], target: Usd.EditTarg
     documents = list(dict.fromkeys(
         m.map.document for r in results for m in r.maps if m.map.origin is Origin.MTLX and m.map.document))
     for document in map(Path, documents):
-        nodes = [prim_ref(m.map.node.strip("<>")) for r in results for m in r.maps if m.map.document == str(document)]
+        nodes = [node_key(m.map) for r in results for m in r.maps if m.map.document == str(document)]
         if anchor_dir is None:
             result.not_written += [(node, f"its MaterialX document {asset_ref(document)} gets a new document beside "
                                           "the layer the edits go to, which has no folder yet: save that layer first")
@@ -297,7 +297,7 @@ def _check_composed(stage: Usd.Stage, edits, results: Sequence[StackResult], res
     sets it) is recorded as not written, with a finding naming that layer."""
     from seamless_usd.authoring.usdedits import _EditKind
 
-    nodes = {Sdf.Path(m.map.file_at.prim).AppendProperty(m.map.file_at.attribute): m.map.node
+    nodes = {Sdf.Path(m.map.file_at.prim).AppendProperty(m.map.file_at.attribute): node_key(m.map)
              for r in results for m in r.maps}  # where each map's file value is authored -> its texture node
     for edit in edits:
         if edit.kind != _EditKind.VALUE or not isinstance(edit.value, Sdf.AssetPath):
@@ -306,7 +306,7 @@ def _check_composed(stage: Usd.Stage, edits, results: Sequence[StackResult], res
         got = attr.Get() if attr else None
         if got is not None and got.path == edit.value.path:
             continue
-        node = prim_ref(nodes.get(edit.path, str(edit.path.GetPrimPath())).strip("<>"))
+        node = nodes.get(edit.path) or prim_ref(edit.path.GetPrimPath())
         not_composed(result, node, (
             f"its new file is authored in {asset_ref(_layer_name(edit.target.GetLayer()))} but "
             f"{asset_ref(strongest_layer(attr))} holds a stronger value, which the stage keeps; author into that "

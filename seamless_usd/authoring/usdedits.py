@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from pxr import Sdf, Usd
 
-from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult
+from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, node_key
 
 from seamless_usd.authoring.usdnodes import Names
 from seamless_usd.textures import TextureStack, describe_selection
@@ -185,14 +185,14 @@ def check_uv_composed(author, results: Sequence[StackResult], result: AuthoringR
     from seamless_usd.discover.variants import apply_selection
 
     selections = {r.stack.id: r.stack.selection for r in results}
-    nodes = {str(Sdf.Path(m.map.node.strip("<>"))): prim_ref(m.map.node.strip("<>")) for r in results for m in r.maps}
+    nodes = {(str(Sdf.Path(m.map.node.strip("<>"))), r.stack.id): node_key(m.map) for r in results for m in r.maps}
     session = author.stage.GetSessionLayer()
     composed = None
     try:
         for edit, owner in zip(author.edits, author.owners):
             if edit.kind != _EditKind.CONNECT or edit.path.name not in ("inputs:st", "inputs:texcoord"):
                 continue
-            node = nodes.get(str(edit.path.GetPrimPath()))
+            node = nodes.get((str(edit.path.GetPrimPath()), owner))
             if node is None or node in result.unwritten_nodes():
                 continue
             selection = selections.get(owner, ())
@@ -233,7 +233,7 @@ def keep_whole_stacks(author, results: Sequence[StackResult], result: AuthoringR
     """A stack one of whose maps' edits the stage does not compose keeps none of its edits (its maps would no
     longer line up): the layers go back to what they held and the other stacks' edits are made again."""
     unwritten = result.unwritten_nodes()
-    failed = {r.stack.id for r in results for m in r.maps if prim_ref(m.map.node.strip("<>")) in unwritten}
+    failed = {r.stack.id for r in results for m in r.maps if node_key(m.map) in unwritten}
     if not failed:
         return
     for layer, text in before.items():
@@ -247,7 +247,7 @@ def keep_whole_stacks(author, results: Sequence[StackResult], result: AuthoringR
     for r in results:
         if r.stack.id in failed:
             for m in r.maps:
-                node = prim_ref(m.map.node.strip("<>"))
+                node = node_key(m.map)
                 if node not in result.unwritten_nodes():
                     result.not_written.append((node, "another map of its stack cannot be edited here, so none of "
                                                      "its edits are kept (its maps would no longer line up)"))

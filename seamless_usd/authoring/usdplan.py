@@ -10,7 +10,7 @@ from pxr import Gf, Sdf, Usd, UsdShade
 from seamless_usd.authoring.files import SET_BY_HAND, relative_asset_path, set_by_hand
 from seamless_usd.authoring.schema import PROPERTIES, Q_PROPERTIES, Schema, has_applied, read_provenance, schemas_known
 from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult,
-                                          shared_with)
+                                          node_key, shared_with)
 from seamless_usd.authoring.usdedits import _Edit, _EditKind, variant_edit_target, variant_not_composed
 from seamless_usd.authoring.usduv import _UVPlanner
 from seamless_usd.authoring.usdnodes import (
@@ -82,7 +82,7 @@ class _Author(_UVPlanner):
             if stack_result.stack.selection and not selections:  # a DCC's open stage: not recomposed
                 finding = variant_not_composed(stack_result.stack)
                 self.result.findings.append(finding)
-                self.result.not_written += [(prim_ref(m.map.node.strip("<>")), finding.message)
+                self.result.not_written += [(node_key(m.map), finding.message)
                                             for m in stack_result.maps if m.map.origin is Origin.USD]
                 continue
             selection = stack_result.stack.selection if selections else ()
@@ -96,7 +96,7 @@ class _Author(_UVPlanner):
                     why = self._plan_map(map_result, stack_result)
                     self.owners += [stack_result.stack.id] * (len(self.edits) - len(self.owners))
                     if why:
-                        self.result.not_written.append((prim_ref(map_result.map.node.strip("<>")), why))
+                        self.result.not_written.append((node_key(map_result.map), why))
         if composed:
             apply_selection(self.stage.GetSessionLayer(), ())
     def plan_retarget(self, document: Path, new_document: Path, target: Usd.EditTarget) -> None:
@@ -163,7 +163,7 @@ class _Author(_UVPlanner):
                     f"results; kept {done[2]}'s. Give each material its own texture node to "
                     "process them separately",
                 )
-                self.result.not_written_for.append((tex_map.material, prim_ref(node_path), shared_with(done[2])))
+                self.result.not_written_for.append((tex_map.material, node_key(tex_map), shared_with(done[2])))
             return None
         self._done[done_key] = (out, scale, tex_map.material)
         first_edit = len(self.edits)

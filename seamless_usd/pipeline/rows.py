@@ -10,6 +10,7 @@ from pathlib import Path
 
 from seamless_usd.discover.select import unread_files, unread_materials
 from seamless_usd.errors import SeamlessUsdError
+from seamless_usd.authoring.types import node_key
 from seamless_usd.findings import Finding, Severity, prim_ref
 from seamless_usd.pipeline.executors import Executor
 from seamless_usd.pipeline.options import Options, ProgressEvent
@@ -166,8 +167,7 @@ def check_written(run: Run, handed, edit, failure: str | None = None) -> None:
         if failure is not None:
             why = failure
         else:
-            missing = [(prim_ref(m.node.strip("<>")), unwritten[prim_ref(m.node.strip("<>"))])
-                       for m in stack.maps if prim_ref(m.node.strip("<>")) in unwritten]
+            missing = [(node_key(m), unwritten[node_key(m)]) for m in stack.maps if node_key(m) in unwritten]
             if not missing:
                 continue
             why = "; ".join(f"{node}: {reason}" for node, reason in missing)
