@@ -81,23 +81,33 @@ def _file(stage: Usd.Stage, node: str) -> str:
 
 
 @pytest.mark.parametrize("mode", ["new-layer", "in-place"])
-def test_a_decal_reading_the_same_material_input_keeps_its_photo(tmp_path, capsys, mode):
+@pytest.mark.parametrize("decal", ["clamp", "repeat"])
+def test_a_decal_reading_the_same_material_input_keeps_its_photo(tmp_path, capsys, mode, decal):
+    """With ``repeat`` both nodes are tiled (the decal's stack, identical, takes the albedo's tiles), each node set
+    on its own; run again, the input is still left as it is (the second run found it read by no node any more and
+    set it to a tile)."""
     (tmp_path / "tex").mkdir()
     shutil.copy(SAMPLES / "brick_albedo.png", tmp_path / "tex")
     scene = tmp_path / "scene.usda"
-    scene.write_text(SCENE)
+    scene.write_text(SCENE.replace('"clamp"', f'"{decal}"'))
     extra = ["--in-place"] if mode == "in-place" else []
     code = main(["process", "--preset", "tiny", "--max-size", "128", "--cache-dir", str(tmp_path / "cache"), "--json",
                  *extra, str(scene)])
     payload = json.loads(capsys.readouterr().out)
     status = {s["maps"][0]["node"].rsplit("/", 1)[-1].strip(">"): s["status"] for s in payload["stacks"]}
-    assert status == {"Albedo": "passed", "Decal": "left-alone"} and code == 0, status
+    assert status["Albedo"] == "passed" and code == payload["exit_code"], status
+    assert status["Decal"] == ("left-alone" if decal == "clamp" else status["Decal"]) != "failed"
     stage = Usd.Stage.Open(str(scene if extra else tmp_path / "scene.seamless.usda"))
     assert _file(stage, "Albedo").endswith(".tile.png")
-    assert _file(stage, "Decal") == "brick_albedo.png"  # the decal as it was
+    if decal == "clamp":
+        assert _file(stage, "Decal") == "brick_albedo.png"  # the decal as it was
+    else:
+        assert _file(stage, "Decal").endswith(".tile.png")  # an identical stack: the first's tile, set on the node
     assert stage.GetAttributeAtPath("/Looks/M.inputs:baseTex").Get().path == "./tex/brick_albedo.png"
     # run again: nothing more to do
     main(["process", "--preset", "tiny", "--max-size", "128", "--cache-dir", str(tmp_path / "cache"), "--json",
           *extra, str(scene)])
     again = json.loads(capsys.readouterr().out)
     assert not again["layers_written"], again["layers_written"]
+    stage = Usd.Stage.Open(str(scene if extra else tmp_path / "scene.seamless.usda"))
+    assert stage.GetAttributeAtPath("/Looks/M.inputs:baseTex").Get().path == "./tex/brick_albedo.png"

@@ -244,9 +244,14 @@ class _Author(_UVPlanner):
             self._refused = by_hand
             return False
         own = shader.GetInput(Names.FILE)
-        if attr.GetPrim() != prim and own and _other_readers(prim, attr):
+        reads = _producing_attr(own) if own else None
+        if attr.GetPrim() != prim and own and (_other_readers(prim, attr) or reads is None
+                                               or reads.GetPath() != attr.GetPath()):
             # an input of the material (or a node graph) that other textures read as well (a decal left alone, a
-            # node reading another channel): this texture's own file is set, and its connection to it cut
+            # node reading another channel): this texture's own file is set, and its connection to it cut (an
+            # earlier run cut it already when the node no longer reads that input)
+            if reads is not None and reads.GetPrim() == prim and _same_file(own.GetAttr().Get(), out):
+                return True
             target = self._target(prim, own.GetAttr())
             if target is None:
                 return False
