@@ -229,6 +229,7 @@ class TextureMap:
     selection: Selection = ()  # variant selection it was found under (() : the stage's own)
     recorded_passed: bool | None = None  # a tile this tool wrote: whether it passed when written (else None)
     recorded_source: RecordedSource | None = None  # a tile this tool wrote: the source it records
+    tile_missing: bool = False  # a tile this tool wrote that is gone: ``resolved`` is its recorded source
 
     @property
     def is_normal(self) -> bool:

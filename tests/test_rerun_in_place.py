@@ -137,3 +137,21 @@ def test_a_stack_keeps_its_id_over_the_uv_nodes_a_run_inserted(tmp_path, capsys)
         after = seamless_usd.scan(path)
         assert all(s.uv.before_ours for s in after.stacks)
         assert sorted((s.material, s.id) for s in after.stacks) == before, scene
+
+
+def test_tiles_deleted_after_an_in_place_run_are_made_again_from_their_recorded_sources(tmp_path, capsys):
+    """The tiles folder deleted after ``--in-place``: check names each missing tile, and process makes them again
+    from the sources the stage records (the material failed, 'no texture of it can be read', with no way on but
+    the .bak)."""
+    scene = _library(tmp_path)
+    first = _run(scene, capsys)
+    made = _file_inputs(scene)
+    shutil.rmtree(scene.parent / "tileable")
+    assert main(["check", "--json", str(scene)]) != 0
+    [item] = json.loads(capsys.readouterr().out)["items"]
+    assert "is not there (its recorded source is): process again" in item["error"]
+    again = _run(scene, capsys)
+    [stack] = again["stacks"]
+    assert stack["status"] == first["stacks"][0]["status"] and stack["origin"] == "cache"
+    assert [f["code"] for f in again["findings"]].count("tile-missing") == 2
+    assert _file_inputs(scene) == made and all(Path(tile).is_file() for tile, _, _ in made.values())

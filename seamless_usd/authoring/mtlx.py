@@ -91,7 +91,7 @@ def author_mtlx(
             f"and the earlier edits of {', '.join(prim_ref(n) for n in lost)} are not kept: process the stages that "
             "use them again"))
     if not author.changed:
-        if checked and not result.findings and not result.not_written:
+        if checked and not result.refusals() and not result.not_written:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(src),
                                            "every texture already has these edits; nothing written"))
         return result

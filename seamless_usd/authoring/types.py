@@ -6,7 +6,7 @@ from enum import Enum
 from pathlib import Path
 
 from seamless_usd.textures import TextureMap, TextureStack
-from seamless_usd.findings import Finding
+from seamless_usd.findings import Finding, Severity
 
 __all__ = [
     "Codes",
@@ -124,6 +124,11 @@ class AuthoringResult:
     not_written: list[tuple[str, str]] = field(default_factory=list)  # ("<texture node>", why) left unedited
     # (material, "<texture node>", why): a node another material shares, which keeps that material's tile
     not_written_for: list[tuple[str, str, str]] = field(default_factory=list)
+
+    def refusals(self) -> list[Finding]:
+        """The findings that say an edit was not made (errors and skips; a warning, such as the schema registry
+        built before the schema was registered, is not one)."""
+        return [f for f in self.findings if f.severity in (Severity.ERROR, Severity.SKIPPED)]
 
     def unwritten_nodes(self, material: str | None = None) -> dict[str, str]:
         """``"<node>"`` -> why, for every texture node whose edits were not made (for ``material``: also those

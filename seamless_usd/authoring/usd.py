@@ -152,7 +152,7 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
             f"was made over another version of {asset_ref(stage_path)}, so it is made again over the stage as it is "
             f"now and the earlier edits of {', '.join(lost)} are not kept: process those materials again"))
     if not author.edits:
-        if author.planned_maps and not result.findings and not result.not_written:
+        if author.planned_maps and not result.refusals() and not result.not_written:
             result.findings.append(
                 Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
                         "every texture already has these edits; no layer written")

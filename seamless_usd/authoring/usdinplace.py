@@ -78,7 +78,7 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
     author = _Author(stage, result, anchor_dir=None)
     author.plan_all(results, _in_place_target, selections=True, one_layer=True)
     if not author.edits:
-        if author.planned_maps and not result.findings and not result.not_written:
+        if author.planned_maps and not result.refusals() and not result.not_written:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
                                            "every texture already has these edits; nothing saved"))
         return result

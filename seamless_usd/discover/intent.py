@@ -166,6 +166,11 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo,
             return decision
     recorded = [m.recorded_passed for m in stack.maps]
     if all(r is not None for r in recorded):  # tiles this tool wrote: the verdict against their recorded source
+        missing = [m for m in stack.maps if m.tile_missing]
+        if missing:
+            return IntentDecision(Intent.TILING, f"{decision.reason}; made by seamless-usd, and its tile "
+                                                 f"{asset_ref(missing[0].asset)} is not there: made again from its "
+                                                 "recorded source")
         changed = _changed_sources(stack)
         if changed:
             return IntentDecision(Intent.TILING, f"{decision.reason}; made by seamless-usd, and its source "

@@ -7,7 +7,7 @@ space resolved.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from seamless_usd.discover.colorspace import Label, mismatch_finding, resolve_color_space
 from seamless_usd.discover.images import ImageReadError, is_package_path, read_image_info, udim_tiles
@@ -109,7 +109,15 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         listed = ", ".join(tiles) if tiles else "none found"
         return None, [_skip(first, Codes.UDIM, f"texture tile sets ({tile_token(first.asset)}) are not made "
                                                 f"tileable (UDIM); tiles: {listed}")]
-    if not first.resolved:
+    recorded = first.recorded_source
+    tile_missing = not first.resolved and bool(recorded and recorded.resolved)
+    findings: list[Finding] = []
+    if tile_missing:  # a tile this tool wrote, deleted since: made again from the source it records
+        findings.append(Finding(Severity.WARNING, Codes.TILE_MISSING, _where(first),
+                                f"this tile is not there; its recorded source {asset_ref(recorded.asset)} is, and "
+                                "process makes the tile again from it", material=first.material))
+        first = replace(first, resolved=recorded.resolved)
+    elif not first.resolved:
         looked = f" at {first.expected}" if first.expected and first.expected != first.asset else ""
         return None, [_skip(first, Codes.MISSING_FILE, f"texture file not found{looked}")]
     info = cache.get_info(first.resolved)
@@ -119,7 +127,6 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         return None, [
             _skip(first, Codes.TOO_SMALL, f"image is {info.width}x{info.height} px, below the {MIN_IMAGE_SIZE} px of the smallest tile")
         ]
-    findings: list[Finding] = []
     cs, reason, unknown = resolve_color_space(first.labels, info)
     for name in unknown:
         findings.append(
@@ -152,6 +159,7 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         selection=first.selection,
         recorded_passed=first.recorded_passed,
         recorded_source=first.recorded_source,
+        tile_missing=tile_missing,
     )
     if (
         tmap.is_normal

@@ -176,6 +176,7 @@ class Codes:
     DISCOVERY_ERROR = "discovery-error"
     SOURCE_NOT_FOUND = "source-not-found"  # a tile this tool wrote whose recorded source is gone
     UNLOADED_PAYLOAD = "unloaded-payload"  # an open stage's payload that is not loaded: not scanned
+    TILE_MISSING = "tile-missing"  # a tile this tool wrote, deleted since: made again from its recorded source
 
 
 MIN_CROP = 100  # px: the smallest crop SeamlessGAN samples (DESIGN: c_min); a smaller stack gets a cut tile only

@@ -301,6 +301,10 @@ def _judge_stack(stage_path: Path, stage, stack) -> CheckItem:
         if packed:
             raise InputError(f"{asset_ref(packed[0].asset)} is inside a .usdz package: its pixels are not judged "
                              "there (unpack the package, or check the files it was made from)")
+        gone = [m for m in stack.maps if m.tile_missing]
+        if gone:  # its source is there, not the tile: nothing of this stack's tiles to judge
+            raise InputError(f"its tile {asset_ref(gone[0].asset)} is not there (its recorded source is): process "
+                             "again to make it")
         recorded, item.note = stack_sources(stage, stack)
         if recorded is None:  # no separate source: judged against itself, as the scan's triage judges it
             _alone(item, [file_map(m) for m in stack.maps])
