@@ -52,8 +52,9 @@ def stack_tile_filenames(maps, stack_id: str, extensions: list[str]) -> list[str
     whole stack's (every map's tile is cut through one field made from all of them: two stacks of one material path
     that share a map but not the others make two tiles of it, neither overwriting the other, and a stack one of
     whose maps changed names every tile anew, so a layer written before keeps the tiles it names); maps of one file
-    (two texture nodes reading its colour and its alpha) also name the channels they read, and their place in the
-    stack when those are the same too, so that neither tile overwrites the other.
+    (two texture nodes reading its colour and its alpha) also name the channels they read, so that neither tile
+    overwrites the other; two nodes reading the same channels of one file share one tile (the same texels cut
+    through the same field; the run knows each map by its file and channels).
 
     >>> from types import SimpleNamespace as M
     >>> stack_tile_filenames([M(asset="rgba.png", resolved="", channels_used="rgb"),
@@ -65,11 +66,9 @@ def stack_tile_filenames(maps, stack_id: str, extensions: list[str]) -> list[str
     names = [tile_filename(m.asset, stack_id, ext, hashlib.sha256(f"{d}|{whole}".encode()).hexdigest() if d else "")
              for m, d, ext in zip(maps, digests, extensions)]
     out = []
-    for i, (m, name) in enumerate(zip(maps, names)):
-        if names.count(name) > 1:
-            same = [k for k, (o, n) in enumerate(zip(maps, names)) if n == name and o.channels_used == m.channels_used]
-            mark = m.channels_used + (str(same.index(i) + 1) if len(same) > 1 else "")
-            name = name.replace(".tile", f".{mark}.tile", 1) if ".tile" in name else name
+    for m, name in zip(maps, names):
+        if len({o.channels_used for o, n in zip(maps, names) if n == name}) > 1:
+            name = name.replace(".tile", f".{m.channels_used}.tile", 1) if ".tile" in name else name
         out.append(name)
     return out
 

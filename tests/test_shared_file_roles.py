@@ -132,3 +132,32 @@ def test_two_stacks_of_one_material_path_sharing_one_map_write_two_tiles_of_it(t
         [item] = check_paths([Path(s["source"]).with_name(Path(s["source"]).stem + ".seamless.usda")]).items
         assert item.passed == (s["status"] == "passed"), (item.verdict, s["status"])
     assert code == (0 if all(s["status"] == "passed" for s in stacks) else 1)
+
+
+def test_two_nodes_reading_the_same_channels_of_one_file_share_one_tile(tmp_path, capsys):
+    """Two texture nodes of one stack reading the same channels of one file: one tile, which both read (two were
+    written, numbered, and both nodes read the second: the first was left on disk, read by nothing)."""
+    import shutil
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    scene = tmp_path / "brick" / "scene.usda"
+    text = scene.read_text()
+    start = text.index('            def Shader "Albedo"')
+    end = text.index("            }\n", start) + len("            }\n")
+    twin = text[start:end].replace('"Albedo"', '"Glow"')
+    text = (text[:end] + "\n" + twin + text[end:]).replace(
+        "color3f inputs:diffuseColor.connect = </World/Looks/Brick/Albedo.outputs:rgb>",
+        "color3f inputs:diffuseColor.connect = </World/Looks/Brick/Albedo.outputs:rgb>\n"
+        "                color3f inputs:emissiveColor.connect = </World/Looks/Brick/Glow.outputs:rgb>")
+    scene.write_text(text)
+    main(["process", str(scene), "--preset", "tiny", "--max-size", "128", "--cache-dir", str(tmp_path / "cache"),
+          "--json"])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    assert len(stack["maps"]) == 4
+    tiles = sorted(p.name for p in (tmp_path / "brick" / "tileable").iterdir())
+    assert len(tiles) == 3, tiles  # albedo (both nodes), normal, roughness
+    stage = Usd.Stage.Open(str(scene.with_name("scene.seamless.usda")))
+    read = {stage.GetAttributeAtPath(f"/World/Looks/Brick/{n}.inputs:file").Get().resolvedPath for n in ("Albedo", "Glow")}
+    assert len(read) == 1 and Path(read.pop()).name in tiles
