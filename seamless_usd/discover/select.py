@@ -11,7 +11,7 @@ from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "unmatched_patterns", "blocked_stacks", "set_aside_stacks",
-           "instanced_stacks", "left_alone_stacks", "from_recorded_sources",
+           "instanced_stacks", "left_alone_stacks", "from_recorded_sources", "matches_any",
            "unread_findings", "unread_materials", "unread_files"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
@@ -32,6 +32,11 @@ def select_stacks(scan: ScanResult, patterns: Sequence[str]) -> list[TextureStac
     if not patterns:
         return list(scan.stacks)
     return [stack for stack in scan.stacks if _matches(stack, patterns)]
+
+
+def matches_any(material: str, patterns: Sequence[str]) -> bool:
+    """Whether ``material`` (a path) matches one of ``patterns`` (by path or name, case-sensitive)."""
+    return _matches(material, patterns)
 
 
 def unmatched_patterns(materials: Sequence[str], patterns: Sequence[str]) -> list[str]:
@@ -143,8 +148,8 @@ def from_recorded_sources(stacks: Sequence[TextureStack], source: str, left_alon
         maps = []
         for m in stack.maps:
             recorded = m.recorded_source
-            if recorded is None:
-                maps.append(m)
+            if recorded is None or m.tile_missing:  # no tile of ours, or one the scan already read as its source
+                maps.append(m if recorded is None else replace(m, asset=recorded.asset))
                 continue
             why = "is not there"
             if recorded.resolved:

@@ -9,7 +9,7 @@ from seamless_usd.discover.tokens import MTLX_SUFFIX
 from seamless_usd.errors import UsageError
 from seamless_usd.findings import asset_ref
 
-__all__ = ["check_output_layer"]
+__all__ = ["MTLX_SUFFIXES", "check_output_layer"]
 
 MTLX_SUFFIXES = {MTLX_SUFFIX}
 _LAYER_SUFFIXES = (".usda", ".usdc", ".usd")  # the layers a new layer can be written as (not a .usdz package)

@@ -17,7 +17,7 @@ from pathlib import Path
 from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
 from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, from_recorded_sources, instanced_stacks,
-                                          select_stacks, set_aside_stacks, unmatched_patterns)
+                                          matches_any, select_stacks, set_aside_stacks, unmatched_patterns)
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
@@ -26,7 +26,7 @@ from seamless_usd.findings import Finding, Severity, asset_ref
 from seamless_usd.pipeline.cache import JobIndex, StackCache, job_fingerprint
 from seamless_usd.pipeline.executors import InProcessExecutor, make_executor
 from seamless_usd.pipeline.options import Options, check_device
-from seamless_usd.pipeline.outputlayer import check_output_layer
+from seamless_usd.pipeline.outputlayer import MTLX_SUFFIXES, check_output_layer
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.pipeline.outcome import StackOutcome
 from seamless_usd.pipeline.rows import (Run, authoring_module, check_written, error_message, record_authoring,
@@ -37,7 +37,6 @@ from seamless_usd.report.model import Report
 __all__ = ["process_paths", "process_stage", "select_stacks", "blocked_stacks", "BLOCKING_SKIPS"]
 
 USD_SUFFIXES = {".usd", ".usda", ".usdc", ".usdz"}
-MTLX_SUFFIXES = {".mtlx"}
 
 
 def _output_dir(options: Options, source: Path | None) -> Path:
@@ -251,12 +250,9 @@ def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
             raise UsageError(said)
         run.report.findings.append(Finding(Severity.WARNING, "pattern-unmatched", option, said))
     if run.options.materials:  # a material forced but not selected is not processed at all: said, not ignored
-        def matches(material: str, patterns) -> bool:
-            return len(unmatched_patterns([material], patterns)) < len(patterns)
-
-        chosen = [m for m in seen if matches(m, run.options.materials)]
+        chosen = [m for m in seen if matches_any(m, run.options.materials)]
         left = [p for p in run.options.force_materials
-                if not unmatched_patterns(seen, [p]) and not any(matches(m, [p]) for m in chosen)]
+                if not unmatched_patterns(seen, [p]) and not any(matches_any(m, [p]) for m in chosen)]
         if left:
             run.report.findings.append(Finding(
                 Severity.WARNING, "pattern-unmatched", "--force-materials",

@@ -55,9 +55,10 @@ def _stack_sources(stage, stack) -> tuple[tuple[list, object] | None, str]:
 
     sources, prov = [], None
     for m in stack.maps:
-        resolved, prov = _mtlx_source(m) if m.origin is Origin.MTLX else _usd_source(stage, m)
+        prov = _mtlx_provenance(m) if m.origin is Origin.MTLX else _usd_provenance(stage, m)
         if prov is None:
             return None, ""
+        resolved = m.recorded_source.resolved if m.recorded_source else ""  # as the scan read it
         if not resolved:
             return None, (f"the source recorded for {asset_ref(m.asset)}, {asset_ref(prov.source_asset)}, is not there: "
                           "judged against itself")
@@ -68,24 +69,21 @@ def _stack_sources(stage, stack) -> tuple[tuple[list, object] | None, str]:
     return (sources, prov), ""
 
 
-def _usd_source(stage, m) -> tuple[str, object]:
-    """(resolved source path or "", provenance or None) recorded on the texture prim of ``m`` in ``stage``."""
+def _usd_provenance(stage, m):
+    """The provenance recorded on the texture prim of ``m`` in ``stage``, or None."""
     if stage is None:
-        return "", None
-    from seamless_usd.authoring.schema import Schema, read_provenance
+        return None
+    from seamless_usd.authoring.schema import read_provenance
 
     prim = stage.GetPrimAtPath(m.node.strip("<>"))
-    prov = read_provenance(prim) if prim else None
-    attr = prim.GetAttribute(Schema.SOURCE_ASSET) if prov is not None else None
-    return (attr.Get().resolvedPath if attr and attr.Get() is not None else ""), prov
+    return read_provenance(prim) if prim else None
 
 
 _MTLX_DOCUMENTS: dict[str, object] = {}
 
 
-def _mtlx_source(m) -> tuple[str, object]:
-    """(resolved source path or "", provenance or None) recorded on the MaterialX node of ``m`` (its source asset
-    relative to the document it is written in)."""
+def _mtlx_provenance(m):
+    """The provenance recorded on the MaterialX node of ``m``, or None."""
     import MaterialX as mx
 
     from seamless_usd.authoring.mtlx import read_mtlx_provenance
@@ -93,7 +91,7 @@ def _mtlx_source(m) -> tuple[str, object]:
     try:
         st = os.stat(m.document or "")
     except OSError:
-        return "", None
+        return None
     key = f"{os.path.realpath(m.document)}|{st.st_size}|{st.st_mtime_ns}"  # the document as it is on disk now
     doc = _MTLX_DOCUMENTS.get(key)
     if doc is None:
@@ -101,15 +99,12 @@ def _mtlx_source(m) -> tuple[str, object]:
         try:
             mx.readFromXmlFile(doc, m.document)
         except (mx.Exception, OSError):  # it was read by the scan a moment ago: whoever reads it next says why
-            return "", None
+            return None
         _MTLX_DOCUMENTS.clear()  # one document at a time
         _MTLX_DOCUMENTS[key] = doc
     node = doc.getDescendant(m.node)
     prov = read_mtlx_provenance(node) if node is not None else None
-    if prov is None or not prov.source_asset:
-        return "", None
-    resolved = Path(m.document).parent / prov.source_asset
-    return (str(resolved.resolve()) if resolved.is_file() else ""), prov
+    return prov if prov is not None and prov.source_asset else None
 
 
 def keystone_of(prov):
