@@ -11,8 +11,8 @@ from PIL import Image
 
 from benchscripts import load_benchmark
 from seamless_usd.verdict import judge
-from seamless_usd.verdict.alone import reduce_bins
-from seamless_usd.verdict.breaks import groove, line_breaks, period
+from seamless_usd.verdict.alone import FileMap, judge_alone, read_alone, reduce_bins
+from seamless_usd.verdict.breaks import groove, lag_figures, line_breaks, line_period, period
 from seamless_usd.verdict.prepare import joint, map_weights, prepare_maps, to_working
 
 PHOTOS = Path(__file__).resolve().parents[1] / "benchmarks" / "photos"
@@ -46,6 +46,25 @@ def test_large_slabs_joints_are_grooves_not_seams():
     # rolled by half, the same texture: no seam either (the joints moved, none was made)
     seams, _ = line_breaks(prepare_maps([np.roll(slabs, (128, 128), (0, 1))], [False]), ["slabs"])
     assert not seams, seams
+
+
+def test_joints_that_recur_where_the_stones_do_not_are_the_textures_own():
+    """A wall of irregular stones set in panels (Poly Haven, made to tile): its rows do not repeat, so the rows'
+    autocorrelation finds no period, but the panels' joints recur every sixth of the height. Read from the lines
+    themselves, that spacing makes each joint the texture's own; `check` called the wall seamed along one of them
+    (+0.50 over the margin) before."""
+    path = PHOTOS / "stones_wall_1.jpg"
+    verdict, _ = judge_alone([FileMap(str(path))])
+    assert verdict.seamless, verdict.reasons()
+    picture, _ = read_alone(FileMap(str(path)))
+    rows = _rows(picture)
+    n = rows.shape[0]
+    assert period(n, rows.reshape(n, -1)) is None
+    spacing = line_period(lag_figures(rows))
+    assert spacing is not None and abs(spacing - n / 6) <= 3, spacing
+    # the same photo's window: its wrap is not at a joint's place, and is still a seam
+    window = picture[n // 10: n // 10 + 3 * n // 4, n // 10: n // 10 + 3 * n // 4]
+    assert not judge([window], None, [False], ["wall"], fidelity=False).seamless
 
 
 def test_a_window_wrap_is_a_seam_and_not_a_groove():

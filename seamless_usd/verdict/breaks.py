@@ -30,7 +30,7 @@ import numpy as np
 from .lines import Seam
 from .prepare import joint, map_weights, to_working
 
-__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "groove", "straddle", "peaks", "working"]
+__all__ = ["WORK_SIDE", "RANK", "MARGIN", "line_breaks", "line_figures", "line_period", "groove", "straddle", "peaks", "working"]
 
 #: Longest side (px) the maps are read at: fine enough that a join's texel step survives the area filter.
 WORK_SIDE = 512
@@ -44,6 +44,8 @@ MARGIN = 6.0
 RECUR = 0.5
 #: Lines closer than this (px at the working size), or than the lag read, to a stronger line are the same line.
 SPACING = 3
+#: The lines' own spacing (:func:`line_period`) counts when their profile's autocorrelation there reaches this.
+LINE_PERIOD = 0.5
 
 
 def period(n: int, profile: np.ndarray) -> int | None:
@@ -107,18 +109,46 @@ def peaks(f: np.ndarray, spacing: int) -> list[int]:
     return taken
 
 
+def line_period(z: dict[int, np.ndarray]) -> int | None:
+    """The spacing at which a texture's strong lines recur, read from the lines themselves when its rows do not
+    repeat (:func:`period` finds none: a wall of irregular stones in panels, whose joints recur but whose stones do
+    not): the lag of the highest local peak, between a sixteenth and half of the side, of the circular
+    autocorrelation of each line's strongest z-score over the lags (``z``: :func:`lag_figures`, below 0 read as
+    0), if it reaches :data:`LINE_PERIOD`."""
+    strongest = np.clip(np.max(np.stack(list(z.values())), axis=0), 0.0, None)
+    n = len(strongest)
+    p = strongest - strongest.mean()
+    spec = np.fft.rfft(p)
+    auto = np.fft.irfft((spec * spec.conj()).real, n)
+    if auto[0] <= 0:
+        return None
+    auto = auto / auto[0]
+    lo, hi = max(4, n // 16), n // 2
+    if hi <= lo + 1:
+        return None
+    inner = np.arange(lo + 1, hi)  # a peak has a neighbour on each side inside the range
+    local = inner[(auto[inner] >= auto[inner - 1]) & (auto[inner] >= auto[inner + 1])]
+    if not len(local):
+        return None
+    peak = int(local[np.argmax(auto[local])])
+    return peak if auto[peak] >= LINE_PERIOD else None
+
+
 def line_figures(img: np.ndarray, own: int | None = None) -> np.ndarray:
     """(n,) how far each horizontal line of ``img`` stands above the texture's own lines, at the lag where it
     stands out most: at each lag, its z-score less the texture's :data:`RANK`-th strongest line at that lag
-    (lines a lag apart) and less its own recurrences one period on (``own``); -inf where it is no top line."""
+    (lines a lag apart) and less its own recurrences one period on, give or take a texel (``own``, else
+    :func:`line_period`); -inf where it is no top line."""
     n = img.shape[0]
     out = np.full(n, -np.inf)
-    for lag, z in lag_figures(img, own).items():
+    z_by_lag = lag_figures(img, own)
+    recur = own or line_period(z_by_lag)
+    for lag, z in z_by_lag.items():
         strongest = peaks(z, max(SPACING, lag))
         reference = z[strongest[RANK]] if len(strongest) > RANK else 0.0
         for line in strongest[:RANK]:
             # a texture's own line recurs one period on: a line is read against its recurrences too
-            again = max(z[(line + d * own + k) % n] for d in (-1, 1) for k in (-1, 0, 1)) if own else -np.inf
+            again = max(z[(line + d * recur + k) % n] for d in (-1, 1) for k in (-1, 0, 1)) if recur else -np.inf
             if again >= RECUR * z[line]:
                 again = np.inf  # it recurs, at most a little weaker: the texture's own line at this lag
             out[line] = max(out[line], float(z[line] - max(reference, again)))
