@@ -199,6 +199,16 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
         return {(s["source"], s["id"]): [m.get("output") for m in s["maps"]] for s in payload["stacks"]}
 
     assert outputs(planned) == outputs(first)  # the dry run plans the very files the run writes
+    assert all(line.startswith("make tiles of") for line in planned["plan"] if "tiles" in line)
+    # after the run, a dry run with its cache plans what the run would do: write the cached tiles, at their scale
+    _, again = _run(str(lib), "--dry-run", "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    made = {(s["source"], s["id"]): s for s in first["stacks"]}
+    for s in again["stacks"]:
+        assert s["status"] == "planned" and s["uv_scale"] == made[(s["source"], s["id"])]["uv_scale"]
+    fresh = [s for s in again["stacks"] if s["origin"] != "duplicate"]
+    assert fresh and all(s["message"].startswith("from the cache: ") for s in fresh)
+    cached_lines = [line for line in again["plan"] if "from the cache" in line]
+    assert len(cached_lines) == len(fresh) and not any(line.startswith("make tiles of") for line in again["plan"])
     jsonschema.validate(first, json_schema("report"))
     assert len(first["sources"]) == 4
     # brick x3 (one unique stack) + brick and wood albedo in two.usda: the brick albedo alone is another
@@ -473,3 +483,23 @@ def test_a_dry_run_plans_the_tiles_a_duplicate_in_the_same_folder_reuses(tmp_pat
         return {s["id"]: sorted(m.get("output") for m in s["maps"]) for s in payload["stacks"]}
 
     assert outputs(planned) == outputs(done)
+
+
+def test_a_finished_job_counts_only_while_its_own_cache_entry_is_there(tmp_path):
+    """The index names each finished job's cache entry. Stacks made by cuts alone all have an empty model hash, so by
+    the model hash alone a job whose entry was deleted still read as finished while any other cut-only entry was
+    there, and the warm path then ran it cold, in the client."""
+    from seamless_usd.pipeline.cache import MANIFEST, JobIndex
+
+    kept, gone = "ab" + "0" * 62, "cd" + "1" * 62
+    folder = tmp_path / kept[:2] / kept
+    folder.mkdir(parents=True)
+    (folder / MANIFEST).write_text(json.dumps({"meta": {"model_hash": ""}}))
+    index = JobIndex(tmp_path)
+    index.record("f" * 64, "", kept)
+    index.record("e" * 64, "", gone)
+    index.record("d" * 64, "")  # a record of an older run, naming no entry: read by its model hash
+    assert index.finished("f" * 64) and index.entry("f" * 64) == folder
+    assert not index.finished("e" * 64) and index.entry("e" * 64) is None
+    assert index.finished("d" * 64) and index.entry("d" * 64) is None
+    assert not JobIndex(tmp_path).finished("0" * 64)

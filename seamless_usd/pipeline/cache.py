@@ -188,8 +188,9 @@ class JobIndex:
     """Which jobs finished, so a warm run finds them before starting any executor.
 
     One small JSON file per job fingerprint (``<cache>/jobs/ab/<fingerprint>.json``) naming the
-    model hash of its cache entry; written atomically by the client after a job returns. A hit
-    counts only while an entry with that model hash is still in the cache (verified once per run).
+    model hash and the key of its cache entry; written atomically by the client after a job returns. A hit
+    counts only while that entry is still in the cache (a record without a key, from an older run: while an
+    entry with its model hash is, verified once per run).
     """
 
     def __init__(self, root: Path | None = None):
@@ -210,20 +211,37 @@ class JobIndex:
                     continue
         return self._live
 
-    def finished(self, fingerprint: str) -> bool:
-        """True when this job finished before and its cache entry is still there."""
+    def _record(self, fingerprint: str) -> dict | None:
         try:
             record = json.loads(self._path(fingerprint).read_text(encoding="utf-8"))
         except (OSError, ValueError):
-            return False
-        return isinstance(record, dict) and str(record.get("model_hash", "")) in self._live_models()
+            return None
+        return record if isinstance(record, dict) else None
 
-    def record(self, fingerprint: str, model_hash: str) -> None:
-        """Note a finished job; a cache that cannot be written only costs the shortcut."""
+    def entry(self, fingerprint: str) -> Path | None:
+        """The folder of the cache entry this job finished with, while it is still there; None when the job did not
+        finish, or its record names no entry (an older run's)."""
+        key = str((self._record(fingerprint) or {}).get("key", ""))
+        if len(key) < 3 or not all(c in "0123456789abcdef" for c in key):
+            return None
+        folder = self.cache_root / key[:2] / key
+        return folder if (folder / MANIFEST).is_file() else None
+
+    def finished(self, fingerprint: str) -> bool:
+        """True when this job finished before and its cache entry is still there."""
+        record = self._record(fingerprint)
+        if record is None:
+            return False
+        if record.get("key"):
+            return self.entry(fingerprint) is not None
+        return str(record.get("model_hash", "")) in self._live_models()
+
+    def record(self, fingerprint: str, model_hash: str, key: str = "") -> None:
+        """Note a finished job and its entry's ``key``; a cache that cannot be written only costs the shortcut."""
         path = self._path(fingerprint)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            atomic_write_text(path, json.dumps({"model_hash": model_hash}))
+            atomic_write_text(path, json.dumps({"model_hash": model_hash, "key": key}))
         except (OSError, InputError):  # a read-only cache: said as InputError by the atomic writer
             return
         if self._live is not None:

@@ -52,6 +52,7 @@ class StackOutcome:
     findings: list[Finding] = field(default_factory=list)  # warnings while loading (e.g. non-finite pixels)
     failing: list[str] = field(default_factory=list)  # "asset: figure value (tolerance)" outside the tolerances
     verdict: dict = field(default_factory=dict)  # seamless_usd.verdict.Verdict.as_dict() of the written tiles
+    cache_key: str = ""  # the cache entry the tiles came from (``pipeline.cache``)
 
     @property
     def passed(self) -> bool:
@@ -128,7 +129,7 @@ class StackOutcome:
 
 
 def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
-                        out_dir: Path) -> StackOutcome:
+                        out_dir: Path, cache_key: str = "") -> StackOutcome:
     """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`).
 
     ``meta["straightened"]``: the tile was made from the straightened maps, and its UV scale, read against them,
@@ -158,6 +159,7 @@ def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, p
         precision=str(meta["precision"]),
         cached=cached,
         output_dir=out_dir,
+        cache_key=cache_key,
         peak_rss_mb=_peak_rss_mb(),
         previews=previews,
         findings=list(pixels.findings) + _turn_refused(straightened)

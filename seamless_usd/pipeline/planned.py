@@ -1,7 +1,9 @@
 """Authoring inputs for stacks that are not trained: an already-tileable stack kept as it is, and what a
-dry run would write."""
+dry run would write (from the cache, when an earlier run with the same files and settings made the tiles)."""
 from __future__ import annotations
 
+import json
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from seamless_usd.version import __version__
@@ -9,7 +11,7 @@ from seamless_usd.textures import TextureStack
 from seamless_usd.naming import stack_tile_filenames
 from seamless_usd.pipeline.options import Options
 
-__all__ = ["planned_result", "wrap_only_result"]
+__all__ = ["CachedPlan", "cached_plan", "planned_result", "plan_line", "wrap_only_result"]
 
 
 def wrap_only_result(stack: TextureStack):
@@ -23,11 +25,49 @@ def wrap_only_result(stack: TextureStack):
     return StackResult(stack=stack, maps=maps, uv_scale=(1.0, 1.0), provenance=prov, wrap_only=True)
 
 
-def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_of: str | None = None):
-    """What a dry run shows authoring: the tile paths that would be written, and the UV scale if the
-    first candidate passes Q: a source-sized refined tile keeps the UVs (scale 1); the paper's tile
-    of the whole texture (c = working size) halves them. A dry run reads no pixels, so it cannot
-    tell a repeating stack whose written tile will be a lattice cut (smaller, with a larger scale).
+@dataclass(frozen=True)
+class CachedPlan:
+    """What an earlier run made of a stack, as its cache entry holds it: the UV scale and crop of its tiles, and, when
+    they were written into the same folder, whether they passed and why not (None: judged again once written)."""
+
+    uv_scale: tuple[float, float]
+    crop: tuple[int, int]
+    passed: bool | None = None
+    reasons: list[str] = field(default_factory=list)
+
+
+def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> CachedPlan | None:
+    """The :class:`CachedPlan` of ``stack`` when a run with the same files and job ``settings`` finished it into the
+    cache at ``cache_dir`` and its entry is still there (``pipeline.cache.JobIndex``); else None. Reads no pixels."""
+    from seamless_usd.pipeline.cache import MANIFEST, JobIndex, job_fingerprint
+    from seamless_usd.pipeline.madefrom import source_uv_scale
+    from seamless_usd.pipeline.rerun import judged_key, record_paths
+
+    try:
+        folder = JobIndex(cache_dir).entry(job_fingerprint(stack, settings))
+        if folder is None:
+            return None
+        meta = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))["meta"]
+        uv = source_uv_scale(meta["uv_scale"], meta.get("straightened"))
+        crop = (int(meta["crop_size"][0]), int(meta["crop_size"][1]))
+    except (OSError, ValueError, KeyError, TypeError, IndexError):  # an unreadable file or entry: planned as new
+        return None
+    try:
+        verdict = json.loads(record_paths(folder, out_dir, judged_key(stack))[0].read_text(encoding="utf-8"))["verdict"]
+        from seamless_usd.verdict import Verdict
+
+        judged = Verdict.from_dict(verdict)
+        return CachedPlan(uv, crop, judged.passed, judged.reasons())
+    except (OSError, ValueError, KeyError, TypeError):  # not written into this folder yet: judged when it is
+        return CachedPlan(uv, crop)
+
+
+def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_of: str | None = None,
+                   cached: CachedPlan | None = None):
+    """What a dry run shows authoring: the tile paths that would be written, and the UV scale: from the cache when an
+    earlier run made the tiles (``cached``), else that of a source-sized tile (scale 1; the paper's tile of the whole
+    texture, c = working size, halves it). A dry run reads no pixels, so it cannot tell a stack whose written tile
+    will be smaller (a lattice cut: a larger scale).
     ``tiles_of``: the id of an identical stack planned earlier into the same folder, whose tiles this one reuses
     (as the run does)."""
     from seamless_usd.authoring import MapResult, Provenance, StackResult, uv_scale_for
@@ -35,7 +75,9 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_o
 
     sizes = [(m.image.width, m.image.height) for m in stack.maps if m.image is not None]
     working = WorkingResolution(max_size=options.max_size).working_size(sizes) if sizes else (1, 1)
-    if options.tile_size == "source" and options.refine != "off":
+    if cached is not None:
+        uv, crop = cached.uv_scale, cached.crop
+    elif options.tile_size == "source" and options.refine != "off":
         uv, crop = (1.0, 1.0), (working[0] // 2, working[1] // 2)
     else:
         uv, crop = uv_scale_for(working, working), working
@@ -45,5 +87,20 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_o
     prov = Provenance(
         source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=None,
         q_tau=0.0, q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__,
+        passed=bool(cached is not None and cached.passed),
     )
     return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov)
+
+
+def plan_line(where: str, stack: TextureStack, out_dir: Path, uv: tuple[float, float], cached: CachedPlan | None) -> str:
+    """The dry run's words for one stack: made from the cache, or made anew, and where its tiles go."""
+    maps = f"{len(stack.maps)} maps: {', '.join(Path(m.asset).name for m in stack.maps)}"
+    scale = f"UV scale {uv[0]:.4g} x {uv[1]:.4g}"
+    if cached is None:
+        return (f"make tiles of {where} ({maps}): cuts of the source first, SeamlessGAN trained only if none "
+                f"passes; and write them to {out_dir} ({scale} for a source-sized tile; a smaller tile, such as a cut "
+                "of whole lattice periods, gives a larger scale)")
+    status = ("judged again once written" if cached.passed is None
+              else "passed" if cached.passed else f"not passed: {'; '.join(cached.reasons[:2])}")
+    return (f"write the tiles an earlier run made of {where} ({maps}), from the cache with nothing trained or "
+            f"cut again, to {out_dir} ({scale}; {status})")

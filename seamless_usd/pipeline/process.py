@@ -84,7 +84,7 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
     for job, result in itertools.chain(*runs):
         run.outcomes[job.stack.content_key] = result
         if isinstance(result, StackOutcome) and fingerprints[id(job)]:
-            index.record(fingerprints[id(job)], result.model_hash)
+            index.record(fingerprints[id(job)], result.model_hash, result.cache_key)
         run.emit("stack-done", job.stack.id, result)
         run.index += 1
 

@@ -15,7 +15,7 @@ from seamless_usd.findings import Finding, Severity, prim_ref
 from seamless_usd.pipeline.executors import Executor
 from seamless_usd.pipeline.options import Options, ProgressEvent
 from seamless_usd.pipeline.outcome import StackOutcome, reused_message
-from seamless_usd.pipeline.planned import planned_result, wrap_only_result
+from seamless_usd.pipeline.planned import cached_plan, plan_line, planned_result, wrap_only_result
 from seamless_usd.pipeline.stackjob import JobSettings, StackJob, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
@@ -97,18 +97,17 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
         elif dry:
             report.status = StackStatus.PLANNED
+            cached = cached_plan(stack, out_dir, run.settings, run.options.cache_dir)
             planned = planned_result(stack, out_dir, run.options, tiles_of=run.planned_first.setdefault(
-                (stack.content_key, out_dir), stack.id))
+                (stack.content_key, out_dir), stack.id), cached=cached)
             report.maps = [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps]
             report.uv_scale = planned.uv_scale
             report.duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
+            if cached is not None:
+                report.message = ("from the cache" + ("" if cached.passed is None else
+                                                      ": passed" if cached.passed else ": not passed"))
             if report.duplicate_of is None:
-                run.report.plan.append(
-                    f"train and sample {where} ({len(stack.maps)} maps: "
-                    f"{', '.join(Path(m.asset).name for m in stack.maps)}) and write tiles to {out_dir} "
-                    f"(UV scale {planned.uv_scale[0]:g} x {planned.uv_scale[1]:g} if the whole texture passes Q; "
-                    "a smaller crop, or a cut of whole lattice periods on a repeating texture, gives a larger scale)"
-                )
+                run.report.plan.append(plan_line(where, stack, out_dir, planned.uv_scale, cached))
             results.append(planned)
         else:
             outcome = run.outcomes.get(stack.content_key)

@@ -173,7 +173,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
         again = load_judged(entry.root, out_dir, judged_key(stack))
         if again is not None:
-            return outcome_from_record(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir)
+            return outcome_from_record(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir,
+                                       cache_key=key)
         # the tile was cut from the maps turned by the turn found (made above when the tile was made)
         pixels = as_made(pixels, normals, straightened, None)
     shown = pixels.values  # the report shows the source as the user has it, its light as it was
@@ -233,7 +234,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
                                                 "source_metrics": o.source_metrics} for k, o in outcomes.items()},
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
     save_judged(entry.root, out_dir, judged_key(stack), record, previews)
-    return outcome_from_record(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir)
+    return outcome_from_record(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir,
+                               cache_key=key)
 
 
 #: The shortest side (px) of the working grid a tile is made from: below it the cuts and the verdict's patch figures
