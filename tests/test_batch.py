@@ -205,10 +205,18 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
     made = {(s["source"], s["id"]): s for s in first["stacks"]}
     for s in again["stacks"]:
         assert s["status"] == "planned" and s["uv_scale"] == made[(s["source"], s["id"])]["uv_scale"]
-    fresh = [s for s in again["stacks"] if s["origin"] != "duplicate"]
-    assert fresh and all(s["message"].startswith("from the cache: ") for s in fresh)
+        assert s["origin"] == "cache" and s["message"].startswith("from the cache: ")
+    fresh = [s for s in again["stacks"] if not s["duplicate_of"]]
     cached_lines = [line for line in again["plan"] if "from the cache" in line]
     assert len(cached_lines) == len(fresh) and not any(line.startswith("make tiles of") for line in again["plan"])
+    assert not any("provenance" in line for line in again["plan"])  # the run's edits are there already
+    # an entry of another shape is planned as new, as the run makes it again
+    shutil.copytree(tmp_path / "cold", tmp_path / "broken")
+    for manifest in (tmp_path / "broken").glob("??/*/manifest.json"):
+        manifest.write_text(json.dumps({"files": {}, "meta": {"uv_scale": [1, 1], "crop_size": [1, 1],
+                                                             "straightened": 5}}))
+    _, broken = _run(str(lib), "--dry-run", "--cache-dir", str(tmp_path / "broken"), capsys=capsys)
+    assert all(line.startswith("make tiles of") for line in broken["plan"] if "tiles" in line)
     jsonschema.validate(first, json_schema("report"))
     assert len(first["sources"]) == 4
     # brick x3 (one unique stack) + brick and wood albedo in two.usda: the brick albedo alone is another

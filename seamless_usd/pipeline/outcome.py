@@ -130,7 +130,8 @@ class StackOutcome:
 
 def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, previews: Previews, cached: bool,
                         out_dir: Path, cache_key: str = "") -> StackOutcome:
-    """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`).
+    """The job's result from the cache entry's ``meta`` and the judged ``record`` (see :mod:`.rerun`); ``pixels``: the
+    stack as loaded, whose reading policy and warnings the result carries (None: a dry run, which reads no pixels).
 
     ``meta["straightened"]``: the tile was made from the straightened maps, and its UV scale, read against them,
     is brought back to the source's texel density; ``meta["levelled"]`` / ``meta["evened"]``: from the maps with
@@ -145,7 +146,7 @@ def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, p
         crop_size=tuple(int(v) for v in meta["crop_size"]),
         tile_size=tuple(int(v) for v in record["tile_size"]),
         working_size=tuple(int(v) for v in meta["scale"]["gan_working_size"]),
-        resampled={**pixels.policy_record, "gan": dict(meta["scale"]),
+        resampled={**(pixels.policy_record if pixels is not None else {}), "gan": dict(meta["scale"]),
                    **({"straightened": straightened} if straightened else {}),
                    **{k: meta[k] for k in ("levelled", "evened") if meta.get(k)}},
         failing=list(verdict.get("failing", [])),
@@ -162,7 +163,7 @@ def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, p
         cache_key=cache_key,
         peak_rss_mb=_peak_rss_mb(),
         previews=previews,
-        findings=list(pixels.findings) + _turn_refused(straightened)
+        findings=[] if pixels is None else list(pixels.findings) + _turn_refused(straightened)
         + _coarser(stack, record["tile_size"], source_uv_scale(meta["uv_scale"], straightened), pixels.original_sizes)
         + _unread_channels(stack, pixels),
     )

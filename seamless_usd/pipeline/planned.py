@@ -2,8 +2,9 @@
 dry run would write (from the cache, when an earlier run with the same files and settings made the tiles)."""
 from __future__ import annotations
 
+import dataclasses
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from seamless_usd.version import __version__
@@ -28,38 +29,46 @@ def wrap_only_result(stack: TextureStack):
 @dataclass(frozen=True)
 class CachedPlan:
     """What an earlier run made of a stack, as its cache entry holds it: the UV scale and crop of its tiles, and, when
-    they were written into the same folder, whether they passed and why not (None: judged again once written)."""
+    they were written into the same folder and are still there, that run's result (``outcome``: its status, reasons
+    and provenance, as the run would give them again); None: judged again once written."""
 
     uv_scale: tuple[float, float]
     crop: tuple[int, int]
-    passed: bool | None = None
-    reasons: list[str] = field(default_factory=list)
+    outcome: object | None = None  # a StackOutcome
 
 
 def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> CachedPlan | None:
     """The :class:`CachedPlan` of ``stack`` when a run with the same files and job ``settings`` finished it into the
-    cache at ``cache_dir`` and its entry is still there (``pipeline.cache.JobIndex``); else None. Reads no pixels."""
+    cache at ``cache_dir`` and its entry is still whole (``pipeline.cache.JobIndex``); else None. Reads no pixels, so
+    it is blind where the run finds the cache by the pixels alone: files written again with the same pixels, a
+    setting that does not change the tile (``--device``), a cache whose index was written by an older version."""
     from seamless_usd.pipeline.cache import MANIFEST, JobIndex, job_fingerprint
     from seamless_usd.pipeline.madefrom import source_uv_scale
+    from seamless_usd.pipeline.outcome import outcome_from_record
     from seamless_usd.pipeline.rerun import judged_key, record_paths
+    from seamless_usd.report.model import Previews
+    from seamless_usd.version import __version__ as version
 
     try:
         folder = JobIndex(cache_dir).entry(job_fingerprint(stack, settings))
         if folder is None:
             return None
-        meta = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))["meta"]
-        uv = source_uv_scale(meta["uv_scale"], meta.get("straightened"))
-        crop = (int(meta["crop_size"][0]), int(meta["crop_size"][1]))
-    except (OSError, ValueError, KeyError, TypeError, IndexError):  # an unreadable file or entry: planned as new
+        manifest = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+        if not all((folder / name).is_file() for name in manifest["files"]):
+            return None  # the run finds it broken and makes the tiles again
+        meta = manifest["meta"]
+        plan = CachedPlan(source_uv_scale(meta["uv_scale"], meta.get("straightened")),
+                          (int(meta["crop_size"][0]), int(meta["crop_size"][1])))
+    except Exception:  # noqa: BLE001 - an entry of any other shape: the run makes the tiles again, so planned as new
         return None
     try:
-        verdict = json.loads(record_paths(folder, out_dir, judged_key(stack))[0].read_text(encoding="utf-8"))["verdict"]
-        from seamless_usd.verdict import Verdict
-
-        judged = Verdict.from_dict(verdict)
-        return CachedPlan(uv, crop, judged.passed, judged.reasons())
-    except (OSError, ValueError, KeyError, TypeError):  # not written into this folder yet: judged when it is
-        return CachedPlan(uv, crop)
+        record = json.loads(record_paths(folder, out_dir, judged_key(stack))[0].read_text(encoding="utf-8"))
+        if record.get("version") != version or not all(Path(o["path"]).is_file() for o in record["outputs"].values()):
+            return plan  # judged again once written, as the run will
+        outcome = outcome_from_record(stack, meta, None, record, Previews(), True, out_dir, folder.name)
+        return dataclasses.replace(plan, outcome=outcome)
+    except Exception:  # noqa: BLE001 - a record of another shape: the run judges the tiles again
+        return plan
 
 
 def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_of: str | None = None,
@@ -87,20 +96,21 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_o
     prov = Provenance(
         source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=None,
         q_tau=0.0, q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__,
-        passed=bool(cached is not None and cached.passed),
     )
     return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov)
 
 
 def plan_line(where: str, stack: TextureStack, out_dir: Path, uv: tuple[float, float], cached: CachedPlan | None) -> str:
     """The dry run's words for one stack: made from the cache, or made anew, and where its tiles go."""
-    maps = f"{len(stack.maps)} maps: {', '.join(Path(m.asset).name for m in stack.maps)}"
+    count = len(stack.maps)
+    maps = f"{count} map{'s' if count != 1 else ''}: {', '.join(Path(m.asset).name for m in stack.maps)}"
     scale = f"UV scale {uv[0]:.4g} x {uv[1]:.4g}"
     if cached is None:
         return (f"make tiles of {where} ({maps}): cuts of the source first, SeamlessGAN trained only if none "
                 f"passes; and write them to {out_dir} ({scale} for a source-sized tile; a smaller tile, such as a cut "
                 "of whole lattice periods, gives a larger scale)")
-    status = ("judged again once written" if cached.passed is None
-              else "passed" if cached.passed else f"not passed: {'; '.join(cached.reasons[:2])}")
+    outcome = cached.outcome
+    status = ("judged again once written" if outcome is None else "passed" if outcome.passed
+              else f"not passed: {'; '.join(outcome.reasons())}")
     return (f"write the tiles an earlier run made of {where} ({maps}), from the cache with nothing trained or "
             f"cut again, to {out_dir} ({scale}; {status})")

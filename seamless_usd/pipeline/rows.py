@@ -96,17 +96,24 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
             report.message = run.blocked[(source_label, stack.id)]
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
         elif dry:
-            report.status = StackStatus.PLANNED
             cached = cached_plan(stack, out_dir, run.settings, run.options.cache_dir)
-            planned = planned_result(stack, out_dir, run.options, tiles_of=run.planned_first.setdefault(
-                (stack.content_key, out_dir), stack.id), cached=cached)
-            report.maps = [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps]
+            tiles_of = run.planned_first.setdefault((stack.content_key, out_dir), stack.id)
+            duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
+            planned = planned_result(stack, out_dir, run.options, tiles_of=tiles_of, cached=cached)
+            if cached is not None and cached.outcome is not None:  # what the run will say, from its last result
+                cached.outcome.fill_report(report, stack, reused=duplicate_of is not None)
+                planned = cached.outcome.stack_result(stack)
+            report.status, report.duplicate_of = StackStatus.PLANNED, duplicate_of
+            report.maps = report.maps or [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps]
             report.uv_scale = planned.uv_scale
-            report.duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
-            if cached is not None:
-                report.message = ("from the cache" + ("" if cached.passed is None else
-                                                      ": passed" if cached.passed else ": not passed"))
-            if report.duplicate_of is None:
+            if cached is not None and cached.outcome is None:
+                report.origin, report.message = "cache", "from the cache; judged again once written"
+            elif cached is not None:
+                outcome = cached.outcome
+                said = (report.message if duplicate_of is not None else "passed" if outcome.passed
+                        else f"not passed: {'; '.join(outcome.reasons())}")
+                report.origin, report.message = "cache", f"from the cache: {said}"
+            if duplicate_of is None:
                 run.report.plan.append(plan_line(where, stack, out_dir, planned.uv_scale, cached))
             results.append(planned)
         else:
