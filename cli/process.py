@@ -22,6 +22,7 @@ from rich.table import Table
 
 from seamless_usd.api import Options, process_paths
 from seamless_usd.authoring import WriteMode
+from seamless_usd.errors import Interrupted
 from seamless_usd.pipeline.options import MAX_SEED, REFINE_MODES, TILE_SIZES, ProgressEvent
 from seamless_usd.report import Report, StackStatus
 
@@ -221,12 +222,21 @@ def run(args: argparse.Namespace) -> int:
     console = Console(stderr=True)
     if not console.is_terminal:
         console = Console(stderr=True, width=120)  # logs and CI: wide enough that prim paths stay whole
-    with _ProgressView(console) as view:
-        report = process_paths([Path(p) for p in args.paths], _options(args, view))
+    try:
+        with _ProgressView(console) as view:
+            report = process_paths([Path(p) for p in args.paths], _options(args, view))
+    except Interrupted as stop:  # what was done is said (and printed as JSON) before the run ends as interrupted
+        _said(stop.report, console, args.json)
+        raise
+    _said(report, console, args.json)
+    return report.exit_code
+
+
+def _said(report, console: Console, as_json: bool) -> None:
+    """The summary table, the report's path, and with ``--json`` the report on stdout."""
     _summary(report, console)
     if report.options.get("report_html"):
         console.print(f"report: {escape(str(report.options['report_html']))}", highlight=False, soft_wrap=True)
-    if args.json:
+    if as_json:
         json.dump(report.to_dict(), sys.stdout, indent=2)
         sys.stdout.write("\n")
-    return report.exit_code

@@ -1,7 +1,7 @@
 """The project's one expected-error type, mapped by the CLI to a clean message and exit code."""
 from __future__ import annotations
 
-__all__ = ["SeamlessUsdError", "InputError", "UsageError"]
+__all__ = ["SeamlessUsdError", "InputError", "UsageError", "Interrupted"]
 
 
 class SeamlessUsdError(Exception):
@@ -17,3 +17,12 @@ class InputError(SeamlessUsdError):
 
 class UsageError(SeamlessUsdError):
     """Options that contradict each other or name something unknown (CLI exit code 2)."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by Ctrl-C while it made tiles, carrying the report of what it had done (``report``): the tiles
+    written so far are on disk and in the cache, the stage is not edited. Caught as any KeyboardInterrupt."""
+
+    def __init__(self, report):
+        super().__init__("interrupted")
+        self.report = report

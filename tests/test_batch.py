@@ -341,6 +341,37 @@ def test_a_run_killed_after_the_first_stack_resumes_to_the_same_outputs(tmp_path
     assert (lib / "looks" / "two.seamless.usda").is_file()
 
 
+def test_a_run_stopped_with_ctrl_c_says_as_json_how_far_each_stack_got(tmp_path, two_stacks):
+    """Ctrl-C while tiles are made: the JSON report is still printed (exit code 130, ``interrupted``), each stack's row
+    says how far it got and agrees with the disk (tiles written, no layer), and a run again resumes from the cache."""
+    cmd = [sys.executable, "-m", "seamless_usd_cli.main", "process", *RUN, "--json"]
+    lib = _library(tmp_path / "run", copies=0)
+    cache = tmp_path / "run-cache"
+    proc = subprocess.Popen([*cmd, "--cache-dir", str(cache), str(lib / "looks")], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE,  # Ctrl-C as a terminal sends it, whatever this runner ignores
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    tiles = lib / "looks" / "tileable"
+    reached = wait_until(lambda: bool(list(tiles.glob("*.tile.png"))), [lib], timeout=300,
+                         stop=lambda: proc.poll() is not None)
+    if reached and proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert reached and proc.returncode == 130, err.decode()[-2000:]
+    payload = json.loads(out)
+    jsonschema.validate(payload, json_schema("report"))
+    assert payload["interrupted"] and payload["exit_code"] == 130 and b"interrupted" in err
+    assert [s["status"] for s in payload["stacks"]] == ["failed", "failed"]
+    assert not (lib / "looks" / "two.seamless.usda").exists()  # no stage edited
+    on_disk = {p.name for p in tiles.glob("*.tile.*")}
+    said = {Path(m["output"]).name for s in payload["stacks"] for m in s["maps"] if m.get("output")}
+    assert said == on_disk and len(on_disk) == 1  # the report names exactly the tiles written
+    assert all(s["message"].startswith("interrupted") for s in payload["stacks"])
+    done = subprocess.run([*cmd, "--cache-dir", str(cache), str(lib / "looks")], capture_output=True, timeout=600)
+    again = json.loads(done.stdout)
+    _assert_all_written(done.returncode, again)
+    assert "cache" in {s["origin"] for s in again["stacks"]} and _tiles(tiles) == two_stacks["tiles"]
+
+
 def test_a_missing_texture_blocks_only_the_file_that_lacks_it(tmp_path, cache, capsys):
     lib = _library(tmp_path, copies=2)
     scene = lib / "brick1" / "scene.usda"

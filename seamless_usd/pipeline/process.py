@@ -20,7 +20,7 @@ from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, from_r
                                           matches_any, select_stacks, set_aside_stacks, unmatched_patterns)
 from seamless_usd.discover.select import left_alone_stacks as _left_alone
 from seamless_usd.textures import ScanResult, TextureStack
-from seamless_usd.errors import InputError, SeamlessUsdError, UsageError
+from seamless_usd.errors import InputError, Interrupted, SeamlessUsdError, UsageError
 from seamless_usd.fileio import folder_problem, marked_writable
 from seamless_usd.findings import Finding, Severity, asset_ref
 from seamless_usd.pipeline.cache import JobIndex, StackCache, job_fingerprint
@@ -312,9 +312,23 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
             if problem:
                 run.blocked.update({(str(src.path), s.id): f"its tiles cannot be written: {problem}"
                                     for s in src.stacks if (str(src.path), s.id) not in run.left_alone})
-        _run_jobs(run, [(str(src.path), src.stacks, _output_dir(run.options, src.path)) for src in sources])
+        try:
+            _run_jobs(run, [(str(src.path), src.stacks, _output_dir(run.options, src.path)) for src in sources])
+        except KeyboardInterrupt:
+            raise Interrupted(_interrupted(run, sources, started)) from None
     for src in sources:
         _author_source(run, src)
+    return _finish(run, started)
+
+
+def _interrupted(run: Run, sources: list[_Source], started: float) -> Report:
+    """The report of a run stopped by Ctrl-C while it made tiles: every stack's row as far as it got (tiles written
+    and cached, or not made), no stage edited; written where ``--report`` asks, as a finished run's is."""
+    run.interrupted = True
+    run.report.interrupted = True
+    for src in sources:
+        run.report.findings += src.scan.findings
+        stack_rows(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
     return _finish(run, started)
 
 

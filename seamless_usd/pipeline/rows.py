@@ -46,6 +46,7 @@ class Run:
     placed: dict[tuple[str, Path], StackOutcome | Exception] = field(default_factory=dict)  # (key, dir) -> tiles there
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
     planned_first: dict[tuple[str, Path], str] = field(default_factory=dict)  # dry run: (key, dir) -> first stack id
+    interrupted: bool = False  # stopped by Ctrl-C while tiles were made: rows say how far each stack got
     total: int = 0
     index: int = 0
     _settings: JobSettings | None = field(default=None, init=False, repr=False)
@@ -116,6 +117,8 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
             if duplicate_of is None:
                 run.report.plan.append(plan_line(where, stack, out_dir, planned.uv_scale, cached))
             results.append(planned)
+        elif run.interrupted:
+            _interrupted_row(run, report, stack, source_label, out_dir)
         else:
             outcome = run.outcomes.get(stack.content_key)
             try:
@@ -151,6 +154,30 @@ def _outcome_row(run: Run, report: StackReport, stack: TextureStack, outcome: St
         report.duplicate_of = first[1] if first[0] == source_label else f"{first[1]} in {first[0]}"
         report.message = reused_message(report.duplicate_of, outcome)
     results.append(outcome.stack_result(stack))
+
+
+#: What a stack's row says when the run was stopped before its stage edits.
+INTERRUPTED_MADE = ("interrupted before the stage was edited: its tiles are written and cached; run again to edit "
+                    "the stage (nothing is made again)")
+INTERRUPTED_NOT_MADE = "interrupted before its tiles were made; run again (what was finished comes from the cache)"
+INTERRUPTED_UNJUDGED = ("interrupted after its tiles were written, before they were judged: {files}; run again to judge "
+                        "them and edit the stage (they come from the cache)")
+
+
+def _interrupted_row(run: Run, report: StackReport, stack: TextureStack, source_label: str, out_dir: Path) -> None:
+    """``report`` of a stack in a run stopped by Ctrl-C: failed, as its stage was not edited, with its tiles' figures
+    where they were made into ``out_dir`` (another folder's copy is not placed: nothing more is done)."""
+    outcome = run.outcomes.get(stack.content_key)
+    if isinstance(outcome, StackOutcome) and outcome.output_dir == out_dir:
+        _outcome_row(run, report, stack, outcome, source_label, [])
+        report.message = f"{INTERRUPTED_MADE}; its tiles {'passed' if outcome.passed else 'did not pass'}"
+    else:
+        planned = planned_result(stack, out_dir, run.options)  # the files the job writes, by name
+        written = [mr.output_path for mr in planned.maps if Path(mr.output_path).is_file()]
+        report.maps = [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps if mr.output_path in written]
+        report.message = (INTERRUPTED_UNJUDGED.format(files=", ".join(Path(p).name for p in written)) if written
+                          else INTERRUPTED_NOT_MADE)
+    report.status = StackStatus.FAILED
 
 
 def unread_rows(run: Run, scan: ScanResult, source_label: str) -> None:

@@ -139,6 +139,7 @@ class Report:
     options: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     tool_version: str = ""
+    interrupted: bool = False  # stopped by Ctrl-C while tiles were made: nothing of the stage edited
 
     @property
     def ok(self) -> bool:
@@ -150,7 +151,10 @@ class Report:
 
     @property
     def exit_code(self) -> int:
-        """0 all stacks passed; 1 some failed or did not pass (the rest were written); 2 unreadable input."""
+        """0 all stacks passed; 1 some failed or did not pass (the rest were written); 2 unreadable input; 130
+        stopped by Ctrl-C (:attr:`interrupted`)."""
+        if self.interrupted:
+            return 130
         if self.unreadable:
             return 2
         return 0 if self.ok else 1
@@ -191,4 +195,5 @@ class Report:
             "unreadable": self.unreadable,
             "variants": self.variants,
             "timings": self.timings,
+            "interrupted": self.interrupted,
         }
