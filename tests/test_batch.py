@@ -542,3 +542,18 @@ def test_a_finished_job_counts_only_while_its_own_cache_entry_is_there(tmp_path)
     assert not index.finished("e" * 64) and index.entry("e" * 64) is None
     assert index.finished("d" * 64) and index.entry("d" * 64) is None
     assert not JobIndex(tmp_path).finished("0" * 64)
+
+
+def test_a_materialx_dry_run_after_a_run_plans_the_cached_scale(tmp_path, capsys):
+    """A tiledimage's uvtiling: before any run the dry run can only say it is multiplied by the tile's UV scale;
+    after a run it plans what the run does, from the cache, with the scale known."""
+    for name in ("mtlx", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    doc, cache = str(tmp_path / "mtlx" / "tiled.mtlx"), str(tmp_path / "cache")
+    _, before = _run(doc, "--dry-run", "--cache-dir", cache, capsys=capsys)
+    assert any("x the tile's UV scale" in line for line in before["plan"])
+    _, run = _run(doc, "--cache-dir", cache, capsys=capsys)
+    _, after = _run(doc, "--dry-run", "--cache-dir", cache, capsys=capsys)
+    assert [s["uv_scale"] for s in after["stacks"]] == [s["uv_scale"] for s in run["stacks"]]
+    assert any("from the cache" in line for line in after["plan"])
+    assert not any("x the tile's UV scale" in line for line in after["plan"])

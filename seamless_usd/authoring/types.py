@@ -108,6 +108,7 @@ class StackResult:
     provenance: Provenance
     wrap_only: bool = False  # an already-tileable stack: only set wrap = repeat (maps are the sources)
     uv_turn: UVTurn | None = None  # a straightened tile turned back in the UVs (None: the UVs do not turn it)
+    scale_known: bool = True  # False: a dry run's guess, the tile not made yet (its UV scale is known once it is)
 
 
 @dataclass

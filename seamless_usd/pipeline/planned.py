@@ -97,7 +97,7 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_o
         source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=None,
         q_tau=0.0, q_band_min=(0.0, 0.0), model_hash="", tool_version=__version__,
     )
-    return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov)
+    return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov, scale_known=cached is not None)
 
 
 def plan_line(where: str, stack: TextureStack, out_dir: Path, uv: tuple[float, float], cached: CachedPlan | None) -> str:
