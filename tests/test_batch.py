@@ -550,7 +550,7 @@ def test_a_materialx_dry_run_after_a_run_plans_the_cached_scale(tmp_path, capsys
     for name in ("mtlx", "textures"):
         shutil.copytree(SAMPLES / name, tmp_path / name)
     doc, cache = str(tmp_path / "mtlx" / "tiled.mtlx"), str(tmp_path / "cache")
-    _, before = _run(doc, "--dry-run", "--cache-dir", cache, capsys=capsys)
+    _, before = _run(doc, "--dry-run", "--cache-dir", cache, "--refine", "on", capsys=capsys)  # a source-sized tile
     assert any("x the tile's UV scale" in line for line in before["plan"])
     _, run = _run(doc, "--cache-dir", cache, capsys=capsys)
     _, after = _run(doc, "--dry-run", "--cache-dir", cache, capsys=capsys)

@@ -107,8 +107,8 @@ def plan_line(where: str, stack: TextureStack, out_dir: Path, uv: tuple[float, f
     scale = f"UV scale {uv[0]:.4g} x {uv[1]:.4g}"
     if cached is None:
         return (f"make tiles of {where} ({maps}): cuts of the source first, SeamlessGAN trained only if none "
-                f"passes; and write them to {out_dir} ({scale} for a source-sized tile; a smaller tile, such as a cut "
-                "of whole lattice periods, gives a larger scale)")
+                f"passes; and write them to {out_dir} ({scale} for a tile of the size planned; a tile of another size, "
+                "such as a cut of whole lattice periods, gives another scale)")
     outcome = cached.outcome
     status = ("judged again once written" if outcome is None else "passed" if outcome.passed
               else f"not passed: {'; '.join(outcome.reasons())}")
