@@ -171,6 +171,10 @@ def _interrupted_row(run: Run, report: StackReport, stack: TextureStack, source_
     if isinstance(outcome, StackOutcome) and outcome.output_dir == out_dir:
         _outcome_row(run, report, stack, outcome, source_label, [])
         report.message = f"{INTERRUPTED_MADE}; its tiles {'passed' if outcome.passed else 'did not pass'}"
+    elif isinstance(outcome, Exception):  # it failed before the run was stopped, as it would have anyway
+        report.message = error_message(outcome)
+        run.report.findings.append(Finding(Severity.ERROR, "stack-failed", prim_ref(stack.material.strip("<>")),
+                                           report.message, stack.material))
     else:
         planned = planned_result(stack, out_dir, run.options)  # the files the job writes, by name
         written = [mr.output_path for mr in planned.maps if Path(mr.output_path).is_file()]
