@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import signal
@@ -347,11 +348,15 @@ def test_a_run_stopped_with_ctrl_c_says_as_json_how_far_each_stack_got(tmp_path,
     cmd = [sys.executable, "-m", "seamless_usd_cli.main", "process", *RUN, "--json"]
     lib = _library(tmp_path / "run", copies=0)
     cache = tmp_path / "run-cache"
+    tiles = lib / "looks" / "tileable"
+    tiles.mkdir()
+    for name, data in two_stacks["tiles"].items():  # an earlier run's tiles, of the same names: not this run's
+        (tiles / name).write_bytes(data)
+        os.utime(tiles / name, (1e9, 1e9))
     proc = subprocess.Popen([*cmd, "--cache-dir", str(cache), str(lib / "looks")], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE,  # Ctrl-C as a terminal sends it, whatever this runner ignores
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    tiles = lib / "looks" / "tileable"
-    reached = wait_until(lambda: bool(list(tiles.glob("*.tile.png"))), [lib], timeout=300,
+    reached = wait_until(lambda: any(p.stat().st_mtime > 1e9 for p in tiles.glob("*.tile.png")), [lib], timeout=300,
                          stop=lambda: proc.poll() is not None)
     if reached and proc.poll() is None:
         proc.send_signal(signal.SIGINT)
@@ -362,9 +367,9 @@ def test_a_run_stopped_with_ctrl_c_says_as_json_how_far_each_stack_got(tmp_path,
     assert payload["interrupted"] and payload["exit_code"] == 130 and b"interrupted" in err
     assert [s["status"] for s in payload["stacks"]] == ["failed", "failed"]
     assert not (lib / "looks" / "two.seamless.usda").exists()  # no stage edited
-    on_disk = {p.name for p in tiles.glob("*.tile.*")}
+    written = {p.name for p in tiles.glob("*.tile.*") if p.stat().st_mtime > 1e9}
     said = {Path(m["output"]).name for s in payload["stacks"] for m in s["maps"] if m.get("output")}
-    assert said == on_disk and len(on_disk) == 1  # the report names exactly the tiles written
+    assert said == written and len(written) == 1  # the report names exactly the tiles this run wrote
     assert all(s["message"].startswith("interrupted") for s in payload["stacks"])
     done = subprocess.run([*cmd, "--cache-dir", str(cache), str(lib / "looks")], capture_output=True, timeout=600)
     again = json.loads(done.stdout)
@@ -557,3 +562,41 @@ def test_a_materialx_dry_run_after_a_run_plans_the_cached_scale(tmp_path, capsys
     assert [s["uv_scale"] for s in after["stacks"]] == [s["uv_scale"] for s in run["stacks"]]
     assert any("from the cache" in line for line in after["plan"])
     assert not any("x the tile's UV scale" in line for line in after["plan"])
+
+
+def test_worker_processes_stop_at_once_when_the_run_stops(tmp_path):
+    """Ctrl-C ends the worker processes' jobs at once: the pool waited for every job still running (a stack's whole
+    training, about 50 s) and, on a second Ctrl-C, left its workers orphaned, still writing tiles the report said
+    were not made."""
+    import multiprocessing
+    import os
+    import threading
+    import time
+
+    from seamless_usd.discover import scan_paths
+    from seamless_usd.pipeline.options import Options
+    from seamless_usd.pipeline.stackjob import JobSettings, StackJob
+
+    lib = _library(tmp_path, copies=0)
+    stacks = scan_paths([lib / "looks" / "two.usda"]).stacks
+    options = Options(preset="draft", iterations=20000, max_size=128, cache_dir=tmp_path / "cache", refine="gan")
+    executor = ProcessPoolExecutor(2)
+    settings = JobSettings.from_options(options, executor.threads_per_job)
+    running = executor.run([StackJob(stack=s, settings=settings, output_dir=tmp_path / "out") for s in stacks],
+                           lambda job, kind, detail: None)
+    before = set(multiprocessing.active_children())
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal
+    ctrl_c = threading.Timer(4.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    try:
+        ctrl_c.start()
+        started = time.perf_counter()
+        with pytest.raises(KeyboardInterrupt):
+            next(running)  # the first job's end: long after the Ctrl-C
+        stopped = time.perf_counter() - started
+    finally:
+        ctrl_c.cancel()
+        signal.signal(signal.SIGINT, previous)
+    assert stopped < 25, stopped
+    workers = set(multiprocessing.active_children()) - before
+    assert not any(w.is_alive() for w in workers)
+    assert not list((tmp_path / "out").glob("*.tile.*"))  # stopped before any tile: none written after

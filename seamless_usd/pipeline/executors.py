@@ -74,6 +74,26 @@ def _run_on_worker(job: StackJob, threads: int) -> Result:
         return exc
 
 
+def _ignore_ctrl_c() -> None:
+    """A worker process leaves Ctrl-C to the client, which stops it (:func:`_stop`): a terminal's Ctrl-C reaches
+    every process of its group, and a worker stopped by it printed its traceback."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _stop(pool) -> None:
+    """Stop ``pool`` (a concurrent.futures process pool) now: its queued jobs cancelled, its worker processes ended
+    (shutting it down waits for every job still running, a stack's whole training)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())  # not public; None once shut down
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=10)
+
+
 def _threads_per_worker(workers: int) -> int:
     return max(1, (os.cpu_count() or 1) // max(1, workers))
 
@@ -95,7 +115,8 @@ class ProcessPoolExecutor:
             return
         threads = _threads_per_worker(self.workers)
         ctx = multiprocessing.get_context("spawn")
-        with futures.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx) as pool:
+        pool = futures.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_ignore_ctrl_c)
+        try:
             pending = {}
             for job in jobs:
                 progress(job, "stack-start", None)
@@ -107,6 +128,10 @@ class ProcessPoolExecutor:
                 except Exception as exc:  # noqa: BLE001 - a worker died (killed, out of memory)
                     result = exc
                 yield job, result
+        except BaseException:  # Ctrl-C, or the run stopped reading: the jobs not done are dropped, now
+            _stop(pool)
+            raise
+        pool.shutdown(wait=True)
 
 
 class DaskExecutor:

@@ -81,12 +81,16 @@ def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]])
     runs = [InProcessExecutor().run(warm, progress)]
     if cold:
         runs.append(run.executor.run(cold, progress))
-    for job, result in itertools.chain(*runs):
-        run.outcomes[job.stack.content_key] = result
-        if isinstance(result, StackOutcome) and fingerprints[id(job)]:
-            index.record(fingerprints[id(job)], result.model_hash, result.cache_key)
-        run.emit("stack-done", job.stack.id, result)
-        run.index += 1
+    try:
+        for job, result in itertools.chain(*runs):
+            run.outcomes[job.stack.content_key] = result
+            if isinstance(result, StackOutcome) and fingerprints[id(job)]:
+                index.record(fingerprints[id(job)], result.model_hash, result.cache_key)
+            run.emit("stack-done", job.stack.id, result)
+            run.index += 1
+    finally:  # stopped (Ctrl-C) or done: an executor's workers end with it, not when it is collected
+        for each in runs:
+            each.close()
 
 
 @dataclass

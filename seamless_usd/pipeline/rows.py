@@ -4,6 +4,7 @@ none of whose textures can be read. The report and the disk agree: a stack whose
 (:func:`check_written`)."""
 from __future__ import annotations
 
+import time
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,6 +48,7 @@ class Run:
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
     planned_first: dict[tuple[str, Path], str] = field(default_factory=dict)  # dry run: (key, dir) -> first stack id
     interrupted: bool = False  # stopped by Ctrl-C while tiles were made: rows say how far each stack got
+    began: float = field(default_factory=time.time)  # when the run began (seconds since the epoch)
     total: int = 0
     index: int = 0
     _settings: JobSettings | None = field(default=None, init=False, repr=False)
@@ -160,8 +162,8 @@ def _outcome_row(run: Run, report: StackReport, stack: TextureStack, outcome: St
 INTERRUPTED_MADE = ("interrupted before the stage was edited: its tiles are written and cached; run again to edit "
                     "the stage (nothing is made again)")
 INTERRUPTED_NOT_MADE = "interrupted before its tiles were made; run again (what was finished comes from the cache)"
-INTERRUPTED_UNJUDGED = ("interrupted after its tiles were written, before they were judged: {files}; run again to judge "
-                        "them and edit the stage (they come from the cache)")
+INTERRUPTED_UNJUDGED = ("interrupted after {files} {was} written, before {judged} judged{rest}; run again to judge "
+                        "its tiles and edit the stage (they come from the cache)")
 
 
 def _interrupted_row(run: Run, report: StackReport, stack: TextureStack, source_label: str, out_dir: Path) -> None:
@@ -176,12 +178,25 @@ def _interrupted_row(run: Run, report: StackReport, stack: TextureStack, source_
         run.report.findings.append(Finding(Severity.ERROR, "stack-failed", prim_ref(stack.material.strip("<>")),
                                            report.message, stack.material))
     else:
-        planned = planned_result(stack, out_dir, run.options)  # the files the job writes, by name
-        written = [mr.output_path for mr in planned.maps if Path(mr.output_path).is_file()]
+        planned = planned_result(stack, out_dir, run.options)  # the files the job writes, by name: those this run
+        written = [mr.output_path for mr in planned.maps if _written_since(mr.output_path, run.began)]  # wrote
         report.maps = [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps if mr.output_path in written]
-        report.message = (INTERRUPTED_UNJUDGED.format(files=", ".join(Path(p).name for p in written)) if written
-                          else INTERRUPTED_NOT_MADE)
+        left = len(planned.maps) - len(written)
+        report.message = INTERRUPTED_UNJUDGED.format(
+            files=", ".join(Path(p).name for p in written), was="was" if len(written) == 1 else "were",
+            judged="it was" if len(written) == 1 else "they were",
+            rest=f" ({left} of its {len(planned.maps)} maps not written)" if left else "") if written \
+            else INTERRUPTED_NOT_MADE
     report.status = StackStatus.FAILED
+
+
+def _written_since(path, began: float) -> bool:
+    """Whether the file at ``path`` was written at or after ``began`` (seconds since the epoch): a tile an earlier
+    run left there has the same name."""
+    try:
+        return Path(path).stat().st_mtime >= began - 1.0
+    except OSError:
+        return False
 
 
 def unread_rows(run: Run, scan: ScanResult, source_label: str) -> None:

@@ -273,7 +273,8 @@ def render_html(report: Report, title: str = "seamless-usd report") -> str:
     counts = report.counts()
     summary = "".join(f"<span><b>{v}</b> {esc(k.replace('_', ' '))}</span>" for k, v in counts.items() if v)
     layers = "".join(f"<li>{esc(p)}</li>" for p in report.layers_written)
-    status = "all stacks passed" if report.ok else "some stacks failed or did not pass"
+    status = ("interrupted (Ctrl-C): no stage edited" if report.interrupted else
+              "all stacks passed" if report.ok else "some stacks failed or did not pass")
     body = (
         f'<h1>{esc(title)}</h1><p class="muted">{esc(", ".join(report.sources))} · seamless-usd '
         f"{esc(report.tool_version)} · {esc(status)} (exit code {report.exit_code})</p>"
@@ -311,4 +312,5 @@ def source_report(report: Report, source: str) -> Report:
         tool_version=report.tool_version,
         unreadable=[u for u in report.unreadable if u == source],
         variants=[v for v in report.variants if v["source"] == source],
+        interrupted=report.interrupted,
     )
