@@ -166,7 +166,6 @@ class _MtlxAuthor(_PlaceUV):
     def __init__(self, doc: mx.Document, src: Path, out: Path, result: AuthoringResult):
         self.doc, self.src, self.out, self.result = doc, src, out, result
         self.changed = False
-        self._scale_known = True  # the map being edited: its UV scale is the tile's (False: a dry run's guess)
         self._uv_nodes: dict[tuple, str] = {}
         self._uv_updates: dict[str, tuple] = {}  # a place2d a run before inserted -> (total scale, turn): once a run
         self._done: dict[str, tuple] = {}
@@ -276,7 +275,6 @@ class _MtlxAuthor(_PlaceUV):
         """Edit one map's node; ``wrap_only`` (an already-tileable source): address modes only; ``turn``: a
         straightened tile turned back in the UVs; ``scale_known`` False: a dry run's guessed UV scale, planned as
         a factor of the tile's."""
-        self._scale_known = scale_known
         tex_map = map_result.map
         node_path = tex_map.node.strip("<>")
         node = self.doc.getDescendant(node_path)
@@ -354,7 +352,7 @@ class _MtlxAuthor(_PlaceUV):
                 if any(abs(new[i] - value[i]) > 1e-9 for i in range(2)):
                     set_vector2(inp, new)
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {fmt(new)}")
-                elif self.result.dry_run and name == MtlxNames.UV_TILING and not self._scale_known:  # known once made
+                elif self.result.dry_run and name == MtlxNames.UV_TILING and not scale_known:  # known once made
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {fmt(value)} x the tile's UV scale")
         elif category.startswith(MtlxNames.GLTF_PREFIX) and not gltf_identity(node):
             self.result.findings.append(Finding(

@@ -218,14 +218,17 @@ class JobIndex:
             return None
         return record if isinstance(record, dict) else None
 
-    def entry(self, fingerprint: str) -> Path | None:
-        """The folder of the cache entry this job finished with, while it is still there; None when the job did not
-        finish, or its record names no entry (an older run's)."""
-        key = str((self._record(fingerprint) or {}).get("key", ""))
+    def _entry_of(self, record: dict | None) -> Path | None:
+        key = str((record or {}).get("key", ""))
         if len(key) < 3 or not all(c in "0123456789abcdef" for c in key):
             return None
         folder = self.cache_root / key[:2] / key
         return folder if (folder / MANIFEST).is_file() else None
+
+    def entry(self, fingerprint: str) -> Path | None:
+        """The folder of the cache entry this job finished with, while it is still there; None when the job did not
+        finish, or its record names no entry (an older run's)."""
+        return self._entry_of(self._record(fingerprint))
 
     def finished(self, fingerprint: str) -> bool:
         """True when this job finished before and its cache entry is still there."""
@@ -233,7 +236,7 @@ class JobIndex:
         if record is None:
             return False
         if record.get("key"):
-            return self.entry(fingerprint) is not None
+            return self._entry_of(record) is not None
         return str(record.get("model_hash", "")) in self._live_models()
 
     def record(self, fingerprint: str, model_hash: str, key: str = "") -> None:

@@ -328,7 +328,6 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
 def _interrupted(run: Run, sources: list[_Source], started: float) -> Report:
     """The report of a run stopped by Ctrl-C while it made tiles: every stack's row as far as it got (tiles written
     and cached, or not made), no stage edited; written where ``--report`` asks, as a finished run's is."""
-    run.interrupted = True
     run.report.interrupted = True
     for src in sources:
         run.report.findings += src.scan.findings

@@ -47,7 +47,6 @@ class Run:
     placed: dict[tuple[str, Path], StackOutcome | Exception] = field(default_factory=dict)  # (key, dir) -> tiles there
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
     planned_first: dict[tuple[str, Path], str] = field(default_factory=dict)  # dry run: (key, dir) -> first stack id
-    interrupted: bool = False  # stopped by Ctrl-C while tiles were made: rows say how far each stack got
     began: float = field(default_factory=time.time)  # when the run began (seconds since the epoch)
     total: int = 0
     index: int = 0
@@ -102,10 +101,11 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
             cached = cached_plan(stack, out_dir, run.settings, run.options.cache_dir)
             tiles_of = run.planned_first.setdefault((stack.content_key, out_dir), stack.id)
             duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
-            planned = planned_result(stack, out_dir, run.options, tiles_of=tiles_of, cached=cached)
             if cached is not None and cached.outcome is not None:  # what the run will say, from its last result
                 cached.outcome.fill_report(report, stack, reused=duplicate_of is not None)
                 planned = cached.outcome.stack_result(stack)
+            else:
+                planned = planned_result(stack, out_dir, run.options, tiles_of=tiles_of, cached=cached)
             report.status, report.duplicate_of = StackStatus.PLANNED, duplicate_of
             report.maps = report.maps or [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps]
             report.uv_scale = planned.uv_scale
@@ -119,7 +119,7 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
             if duplicate_of is None:
                 run.report.plan.append(plan_line(where, stack, out_dir, planned.uv_scale, cached))
             results.append(planned)
-        elif run.interrupted:
+        elif run.report.interrupted:  # stopped by Ctrl-C while tiles were made: how far each stack got
             _interrupted_row(run, report, stack, source_label, out_dir)
         else:
             outcome = run.outcomes.get(stack.content_key)

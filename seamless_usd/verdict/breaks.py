@@ -48,13 +48,18 @@ SPACING = 3
 LINE_PERIOD = 0.5
 
 
+def _autocorrelation(n: int, profile: np.ndarray) -> np.ndarray:
+    """(n,) the circular autocorrelation of ``profile`` ((n, m): rows, each less the mean row), summed over its
+    columns, over its value at lag 0."""
+    spec = np.fft.rfft(profile - profile.mean(axis=0), axis=0)
+    auto = np.fft.irfft((spec * spec.conj()).real.sum(axis=1), n=n)
+    return auto / max(auto[0], 1e-12)
+
+
 def period(n: int, profile: np.ndarray) -> int | None:
     """The texture's own period along the axis: the lag of the strongest autocorrelation peak of ``profile``
     (rows of the maps flattened, on a torus) between a sixteenth and half of ``n``, if it reaches 0.3."""
-    rows = profile - profile.mean(axis=0)
-    spec = np.fft.rfft(rows, axis=0)
-    auto = np.fft.irfft((spec * spec.conj()).real.sum(axis=1), n=n)
-    auto = auto / max(auto[0], 1e-12)
+    auto = _autocorrelation(n, profile)
     lo, hi = max(4, n // 16), n // 2
     if hi <= lo:
         return None
@@ -117,12 +122,7 @@ def line_period(z: dict[int, np.ndarray]) -> int | None:
     0), if it reaches :data:`LINE_PERIOD`."""
     strongest = np.clip(np.max(np.stack(list(z.values())), axis=0), 0.0, None)
     n = len(strongest)
-    p = strongest - strongest.mean()
-    spec = np.fft.rfft(p)
-    auto = np.fft.irfft((spec * spec.conj()).real, n)
-    if auto[0] <= 0:
-        return None
-    auto = auto / auto[0]
+    auto = _autocorrelation(n, strongest[:, None])
     lo, hi = max(4, n // 16), n // 2
     if hi <= lo + 1:
         return None
