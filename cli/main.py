@@ -66,19 +66,26 @@ def _handle_interrupt(handler):
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
-    try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
-        return int(exc.code or 0)
     interrupted: list[int] = []
+    starting = [True]
 
-    def on_interrupt(signum, frame):  # noted: an interrupt some code turns into another error is still one
+    def on_interrupt(signum, frame):  # noted: an interrupt some code turns into another error, or swallows, is still one
         interrupted.append(signum)
-        raise KeyboardInterrupt
+        if not starting[0]:
+            raise KeyboardInterrupt
 
     previous = _handle_interrupt(on_interrupt)
     try:
+        try:
+            # Ctrl-C while the sub-command's modules load is held until they have: raised inside USD's module
+            # loader, it printed that loader's tracebacks and was swallowed; nothing is done yet (well under a second)
+            parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
+            return int(exc.code or 0)
+        starting[0] = False
+        if interrupted:
+            raise KeyboardInterrupt
         return int(args._run(args))
     except SeamlessUsdError as exc:
         print(f"seamless-usd: error: {exc}", file=sys.stderr)
@@ -114,7 +121,11 @@ def run() -> None:
     command writes is complete (atomic) and every cluster closed before ``main`` returns, so the
     process ends with ``os._exit`` after flushing its streams.
     """
-    code = main()
+    try:
+        code = main()
+    except KeyboardInterrupt:  # Ctrl-C between main's own handlers (as it starts or returns): nothing half-done
+        print("seamless-usd: interrupted", file=sys.stderr)
+        code = 130
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

@@ -374,6 +374,61 @@ def test_a_run_stopped_with_ctrl_c_says_as_json_how_far_each_stack_got(tmp_path,
     # a run again resumes from the cache, as after a kill (test_a_run_killed_after_the_first_stack_resumes_...)
 
 
+def _stopped_at(monkeypatch, module, name: str, call: int) -> None:
+    """Ctrl-C as it arrives at the ``call``-th call of ``module.name`` (1 is the first): the call raises
+    KeyboardInterrupt, as Python raises it wherever the run is when the signal comes."""
+    real, calls = getattr(module, name), []
+
+    def stopping(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == call:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, stopping)
+
+
+def test_ctrl_c_while_the_library_is_scanned_says_what_was_found_and_writes_nothing(tmp_path, cache, capsys,
+                                                                                    monkeypatch):
+    import seamless_usd.pipeline.process as process
+
+    lib = _library(tmp_path, copies=1)
+    _stopped_at(monkeypatch, process, "_scan_source", 2)  # while the second source is read
+    code, payload = _run(str(lib / "brick0" / "scene.usda"), str(lib / "looks" / "two.usda"), "--cache-dir",
+                         str(cache), capsys=capsys)
+    assert code == 130 and payload["interrupted"] and payload["exit_code"] == 130
+    jsonschema.validate(payload, json_schema("report"))
+    [row] = payload["stacks"]  # the first source's stack, found and not made
+    assert row["status"] == "failed" and row["message"].startswith("interrupted before its tiles were made")
+    assert not list(lib.rglob("tileable")) and not list(lib.rglob("*.seamless.usda"))
+
+
+def test_ctrl_c_while_the_stages_are_edited_keeps_the_edits_made_and_names_the_rest(tmp_path, cache, capsys,
+                                                                                   monkeypatch):
+    """The first stage's layer is written and its row says how its stack did; the second stage, stopped while its
+    edits were written, has its tiles on disk, no layer, and rows that say to run again."""
+    from seamless_usd import authoring
+
+    lib = _library(tmp_path, copies=1)
+    first, second = lib / "brick0" / "scene.usda", lib / "looks" / "two.usda"
+    _stopped_at(monkeypatch, authoring, "author_usd", 2)
+    code, payload = _run(str(first), str(second), "--cache-dir", str(cache), capsys=capsys)
+    assert code == 130 and payload["interrupted"]
+    jsonschema.validate(payload, json_schema("report"))
+    by_source = {}
+    for row in payload["stacks"]:
+        by_source.setdefault(Path(row["source"]).name, []).append(row)
+    assert [r["status"] for r in by_source["scene.usda"]] in (["passed"], ["not-passed"])
+    assert first.with_name("scene.seamless.usda").is_file()
+    assert [r["status"] for r in by_source["two.usda"]] == ["failed", "failed"]
+    assert all(r["message"].startswith("interrupted before the stage was edited") for r in by_source["two.usda"])
+    assert not second.with_name("two.seamless.usda").exists()
+    said = {Path(m["output"]).name for r in by_source["two.usda"] for m in r["maps"]}
+    assert said == {p.name for p in (lib / "looks" / "tileable").glob("*.tile.*")} and len(said) == 2
+    findings = [json.dumps(f, sort_keys=True) for f in payload["findings"]]
+    assert len(findings) == len(set(findings)), "a finding said twice"
+
+
 def test_a_missing_texture_blocks_only_the_file_that_lacks_it(tmp_path, cache, capsys):
     lib = _library(tmp_path, copies=2)
     scene = lib / "brick1" / "scene.usda"

@@ -107,3 +107,27 @@ def test_process_refuses_values_it_cannot_use_before_any_work(tmp_path, capsys):
         assert main(["process", scene, *args]) == 2, args
         assert said in capsys.readouterr().err
     assert sorted(p.name for p in (tmp_path / "brick").iterdir()) == ["scene.usda"]
+
+
+def test_ctrl_c_as_the_command_starts_ends_it_as_interrupted_without_a_traceback(tmp_path):
+    """Ctrl-C while the command loads its modules (USD's among them, whose loader printed the tracebacks of an
+    interrupt raised inside it and swallowed it) ends the command as interrupted (exit 130), quietly; one that comes
+    after the command is done changes nothing."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    codes = []
+    for delay in (0.15, 0.25, 0.4):  # after the interpreter itself has started (about 0.03 s; 0.1 s under load)
+        proc = subprocess.Popen([sys.executable, "-m", "seamless_usd_cli.main", "scan", str(tmp_path / "none.usda")],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # as a terminal's
+        time.sleep(delay)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+        assert "Traceback" not in err.decode(), (delay, err.decode()[-3000:])
+        assert proc.returncode in (130, 2), (delay, proc.returncode)  # 2: it had read the missing file already
+        assert (proc.returncode == 130) == ("interrupted" in err.decode()), err.decode()
+        codes.append(proc.returncode)
+    assert 130 in codes

@@ -264,6 +264,27 @@ def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
                 "processed at all; add them to --materials"))
 
 
+def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
+    """Scan every input into ``sources``; an unreadable input is reported and the others go on."""
+    for path in inputs:
+        run.report.sources.append(str(path))
+        try:
+            src = _scan_source(path, run.options.materials, *_triage(run.options))
+            run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
+            run.blocked.update(src.instanced)
+            run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
+            unread_rows(run, src.scan, str(src.path))
+            run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
+            src.stacks, found = from_recorded_sources(src.stacks, str(src.path), run.left_alone)
+            run.report.findings += found
+            sources.append(src)
+        except InputError as exc:
+            run.report.unreadable.append(str(path))
+            where = asset_ref(path)
+            said = str(exc).removeprefix(f"{where}: ")  # the finding names the file once, as its place
+            run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", where, said))
+
+
 def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | None = None) -> Report:
     """Process stages and MaterialX documents (files, folders, glob patterns); the report owns the exit code.
 
@@ -289,23 +310,10 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
             raise UsageError("-o/--output-layer names a new layer, but --in-place edits the source layers: use one "
                              "or the other")
         check_output_layer(Path(run.options.output_layer), inputs)
-    for path in inputs:
-        run.report.sources.append(str(path))
-        try:
-            src = _scan_source(path, run.options.materials, *_triage(run.options))
-            run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
-            run.blocked.update(src.instanced)
-            run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
-            unread_rows(run, src.scan, str(src.path))
-            run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
-            src.stacks, found = from_recorded_sources(src.stacks, str(src.path), run.left_alone)
-            run.report.findings += found
-            sources.append(src)
-        except InputError as exc:
-            run.report.unreadable.append(str(path))
-            where = asset_ref(path)
-            said = str(exc).removeprefix(f"{where}: ")  # the finding names the file once, as its place
-            run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", where, said))
+    try:
+        _scan_sources(run, inputs, sources)
+    except KeyboardInterrupt:  # nothing is made yet: the stacks found so far, not made
+        raise Interrupted(_interrupted(run, sources, started)) from None
     if modes.IN_PLACE in (run.options.mode, run.options.plan_mode if run.options.mode is modes.DRY_RUN else None):
         for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
             run.blocked.update(_locked_in_place(run, src))
@@ -320,14 +328,20 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
             _run_jobs(run, [(str(src.path), src.stacks, _output_dir(run.options, src.path)) for src in sources])
         except KeyboardInterrupt:
             raise Interrupted(_interrupted(run, sources, started)) from None
-    for src in sources:
-        _author_source(run, src)
+    for done, src in enumerate(sources):
+        rows, findings = len(run.report.stacks), len(run.report.findings)
+        try:
+            _author_source(run, src)
+        except KeyboardInterrupt:  # the sources before are edited; this one's rows (if any) and the rest say stopped
+            del run.report.stacks[rows:], run.report.findings[findings:]
+            raise Interrupted(_interrupted(run, sources[done:], started)) from None
     return _finish(run, started)
 
 
 def _interrupted(run: Run, sources: list[_Source], started: float) -> Report:
-    """The report of a run stopped by Ctrl-C while it made tiles: every stack's row as far as it got (tiles written
-    and cached, or not made), no stage edited; written where ``--report`` asks, as a finished run's is."""
+    """The report of a run stopped by Ctrl-C: every stack of ``sources`` (those whose stages were not edited yet) with
+    its row as far as it got (tiles written and cached, or not made); written where ``--report`` asks, as a finished
+    run's is."""
     run.report.interrupted = True
     for src in sources:
         run.report.findings += src.scan.findings
