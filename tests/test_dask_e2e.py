@@ -222,3 +222,32 @@ def _kill_a_worker_mid_stack(deployment: Deployment, cache: Path, timeout: float
                 return name
             time.sleep(0.05)
     raise AssertionError("no stack was under way on a worker in time\n" + deployment.logs())
+
+
+def test_ctrl_c_to_a_run_on_its_own_local_cluster_stops_it_quietly(tmp_path):
+    """Ctrl-C from a terminal reaches every process of its group: the client and its local cluster's workers. The
+    workers leave it to the client, which reports the run as interrupted and closes the cluster; no worker prints a
+    traceback and Dask logs nothing (before: a traceback from every worker and warnings from every nanny)."""
+    from fswatch import wait_until
+
+    lib = _library(tmp_path / "lib")
+    cache = tmp_path / "cache"
+    cmd = [sys.executable, "-m", "seamless_usd_cli.main", "process", *ARGS, "--iterations", "400",
+           "--scheduler", "local:2", "--cache-dir", str(cache), str(lib)]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # as a terminal's
+    training = wait_until(lambda: bool(list(cache.glob("*/*/checkpoints/*"))), [tmp_path], timeout=240,
+                          stop=lambda: proc.poll() is not None)
+    assert training and proc.poll() is None, "the run ended before its workers trained"
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    text = err.decode()
+    assert proc.returncode == 130, text[-3000:]
+    assert "Traceback" not in text and "distributed." not in text, text[-3000:]
+    payload = json.loads(out)
+    assert payload["interrupted"] and {s["status"] for s in payload["stacks"]} == {"failed"}
+    assert not (lib / "two.seamless.usda").exists()
+    time.sleep(1.0)
+    listed = subprocess.run(["ps", "-e", "-o", "sid=,stat=,args="], capture_output=True, text=True).stdout.splitlines()
+    alive = [line for line in listed if line.split()[0] == str(proc.pid) and not line.split()[1].startswith("Z")]
+    assert not alive, f"processes of the run still running: {alive}"  # exited ones (zombies) wait for init to reap

@@ -12,6 +12,7 @@ Workers only train, sample and write maps; stage and document edits happen in th
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
@@ -175,10 +176,11 @@ class DaskExecutor:
             raise UsageError("a Dask scheduler needs the 'dask[distributed]' extra: pip install 'seamless-usd[dask]'") from None
         cluster = None
         if self.address == "local":
-            cluster = LocalCluster(
-                n_workers=self.workers or 2, threads_per_worker=self.threads_per_worker,
-                processes=True, dashboard_address=None, host="127.0.0.1",
-            )
+            with _ctrl_c_ignored_by_children():
+                cluster = LocalCluster(
+                    n_workers=self.workers or 2, threads_per_worker=self.threads_per_worker,
+                    processes=True, dashboard_address=None, host="127.0.0.1",
+                )
             client = Client(cluster)
         else:
             client = self._remote(Client)
@@ -195,10 +197,51 @@ class DaskExecutor:
                 except Exception as exc:  # noqa: BLE001 - a lost worker, say
                     result = exc
                 yield job, result
+        except BaseException:  # Ctrl-C, or the run stopped reading: the jobs still running are dropped
+            _quiet(client, local=cluster is not None)
+            raise
         finally:
             client.close()
             if cluster is not None:
                 cluster.close()
+
+
+@contextlib.contextmanager
+def _ctrl_c_ignored_by_children():
+    """Ctrl-C ignored while the block starts processes (a local Dask cluster's workers), which keep ignoring it: a
+    terminal's Ctrl-C reaches every process of its group, and each worker stopped by it printed its traceback. The
+    client stops them (it closes the cluster). Only from the main thread, where signals are handled."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+def _quiet(client, local: bool) -> None:
+    """Dask's own logs silenced before a run stopped part-way closes its cluster: jobs cancelled mid-task make the
+    workers and nannies log warnings and tracebacks that say nothing to the user (the report says what stopped).
+    On a cluster of its own the workers are silenced too; a remote scheduler's are left as they are."""
+    import logging
+
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
+    if local:
+        try:
+            client.run(_silence_dask, wait=True)
+        except BaseException:  # noqa: BLE001 - a worker that does not answer is closed all the same
+            pass
+
+
+def _silence_dask() -> None:
+    import logging
+
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
 
 
 #: Seconds to wait for a remote Dask scheduler to answer before the run is refused.
