@@ -13,6 +13,7 @@ Workers only train, sample and write maps; stage and document edits happen in th
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
@@ -198,12 +199,17 @@ class DaskExecutor:
                     result = exc
                 yield job, result
         except BaseException:  # Ctrl-C, or the run stopped reading: the jobs still running are dropped
-            _quiet(client, local=cluster is not None)
+            level = _quiet(client, local=cluster is not None)
+            try:
+                client.close()
+                if cluster is not None:
+                    cluster.close()
+            finally:
+                logging.getLogger("distributed").setLevel(level)  # a host process's own Dask logging, as it was
             raise
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 @contextlib.contextmanager
@@ -224,23 +230,23 @@ def _ctrl_c_ignored_by_children():
         signal.signal(signal.SIGINT, before)
 
 
-def _quiet(client, local: bool) -> None:
+def _quiet(client, local: bool) -> int:
     """Dask's own logs silenced before a run stopped part-way closes its cluster: jobs cancelled mid-task make the
     workers and nannies log warnings and tracebacks that say nothing to the user (the report says what stopped).
-    On a cluster of its own the workers are silenced too; a remote scheduler's are left as they are."""
-    import logging
-
-    logging.getLogger("distributed").setLevel(logging.CRITICAL)
+    On a cluster of its own the workers are silenced too; a remote scheduler's are left as they are. Returns the
+    client's level before, to put back."""
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
     if local:
         try:
             client.run(_silence_dask, wait=True)
         except BaseException:  # noqa: BLE001 - a worker that does not answer is closed all the same
             pass
+    return level
 
 
 def _silence_dask() -> None:
-    import logging
-
     logging.getLogger("distributed").setLevel(logging.CRITICAL)
 
 
