@@ -88,10 +88,21 @@ def roc_area(seamed: list[float], seamless: list[float]) -> float:
     return float(np.mean((a > b) + 0.5 * (a == b)))
 
 
+#: Items whose joins were blended (a gradient-domain band, a crossfade): the class of tiles whose texels moved, where
+#: the verdict cannot find copies, reported on its own as well.
+BLENDS = ("blended", "lattice-blended", "blocky-blended", "crossfade")
+
+
+def _part(rows: list[dict], split: str) -> list[dict]:
+    if split == "held-back blends":
+        return [r for r in rows if r["split"] == "held-back" and r["kind"] in BLENDS]
+    return [r for r in rows if split == "all" or r["split"] == split]
+
+
 def summarise(rows: list[dict], rules: list[str]) -> dict:
     out: dict = {}
-    for split in ("tuning", "held-back", "all"):
-        part = [r for r in rows if split == "all" or r["split"] == split]
+    for split in ("tuning", "held-back", "held-back blends", "all"):
+        part = _part(rows, split)
         out[split] = {}
         for rule in rules:
             seamless = [r for r in part if r["seamless"]]
