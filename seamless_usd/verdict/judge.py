@@ -38,6 +38,7 @@ from .ghosts import ghost_bands
 from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, MAP_THRESHOLD, copy_seams
 from .lines import Seam, runs, seams_from_scores
 from .prepare import WORK_SIDE, joint, map_weights, to_working
+from .visibility import visible
 from .reference import Reading, Reference
 from .tolerance import faithfulness
 from .tone import tone_steps
@@ -198,6 +199,21 @@ def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: li
     return judge_reading(Reading(tiles, normals, names, reference), fidelity=fidelity, seed=seed)
 
 
+def _seen(seams: list[Seam], strongest: float, margin: float, reading: Reading, work: list[np.ndarray] | None
+          ) -> tuple[list[Seam], float]:
+    """The seams whose step can be seen (:mod:`.visibility`), strongest first, and the strongest figure: where every
+    line found is too faint to see (a nearly flat map), at most the margin. ``work``: the maps at the working size,
+    when at hand."""
+    if not seams:
+        return seams, strongest
+    factor = min(1.0, WORK_SIDE / max(reading.size))
+    maps = work if work is not None else to_working(reading.maps, factor, periodic=True)
+    kept = sorted(visible(seams, maps, reading.names, factor), key=lambda x: -x.figure)
+    if not kept:
+        strongest = min(strongest, margin)
+    return kept, strongest
+
+
 def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> Verdict:
     """:func:`judge` on a tile already prepared (:class:`.reference.Reading`), against its reference if it has one."""
     ref = reading.reference
@@ -206,7 +222,7 @@ def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> 
         copied = _copied(reading)
         if copied is not None:
             seams, strongest = copied
-            seams = sorted(seams + _tone_seams(reading), key=lambda x: -x.figure)
+            seams, strongest = _seen(seams + _tone_seams(reading), strongest, COPY_THRESHOLD, reading, None)
             verdict = Verdict(not seams, True, seams, strongest, COPY_THRESHOLD, "source", "copies", size)
             if fidelity:
                 verdict.figures, verdict.tolerances, verdict.failing = faithfulness(
@@ -241,7 +257,7 @@ def judge_reading(reading: Reading, *, fidelity: bool = True, seed: int = 0) -> 
             if not _near(s, kept):
                 kept.append(s)
         seams = kept
-    seams.sort(key=lambda x: -x.figure)
+    seams, strongest = _seen(seams, strongest, margin, reading, tw)
     verdict = Verdict(not seams, True, seams, strongest, margin, "source" if ref is not None else "itself",
                       "classifier", size)
     if fidelity and ref is not None:

@@ -1,0 +1,70 @@
+"""Whether a seam can be seen at all: the step of value across its line, in the maps' own units.
+
+The verdict's figures are relative: a line is read against the texture's other lines, in units of their
+spread. On a map that is nearly flat (a roughness, metallic or opacity map of one value, with a patch or a row
+one code value off) every line but a few reads exactly nothing, so those few read millions of units above the
+rest though no eye can see them. A seam is kept only where the maps step across its line, over its run, by at
+least :data:`VISIBLE`: at some width (:data:`WIDTHS`), the mean of the texels on one side against the mean on the
+other, texel by texel along the run, so that a one-texel break, a jumble of unrelated texels and a broad step of
+tone all count. The step is read as it is, not against the texture's other lines: on a textured map every line
+steps by far more than that (a seam's step there is as large as any line's, and is told apart by the verdict's
+own figures), so only lines of a nearly flat map are dropped. A ghosted band (a crossfade's fading detail) is
+not a step and is kept as found.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .lines import Seam
+
+__all__ = ["VISIBLE", "WIDTHS", "step_across", "visible"]
+
+#: The least step (network units, where a map spans 2) a seam must show over a typical line: one and a half 8-bit
+#: code values, under which a step of value is not seen on a flat surface.
+VISIBLE = 2 * 1.5 / 255
+#: Widths (texels at the reading's size) of the bands read on each side of a line.
+WIDTHS = (1, 2, 4, 8, 16)
+
+
+def _band_steps(a: np.ndarray, width: int) -> np.ndarray:
+    """(n,) for every horizontal line ``p`` of ``a`` (n, R, C) on a torus: the mean over the run of the norm of
+    (mean of rows p .. p + width - 1) less (mean of rows p - width .. p - 1)."""
+    n = a.shape[0]
+    c = np.concatenate([np.zeros((1,) + a.shape[1:]), np.cumsum(np.concatenate([a, a, a]), axis=0)])
+    p = np.arange(n) + n
+    after = (c[p + width] - c[p]) / width
+    before = (c[p] - c[p - width]) / width
+    return np.sqrt(((after - before) ** 2).sum(axis=-1)).mean(axis=1)
+
+
+def step_across(m: np.ndarray, axis: str, line: int, start: int, end: int) -> float:
+    """The step across ``line`` of map ``m`` (H, W, C; ``axis`` ``"x"``: a vertical line at column ``line`` over
+    rows ``start`` to ``end``, on a torus), at the band width where it is largest."""
+    a = m if axis == "y" else m.transpose(1, 0, 2)
+    n, length = a.shape[:2]
+    run = np.arange(start, end + 1) % length
+    a = np.asarray(a[:, run], dtype=np.float64)
+    best = -np.inf
+    for width in WIDTHS:
+        if width > n // 4:
+            break
+        best = max(best, float(_band_steps(a, width)[line % n]))
+    return best
+
+
+def visible(seams: Sequence[Seam], maps: Sequence[np.ndarray], names: Sequence[str], factor: float) -> list[Seam]:
+    """The ``seams`` (positions in texels of the full size) whose step can be seen in ``maps`` (the maps at
+    ``factor`` times the full size, in network units: normal maps as unit vectors), in the named map or, for a
+    seam of the maps together, in any of them; ghosted bands are kept as found."""
+    kept = []
+    for s in seams:
+        if s.kind == "ghost":
+            kept.append(s)
+            continue
+        chosen = [m for m, name in zip(maps, names) if name == s.map] or list(maps)
+        line, start, end = (int(round(v * factor)) for v in (s.position, s.start, s.end))
+        if max(step_across(m, s.axis, line, start, max(start, end)) for m in chosen) >= VISIBLE:
+            kept.append(s)
+    return kept
