@@ -1,7 +1,8 @@
 """Entry point of the ``seamless-usd`` command: sub-command dispatch and error mapping.
 
 Exit codes: 0 success; 1 some items failed or did not pass (the rest were done); 2 usage error or
-unreadable input; 3 internal error (the traceback goes to a log file named in the message).
+unreadable input; 3 internal error (the traceback goes to a log file named in the message); 130 stopped by
+Ctrl-C; 141 the reader of its output went away (``| head``).
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from collections.abc import Sequence
 from seamless_usd.version import __version__
 from seamless_usd.errors import SeamlessUsdError
 
-__all__ = ["main", "run", "EXIT_OK", "EXIT_FAILED_ITEMS", "EXIT_USAGE", "EXIT_INTERNAL"]
+__all__ = ["main", "run", "EXIT_OK", "EXIT_FAILED_ITEMS", "EXIT_USAGE", "EXIT_INTERNAL", "EXIT_PIPE_CLOSED"]
 
 EXIT_OK = 0
 EXIT_FAILED_ITEMS = 1
@@ -93,6 +94,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("seamless-usd: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of stdout went away (``| head``): nothing more is said there
+        return _pipe_closed()
     except Exception:  # noqa: BLE001 - the one place unexpected errors are turned into a log file
         if interrupted:  # Ctrl-C inside an extension module's import surfaces as ImportError
             print("seamless-usd: interrupted", file=sys.stderr)
@@ -113,6 +116,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             signal.signal(signal.SIGINT, previous)
 
 
+EXIT_PIPE_CLOSED = 141  # as a command ended by SIGPIPE: 128 + 13
+
+
+def _pipe_closed() -> int:
+    """Stdout pointed at nothing, so that flushing what is left of it at exit raises no second error."""
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError):  # not a real file (captured in a test): nothing to flush there
+        pass
+    return EXIT_PIPE_CLOSED
+
+
 def run() -> None:
     """Console-script entry: ``main()``, then a fast exit.
 
@@ -126,7 +141,10 @@ def run() -> None:
     except KeyboardInterrupt:  # Ctrl-C between main's own handlers (as it starts or returns): nothing half-done
         print("seamless-usd: interrupted", file=sys.stderr)
         code = 130
-    sys.stdout.flush()
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        code = _pipe_closed()
     sys.stderr.flush()
     os._exit(code)
 

@@ -131,3 +131,19 @@ def test_ctrl_c_as_the_command_starts_ends_it_as_interrupted_without_a_traceback
         assert (proc.returncode == 130) == ("interrupted" in err.decode()), err.decode()
         codes.append(proc.returncode)
     assert 130 in codes
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly():
+    """``seamless-usd check ... --json | head -c 10``: the JSON's reader closes the pipe; the command ends with
+    141 (as one ended by SIGPIPE) and no message, not as an internal error with a crash log."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    picture = Path(__file__).resolve().parents[1] / "sample_assets" / "textures" / "brick_albedo.png"
+    proc = subprocess.Popen([sys.executable, "-m", "seamless_usd_cli.main", "check", str(picture), "--json"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # gone before anything is written
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 141, err
+    assert "internal error" not in err and "Traceback" not in err, err
