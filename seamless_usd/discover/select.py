@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 from seamless_usd.discover.intent import Intent
 from seamless_usd.discover.tokens import Codes
-from seamless_usd.textures import ScanResult, TextureStack
+from seamless_usd.textures import ScanResult, TextureStack, describe_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "unmatched_patterns", "blocked_stacks", "set_aside_stacks",
@@ -167,3 +167,48 @@ def from_recorded_sources(stacks: Sequence[TextureStack], source: str, left_alon
             maps.append(m)
         out.append(replace(stack, maps=tuple(maps)))
     return out, findings
+
+
+def shared_node_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str,
+                       kept: dict[tuple[str, str], str]) -> dict[tuple[str, str], str]:
+    """Stacks that would change another use of their texture nodes: a node (one ``UsdUVTexture`` prim, or MaterialX
+    node) read by a material, or a variant selection of it, whose stack is not made (``kept``: (source, id) -> why,
+    left alone or not made for a reason of its own) or not selected (``stacks``: the selected ones). Its edits (the
+    tile's path, repeat, the UV scale) are made on the node, so the other use would show the tile too: such a stack
+    fails, naming that use, and is not made."""
+    users: dict[tuple, list[TextureStack]] = {}
+    for stack in scan.stacks:
+        for key in {_use(m) for m in stack.maps}:
+            users.setdefault(key, []).append(stack)
+    selected = {s.id for s in stacks}
+    out = {}
+    for stack in stacks:
+        if (source, stack.id) in kept:
+            continue
+        for m in stack.maps:
+            others = [o for o in users.get(_use(m), []) if o.id != stack.id
+                      and ((source, o.id) in kept or o.id not in selected)]
+            if others:
+                other = others[0]
+                where = f" in {describe_selection(other.selection)}" if other.selection else ""
+                why = kept.get((source, other.id)) or "not selected (--materials)"
+                fix = ("author the texture's file inside each variant (its edits then stay in the variant)"
+                       if other.material == stack.material else
+                       "give each material a texture node of its own, or process both (--force-materials)")
+                out[(source, stack.id)] = (
+                    f"not processed: its texture node {prim_ref(m.node)} is also read by {other.material}{where}, "
+                    f"which is not made tileable ({_first_clause(why)}); editing the node would change that use too: "
+                    f"{fix}")
+                break
+    return out
+
+
+def _use(m) -> tuple:
+    """What an edit of a map's node changes: the node, with the file value it reads and where that is authored (a
+    variant that authors a file of its own is edited inside the variant)."""
+    return m.node, m.asset, m.file_at
+
+
+def _first_clause(reason: str) -> str:
+    """The reason a stack is not made, shortened to its first clause."""
+    return reason.split(";")[0].split(": ", 1)[-1].strip() or reason

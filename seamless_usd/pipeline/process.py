@@ -18,7 +18,7 @@ from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
 from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, from_recorded_sources, instanced_stacks,
                                           matches_any, select_stacks, set_aside_stacks, unmatched_patterns)
-from seamless_usd.discover.select import left_alone_stacks as _left_alone
+from seamless_usd.discover.select import left_alone_stacks as _left_alone, shared_node_stacks
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, Interrupted, SeamlessUsdError, UsageError
 from seamless_usd.fileio import folder_problem, marked_writable
@@ -264,6 +264,14 @@ def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
                 "processed at all; add them to --materials"))
 
 
+def _block_shared_nodes(run: Run, scan: ScanResult, stacks: list[TextureStack], label: str) -> None:
+    """Stacks whose texture nodes another use reads that is not made tileable fail (:func:`shared_node_stacks`)."""
+    by_id = {s.id: s for s in scan.stacks}
+    kept = {key: f"left alone: {by_id[key[1]].intent}" for key in run.left_alone if key[0] == label and key[1] in by_id}
+    kept.update({k: v for k, v in {**run.set_aside, **run.blocked}.items() if k[0] == label})
+    run.blocked.update(shared_node_stacks(scan, stacks, label, kept))
+
+
 def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
     """Scan every input into ``sources``; an unreadable input is reported and the others go on."""
     for path in inputs:
@@ -314,6 +322,8 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
         _scan_sources(run, inputs, sources)
     except KeyboardInterrupt:  # nothing is made yet: the stacks found so far, not made
         raise Interrupted(_interrupted(run, sources, started)) from None
+    for src in sources:
+        _block_shared_nodes(run, src.scan, src.stacks, str(src.path))
     if modes.IN_PLACE in (run.options.mode, run.options.plan_mode if run.options.mode is modes.DRY_RUN else None):
         for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
             run.blocked.update(_locked_in_place(run, src))
@@ -403,6 +413,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))
     stacks, found = from_recorded_sources(stacks, label, run.left_alone)
     run.report.findings += found
+    _block_shared_nodes(run, scan, stacks, label)
     out_dir = _output_dir(run.options, source)
     if run.options.mode != authoring.WriteMode.DRY_RUN:
         _run_jobs(run, [(label, stacks, out_dir)])

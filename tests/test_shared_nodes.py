@@ -1,0 +1,236 @@
+"""A texture node read by a use that is not made tileable is not edited for another use: the edit (the tile's path,
+repeat, the UV scale) is made on the node, so the other use would show the tile too. Real stages: a node graph
+shared by a tiling material and a UV atlas's, and a material whose clamped variant is left alone while its file is
+authored outside the variants."""
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+from pxr import Usd, UsdShade
+from runchecks import PLUMBING
+
+from seamless_usd_cli.main import main
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
+
+SHARED = """#usda 1.0
+(
+    defaultPrim = "World"
+)
+
+def Xform "World"
+{
+    def Scope "Looks"
+    {
+        def NodeGraph "SharedTex"
+        {
+            float3 outputs:rgb.connect = </World/Looks/SharedTex/Tex.outputs:rgb>
+            def Shader "StReader"
+            {
+                uniform token info:id = "UsdPrimvarReader_float2"
+                string inputs:varname = "st"
+                float2 outputs:result
+            }
+            def Shader "Tex"
+            {
+                uniform token info:id = "UsdUVTexture"
+                asset inputs:file = @../textures/brick_albedo.png@
+                float2 inputs:st.connect = </World/Looks/SharedTex/StReader.outputs:result>
+                token inputs:wrapS = "repeat"
+                token inputs:wrapT = "repeat"
+                float3 outputs:rgb
+            }
+        }
+        def Material "M_tile"
+        {
+            token outputs:surface.connect = </World/Looks/M_tile/Surface.outputs:surface>
+            def Shader "Surface"
+            {
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor.connect = </World/Looks/SharedTex.outputs:rgb>
+                token outputs:surface
+            }
+        }
+        def Material "M_other"
+        {
+            token outputs:surface.connect = </World/Looks/M_other/Surface.outputs:surface>
+            def Shader "Surface"
+            {
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor.connect = </World/Looks/SharedTex.outputs:rgb>
+                float inputs:roughness = 0.2
+                token outputs:surface
+            }
+        }
+    }
+    def Mesh "A" (
+        prepend apiSchemas = ["MaterialBindingAPI"]
+    )
+    {
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+        texCoord2f[] primvars:st = [(0, 0), (4, 0), (4, 4), (0, 4)] (
+            interpolation = "vertex"
+        )
+        rel material:binding = </World/Looks/M_tile>
+    }
+    def Mesh "B" (
+        prepend apiSchemas = ["MaterialBindingAPI"]
+    )
+    {
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(2, -1, 0), (4, -1, 0), (4, 1, 0), (2, 1, 0)]
+        texCoord2f[] primvars:st = [(0.1, 0.1), (0.45, 0.1), (0.45, 0.45), (0.1, 0.45)] (
+            interpolation = "vertex"
+        )
+        rel material:binding = </World/Looks/M_other>
+    }
+}
+"""
+
+WRAP_VARIANTS = """#usda 1.0
+(
+    defaultPrim = "World"
+)
+
+def Xform "World" (
+    variants = {
+        string wrapMode = "rep"
+    }
+    prepend variantSets = "wrapMode"
+)
+{
+    def Scope "Looks"
+    {
+        def Material "M_wrapvar"
+        {
+            token outputs:surface.connect = </World/Looks/M_wrapvar/Surface.outputs:surface>
+            def Shader "Surface"
+            {
+                uniform token info:id = "UsdPreviewSurface"
+                float inputs:roughness.connect = </World/Looks/M_wrapvar/Tex.outputs:r>
+                token outputs:surface
+            }
+            def Shader "StReader"
+            {
+                uniform token info:id = "UsdPrimvarReader_float2"
+                string inputs:varname = "st"
+                float2 outputs:result
+            }
+            def Shader "Tex"
+            {
+                uniform token info:id = "UsdUVTexture"
+                asset inputs:file = @../textures/brick_roughness.png@
+                token inputs:sourceColorSpace = "raw"
+                float2 inputs:st.connect = </World/Looks/M_wrapvar/StReader.outputs:result>
+                float outputs:r
+            }
+        }
+    }
+
+    def Mesh "G" (
+        prepend apiSchemas = ["MaterialBindingAPI"]
+    )
+    {
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+        texCoord2f[] primvars:st = [(0, 0), (4, 0), (4, 4), (0, 4)] (
+            interpolation = "vertex"
+        )
+        rel material:binding = </World/Looks/M_wrapvar>
+    }
+    variantSet "wrapMode" = {
+        "rep" {
+            over "Looks"
+            {
+                over "M_wrapvar"
+                {
+                    over "Tex"
+                    {
+                        token inputs:wrapS = "repeat"
+                        token inputs:wrapT = "repeat"
+                    }
+                }
+            }
+        }
+        "clp" {
+            over "Looks"
+            {
+                over "M_wrapvar"
+                {
+                    over "Tex"
+                    {
+                        token inputs:wrapS = "clamp"
+                        token inputs:wrapT = "clamp"
+                    }
+                }
+            }
+            over "G"
+            {
+                texCoord2f[] primvars:st = [(0, 0), (1, 0), (1, 1), (0, 1)] (
+                    interpolation = "vertex"
+                )
+            }
+        }
+    }
+}
+"""
+
+
+def _scene(tmp_path: Path, text: str) -> Path:
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    (tmp_path / "looks").mkdir()
+    scene = tmp_path / "looks" / "scene.usda"
+    scene.write_text(text)
+    return scene
+
+
+def _process(scene: Path, cache: Path, capsys, *extra: str) -> tuple[int, dict]:
+    code = main(["process", *PLUMBING, "--max-size", "112", "--json", "--cache-dir", str(cache), str(scene), *extra])
+    return code, json.loads(capsys.readouterr().out)
+
+
+def _file(layer: Path, node: str, variant: tuple[str, str] | None = None) -> str:
+    stage = Usd.Stage.Open(str(layer))
+    if variant:
+        stage.GetPrimAtPath("/World").GetVariantSets().GetVariantSet(variant[0]).SetVariantSelection(variant[1])
+    return UsdShade.Shader(stage.GetPrimAtPath(node)).GetInput("file").Get().path
+
+
+def test_a_node_shared_with_an_atlas_is_not_edited_and_the_tiling_material_says_why(tmp_path, model_cache, capsys):
+    scene = _scene(tmp_path, SHARED)
+    before = hashlib.sha256(scene.read_bytes()).hexdigest()
+    code, payload = _process(scene, model_cache, capsys)
+    rows = {s["material"]: s for s in payload["stacks"]}
+    assert rows["</World/Looks/M_other>"]["status"] == "left-alone"
+    tiling = rows["</World/Looks/M_tile>"]
+    assert tiling["status"] == "failed" and code == 1
+    assert "</World/Looks/SharedTex/Tex>" in tiling["message"] and "</World/Looks/M_other>" in tiling["message"]
+    layer = scene.with_name("scene.seamless.usda")
+    assert not layer.exists() or _file(layer, "/World/Looks/SharedTex/Tex") == "../textures/brick_albedo.png"
+    assert not (scene.parent / "tileable").exists() or not list((scene.parent / "tileable").glob("*.tile.*"))
+    assert hashlib.sha256(scene.read_bytes()).hexdigest() == before
+    # both uses made tileable, asked for: the node is edited for both
+    code, payload = _process(scene, model_cache, capsys, "--force-materials", "*M_other")
+    assert {s["status"] for s in payload["stacks"]} <= {"passed", "not-passed", "reused"}, payload["stacks"]
+    assert "tileable" in _file(layer, "/World/Looks/SharedTex/Tex")
+
+
+def test_a_left_alone_variant_keeps_its_texture_when_the_file_is_authored_outside_the_variants(tmp_path, model_cache,
+                                                                                             capsys):
+    scene = _scene(tmp_path, WRAP_VARIANTS)
+    code, payload = _process(scene, model_cache, capsys)
+    by_variant = {s["variant"]: s for s in payload["stacks"]}
+    assert by_variant["wrapMode=clp"]["status"] == "left-alone" and code == 1
+    failed = by_variant[""]  # the stage's own selection (repeat): it would have edited the file both read
+    assert failed["status"] == "failed"
+    assert "wrapMode=clp" in failed["message"] and "inside each variant" in failed["message"]
+    layer = scene.with_name("scene.seamless.usda")
+    if layer.exists():  # whatever else it holds, the clamped variant still reads the photo
+        assert _file(layer, "/World/Looks/M_wrapvar/Tex", ("wrapMode", "clp")) == "../textures/brick_roughness.png"
