@@ -1,7 +1,7 @@
 """The project's one expected-error type, mapped by the CLI to a clean message and exit code."""
 from __future__ import annotations
 
-__all__ = ["SeamlessUsdError", "InputError", "UsageError", "Interrupted"]
+__all__ = ["SeamlessUsdError", "InputError", "UndecodableImage", "UsageError", "Interrupted"]
 
 
 class SeamlessUsdError(Exception):
@@ -13,6 +13,10 @@ class SeamlessUsdError(Exception):
 
 class InputError(SeamlessUsdError):
     """A stage, document or image that cannot be read (CLI exit code 2)."""
+
+
+class UndecodableImage(InputError):
+    """An image whose header reads but whose pixels do not decode: truncated or corrupt."""
 
 
 class UsageError(SeamlessUsdError):

@@ -152,3 +152,32 @@ def test_a_library_with_one_broken_stage_is_still_scanned_and_json_names_it(tmp_
     assert [s["material"] for s in result["stacks"]] == ["</World/Looks/Brick>"]
     [found] = [f for f in result["findings"] if f["code"] == "unreadable-input"]
     assert "broken.usda" in found["where"] and "broken.usda" in err
+
+
+def test_a_texture_whose_pixels_do_not_decode_is_named_by_scan_and_fails_its_stack_in_process(tmp_path, model_cache,
+                                                                                               capsys):
+    """A truncated PNG reads its header, so it was classed ``tiling`` with the decode error only in the intent's reason:
+    no finding, and a pipeline reading the codes sent it on. Now an ``unreadable-file`` finding names it, as for a file
+    whose header does not read, and ``process`` fails its stack before any work, naming it."""
+    import shutil
+
+    from runchecks import PLUMBING
+    from test_reliability_inputs import write_scene
+
+    textures = tmp_path / "textures"
+    textures.mkdir()
+    whole = (Path(__file__).resolve().parents[1] / "sample_assets" / "textures" / "brick_albedo.png").read_bytes()
+    (textures / "cut.png").write_bytes(whole[: len(whole) // 2])
+    shutil.copy(Path(__file__).resolve().parents[1] / "sample_assets" / "textures" / "cloth.png", textures)
+    scene = write_scene(tmp_path / "looks" / "scene.usda", {"Cut": "../textures/cut.png", "Cloth": "../textures/cloth.png"})
+    assert main(["scan", str(scene), "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    _validate(payload)
+    [finding] = [f for f in payload["findings"] if "cut.png" in f["where"]]
+    assert finding["code"] == "unreadable-file" and finding["severity"] == "skipped"
+    assert "truncated or corrupt" in finding["message"]
+    code = main(["process", *PLUMBING, "--max-size", "112", "--json", "--cache-dir", str(model_cache), str(scene)])
+    rows = {s["material"]: s for s in json.loads(capsys.readouterr().out)["stacks"]}
+    assert code == 1
+    assert rows["</Root/Looks/Cut>"]["status"] == "failed" and "cut.png" in rows["</Root/Looks/Cut>"]["message"]
+    assert rows["</Root/Looks/Cloth>"]["status"] in ("passed", "not-passed")

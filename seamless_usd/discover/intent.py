@@ -82,7 +82,7 @@ def judged_alone(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> di
     """The verdict on the stack's files judged against themselves, exactly as ``check`` judges them
     (:func:`seamless_usd.verdict.alone.judge_alone`): ``{"verdict": Verdict.as_dict()}``, or ``{"error": why}``
     when they are not judged (a file not on disk, too large to decode before processing, unreadable, too small)."""
-    from seamless_usd.errors import InputError
+    from seamless_usd.errors import InputError, UndecodableImage
     from seamless_usd.verdict.alone import file_map, judge_alone, normal_doubts
 
     for m in stack.maps:
@@ -98,7 +98,10 @@ def judged_alone(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> di
         files = [file_map(m) for m in stack.maps]
         verdict, _ = judge_alone(files)
     except (InputError, ValueError, RuntimeError, OSError) as exc:
-        return {"error": str(exc)}
+        # a file whose header reads but whose pixels do not decode (truncated, corrupt): named, as a header that
+        # does not read is (its material's stack cannot be made)
+        broken = [m.asset for m in stack.maps if isinstance(exc, UndecodableImage) and asset_ref(m.resolved) in str(exc)]
+        return {"error": str(exc), **({"unreadable": broken[0]} if broken else {})}
     return {"verdict": verdict.as_dict(), "doubts": normal_doubts(files)}
 
 

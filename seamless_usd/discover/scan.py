@@ -16,7 +16,7 @@ from seamless_usd.discover.triagememo import TriageMemo
 from seamless_usd.discover.maps import HeaderCache, TextureUse, build_maps
 from seamless_usd.discover.stacks import build_stacks
 from seamless_usd.discover.tokens import MTLX_SUFFIX, Codes
-from seamless_usd.textures import ExploredSelection, ScanResult, VariantExploration
+from seamless_usd.textures import ExploredSelection, ScanResult, TextureStack, VariantExploration
 from seamless_usd.discover.variants import VariantSpace
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
@@ -199,7 +199,23 @@ class _Scan:
             self.geometry.measure(stacks)
         self.result.stacks = classify_stacks(stacks, self.geometry, explored=self.geometry.explored_for,
                                              memo=self.triage)
+        self.result.findings.extend(_undecodable(self.result.stacks, self.triage))
         return self.result
+
+
+def _undecodable(stacks: list[TextureStack], triage: TriageMemo) -> list[Finding]:
+    """A skipped ``unreadable-file`` finding for each file the triage found whose header reads but whose pixels do
+    not decode (truncated, corrupt), as for one whose header does not read: its material's stack cannot be made."""
+    out = []
+    for stack in stacks:
+        judged = triage.seen("verdict", stack.maps) or {}
+        broken = [m for m in stack.maps if m.asset == judged.get("unreadable")]
+        if broken:
+            m = broken[0]
+            out.append(Finding(Severity.SKIPPED, Codes.UNREADABLE_FILE, f"{prim_ref(m.node)} {asset_ref(m.asset)}",
+                               f"cannot decode the image: {judged['error']} (material {stack.material})",
+                               material=stack.material))
+    return out
 
 
 def scan_stage(stage: Usd.Stage, triage_dir: Path | None = None, keep_triage: bool = True) -> ScanResult:

@@ -26,7 +26,7 @@ from seamless_usd.version import __version__
 __all__ = ["TriageMemo", "TRIAGE_REVISION"]
 
 #: Bump whenever the same files would be triaged differently (a rule or a figure changed).
-TRIAGE_REVISION = 3  # 3: a normal map read as its vectors, with its scale and bias
+TRIAGE_REVISION = 4  # 3: a normal map read as its vectors, with its scale and bias; 4: a file that does not decode named
 
 
 class TriageMemo:
@@ -59,6 +59,11 @@ class TriageMemo:
             except OSError:
                 return None
         return h.hexdigest()
+
+    def seen(self, kind: str, maps: Sequence[TextureMap]) -> Any:
+        """The figure for ``maps`` measured or read back by this memo so far, else None (nothing is measured)."""
+        key = self.key(kind, maps)
+        return None if key is None else self._values.get(key)
 
     def get(self, kind: str, maps: Sequence[TextureMap], compute: Callable[[], Any]) -> Any:
         """The figure ``compute()`` gives for ``maps`` (JSON-able), measured at most once per content."""

@@ -18,7 +18,7 @@ import numpy as np
 import OpenImageIO as oiio
 
 from seamless_usd.textures import ImageInfo
-from seamless_usd.errors import InputError
+from seamless_usd.errors import InputError, UndecodableImage
 from seamless_usd.findings import asset_ref
 from seamless_usd.pngchunks import png_stated_color_space
 
@@ -228,7 +228,7 @@ def read_image(
     finally:
         inp.close()
     if pixels is None or not isinstance(pixels, np.ndarray) or error:
-        raise InputError(
+        raise UndecodableImage(
             f"{asset_ref(p)}: the image data cannot be decoded ({error or 'read failed'}); "
             "the file is truncated or corrupt: re-export or re-download it"
         )
