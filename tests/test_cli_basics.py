@@ -147,3 +147,10 @@ def test_a_reader_that_goes_away_ends_the_command_quietly():
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=120) == 141, err
     assert "internal error" not in err and "Traceback" not in err, err
+
+
+def test_process_on_a_folder_with_no_stage_in_it_is_an_error(tmp_path, capsys):
+    """A batch pointed at the wrong folder: exit 2 naming it, as scan and check say; it exited 0 and said nothing."""
+    (tmp_path / "notes.txt").write_text("not a stage")
+    assert main(["process", "--preset", "tiny", str(tmp_path)]) == 2
+    assert "no USD stage or MaterialX document found in this folder" in capsys.readouterr().err

@@ -308,6 +308,9 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
     run = _new_run(_as_options(options))
     sources = []
     inputs = expand_inputs(paths)
+    for item in paths:  # as scan: a batch pointed at the wrong folder must not read as a run that went well
+        if Path(item).is_dir() and not expand_inputs([item]):
+            raise InputError(f"{asset_ref(item)}: no USD stage or MaterialX document found in this folder")
     modes = authoring_module().WriteMode
     packages = [p for p in inputs if p.suffix.lower() == ".usdz"]
     if packages and modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
