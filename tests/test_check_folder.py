@@ -190,20 +190,26 @@ def test_stacks_of_two_stages_are_told_apart_and_a_broken_link_is_named(tmp_path
     pictures.mkdir()
     _write(pictures / "ok.png", _wood())
     os.symlink(pictures / "gone.png", pictures / "link.png")
-    assert main(["check", str(pictures)]) == 2
-    assert "link.png@: no such file (a link to a file that is gone)" in " ".join(capsys.readouterr().out.split())
+    assert main(["check", str(pictures)]) == 1  # a picture of the folder that cannot be read; the folder is there
+    [gone] = [i for i in check_paths([pictures]).items if i.error]
+    assert gone.error.endswith("link.png@: no such file (a link to a file that is gone)")
+    assert main(["check", str(pictures / "link.png")]) == 2  # named: a path that is not there
 
 
 def test_links_that_loop_are_named_and_the_rest_judged(tmp_path, capsys):
-    """Two links that lead to each other are each named unreadable; the picture beside them is judged; no crash."""
+    """Two links that lead to each other are each named as a picture that cannot be read (exit 1, as any picture of
+    the folder that cannot be read); the picture beside them is judged; no crash. Named, such a link is a path that
+    is not there (exit 2)."""
     lib = tmp_path / "lib"
     lib.mkdir()
     _write(lib / "wood.png", _wood())
     (lib / "x.png").symlink_to("y.png")
     (lib / "y.png").symlink_to("x.png")
     report = check_paths([lib])
-    assert [Path(i.name).name for i in report.items] == ["wood.png"]
-    assert len(report.unreadable) == 2 and all("loop of links" in u for u in report.unreadable)
+    assert sorted(Path(i.name).name for i in report.items) == ["wood.png", "x.png", "y.png"]
+    errors = [i.error for i in report.items if i.error]
+    assert len(errors) == 2 and all("loop of links" in e for e in errors) and not report.unreadable
+    assert report.exit_code == 1
     assert main(["check", str(lib / "x.png")]) == 2 and "loop of links" in capsys.readouterr().out
 
 

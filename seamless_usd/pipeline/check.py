@@ -145,7 +145,10 @@ def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path], list[P
             else:
                 problems.append(f"{asset_ref(p)}: no USD stage, MaterialX document or picture found in this folder")
         elif p.suffix.lower() in IMAGE_SUFFIXES:
-            pictures.append(p)
+            if p.is_file():
+                pictures.append(p)
+            else:  # named and not there (a link to nothing, a loop of links): a path that does not exist, exit 2
+                problems.append(f"{asset_ref(p)}: {_missing(p)}")
         elif not p.exists() and not set(str(p)) & set("*?["):
             problems.append(f"{asset_ref(p)}: no such file or folder")
         else:
@@ -393,9 +396,10 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
     for picture in pictures:
         if picture.is_file():
             found.append(picture)
-        else:
+        else:  # found in a folder (one named and not there is said before): a picture that cannot be read, exit 1
             done += 1
-            report.unreadable.append(f"{asset_ref(picture)}: {_missing(picture)}")
+            report.items.append(CheckItem(str(picture), str(picture), [str(picture)],
+                                          error=f"{asset_ref(picture)}: {_missing(picture)}"))
     groups = _picture_groups(found)  # a stack's tiles are judged together
     for (files, _), items in zip(groups, _judged_pictures(groups, jobs, frozenset(map(_real, found)))):
         emit(items[0].name)
