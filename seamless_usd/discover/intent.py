@@ -139,7 +139,7 @@ def _geometry_decision(stack: TextureStack, factor, stats, bound: int, explored:
     worst = max(atlas, key=lambda s: s.islands)
     return IntentDecision(
         Intent.UV_ATLAS,
-        f"UVs {worst.lo[0]:.2f}-{worst.hi[0]:.2f} x {worst.lo[1]:.2f}-{worst.hi[1]:.2f}, {worst.islands} islands "
+        f"UVs {worst.lo[0]:.2f}-{worst.hi[0]:.2f} x {worst.lo[1]:.2f}-{worst.hi[1]:.2f}, {worst.islands} {'island' if worst.islands == 1 else 'islands'} "
         f"on <{worst.mesh}>{_in(worst)}" + (f" (+{len(atlas) - 1} more mesh use(s))" if len(atlas) > 1 else "")
         + ": an unwrapped UV atlas",
     )

@@ -105,8 +105,9 @@ def read_alone(m: FileMap) -> tuple[np.ndarray, tuple[int, int]]:
             picks.append(k)
     a = pixels[..., picks or colour[:1] or [0]]
     if a.dtype.kind == "f" and not np.isfinite(a).all():
-        raise InputError(f"{asset_ref(m.path)}: {int((~np.isfinite(a)).sum())} texels are NaN or infinite; it "
-                         "cannot be judged until they are replaced (re-export the image)")
+        bad = int((~np.isfinite(a)).sum())
+        raise InputError(f"{asset_ref(m.path)}: {bad} {'texel is' if bad == 1 else 'texels are'} NaN or infinite; it "
+                         f"cannot be judged until {'it is' if bad == 1 else 'they are'} replaced (re-export the image)")
     reduced = reduce_bins(a, _reading_shape(*a.shape[:2]))  # summed in float64
     top = float(np.iinfo(a.dtype).max) if a.dtype.kind == "u" else 1.0  # file values: an integer code over its largest
     reduced = reduced / top
