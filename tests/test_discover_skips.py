@@ -179,3 +179,21 @@ def test_an_animated_file_input_is_named_and_its_material_left_alone(tmp_path, c
         assert f.code == "animated-file" and "2 time sample(s)" in f.message
         assert main(["process", str(path), "--dry-run", "--json"]) == 0
         assert json.loads(capsys.readouterr().out)["layers_written"] == []
+
+
+def test_a_material_whose_only_texture_is_a_udim_set_has_a_left_alone_row(tmp_path, capsys):
+    """It has no stack, so it was only a finding: no row in the table or the JSON and not counted left alone, where
+    a material whose texture is missing gets a failed row. Now a left-alone row says why."""
+    import json
+
+    from seamless_usd_cli.main import main
+
+    (tmp_path / "tex").mkdir()
+    for tile in (1001, 1002):
+        write_image(tmp_path / "tex" / f"body.{tile}.png")
+    path = texture_scene(tmp_path / "s.usda", "tex/body.<UDIM>.png")
+    code = main(["process", str(path), "--dry-run", "--json"])
+    report = json.loads(capsys.readouterr().out)
+    [row] = report["stacks"]
+    assert code == 0 and row["status"] == "left-alone" and report["counts"]["left-alone"] == 1
+    assert "body.<UDIM>.png" in row["message"] and "1001, 1002" in row["message"]

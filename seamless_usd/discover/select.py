@@ -125,6 +125,20 @@ def unread_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[str
             if m not in have and (not patterns or _matches(m, patterns))}
 
 
+def set_aside_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[str, list[Finding]]:
+    """The materials (matching ``patterns``, all when empty) with no stack because every texture of theirs is one
+    this tool does not make tileable (a UDIM set, a picture too small, an animated file), none missing or
+    unreadable: left alone, with why (:func:`set_aside_stacks` names those with a stack)."""
+    have = {s.material for s in scan.stacks}
+    unread = unread_findings(scan)
+    out: dict[str, list[Finding]] = {}
+    for f in scan.findings:
+        if (f.severity is Severity.SKIPPED and f.code in BLOCKING_SKIPS - UNREAD_SKIPS and f.material
+                and f.material not in have and f.material not in unread and (not patterns or _matches(f.material, patterns))):
+            out.setdefault(f.material, []).append(f)
+    return out
+
+
 def unread_files(skipped: Sequence[Finding]) -> str:
     """The files of :func:`unread_findings`' findings, each with why, for a message: ``@a.png@ (missing-file), ...``."""
     return ", ".join(f"{f.where.split(' ')[-1]} ({f.code})" for f in skipped)

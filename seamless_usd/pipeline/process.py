@@ -30,7 +30,7 @@ from seamless_usd.pipeline.outputlayer import MTLX_SUFFIXES, check_output_layer
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.pipeline.outcome import StackOutcome
 from seamless_usd.pipeline.rows import (Run, authoring_module, check_written, error_message, record_authoring,
-                                        stack_rows, unread_rows)
+                                        set_aside_rows, stack_rows, unread_rows)
 from seamless_usd.pipeline.stackjob import StackJob
 from seamless_usd.report.model import Report
 
@@ -282,6 +282,7 @@ def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
             run.blocked.update(src.instanced)
             run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
             unread_rows(run, src.scan, str(src.path))
+            set_aside_rows(run, src.scan, str(src.path))
             run.left_alone.update(_left_alone(src.stacks, str(src.path), run.options.force, run.options.force_materials))
             src.stacks, found = from_recorded_sources(src.stacks, str(src.path), run.left_alone)
             run.report.findings += found
@@ -413,6 +414,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     run.blocked.update(instanced_stacks(stage, stacks, label))
     run.set_aside.update(set_aside_stacks(scan, stacks, label))
     unread_rows(run, scan, label)
+    set_aside_rows(run, scan, label)
     run.left_alone.update(_left_alone(stacks, label, run.options.force, run.options.force_materials))
     stacks, found = from_recorded_sources(stacks, label, run.left_alone)
     run.report.findings += found

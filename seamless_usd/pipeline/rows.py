@@ -9,7 +9,7 @@ import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from seamless_usd.discover.select import unread_files, unread_materials
+from seamless_usd.discover.select import set_aside_materials, unread_files, unread_materials
 from seamless_usd.errors import SeamlessUsdError
 from seamless_usd.authoring.types import node_key
 from seamless_usd.findings import Finding, Severity, prim_ref
@@ -21,7 +21,7 @@ from seamless_usd.pipeline.stackjob import JobSettings, StackJob, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
 
-__all__ = ["Run", "authoring_module", "stack_rows", "unread_rows", "check_written", "record_authoring", "error_message"]
+__all__ = ["Run", "authoring_module", "stack_rows", "unread_rows", "set_aside_rows", "check_written", "record_authoring", "error_message"]
 
 TILING, ALREADY_TILEABLE = "tiling", "already-tileable"  # discover.intent.Intent values
 
@@ -210,6 +210,17 @@ def unread_rows(run: Run, scan: ScanResult, source_label: str) -> None:
                                              status=StackStatus.FAILED, message=message))
         run.report.findings.append(Finding(Severity.ERROR, "stack-unread", prim_ref(material.strip("<>")), message,
                                            material))
+
+
+def set_aside_rows(run: Run, scan: ScanResult, source_label: str) -> None:
+    """A left-alone row for each selected material every texture of which this tool does not make tileable (a UDIM
+    set, a picture too small): it has no stack, and is not left out of the table or the counts."""
+    for material, skipped in set_aside_materials(scan, run.options.materials).items():
+        slug = material.strip("<>").strip("/").replace("/", "_") or "material"
+        run.report.stacks.append(StackReport(
+            id=f"{slug}-set-aside", material=material, source=source_label, status=StackStatus.LEFT_ALONE,
+            message="left alone: " + "; ".join(f"{f.where.split(' ')[-1]}: {f.message.split(' (material ')[0]}"
+                                               for f in skipped)))
 
 
 def check_written(run: Run, handed, edit, failure: str | None = None) -> None:
