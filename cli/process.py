@@ -39,7 +39,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--materials", action="append", default=[], metavar="GLOB",
                    help="only materials whose path or name matches (repeatable)")
     p.add_argument("--dry-run", action="store_true",
-                   help="show what would be done, write nothing (with --in-place: the in-place edits)")
+                   help="show what would be done, write no tile, layer or document (the --report asked for is "
+                        "written; with --in-place: the in-place edits are shown)")
     p.add_argument("--in-place", action="store_true", help="edit the source layers (keeps .bak copies)")
     p.add_argument("-o", "--output-layer", type=Path, help="override layer (or, for a .mtlx input, new MaterialX document) to write "
                    "(default <scene>.seamless.usda, <doc>.seamless.mtlx)")
