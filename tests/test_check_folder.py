@@ -282,3 +282,28 @@ def test_a_linear_openexrs_thumbnail_shows_as_its_8_bit_twin_does():
     png, exr = check_paths([SAMPLES / "brick_albedo.png", SAMPLES / "brick_albedo_linear.exr"]).items
     a, b = shown(png), shown(exr)
     assert a.shape == b.shape and abs(a.mean() - b.mean()) < 3.0 and np.abs(a - b).mean() < 6.0, (a.mean(), b.mean())
+
+
+def test_an_hdr_and_a_faint_picture_are_shown_readable_on_the_sheet_and_say_so(tmp_path):
+    """A linear OpenEXR whose values reach 50 was a white square, a 16-bit map holding 1.5 % of its range a flat one;
+    each is now shown exposed or stretched, and its card says how."""
+    import base64
+    import io
+
+    import OpenImageIO as oiio
+    from PIL import Image
+
+    linear = np.asarray(oiio.ImageBuf(str(SAMPLES / "brick_albedo_linear.exr")).get_pixels(oiio.FLOAT))[..., :3]
+    hdr = tmp_path / "hdr.exr"
+    out = oiio.ImageBuf(oiio.ImageSpec(linear.shape[1], linear.shape[0], 3, oiio.HALF))
+    out.set_pixels(oiio.ROI(0, linear.shape[1], 0, linear.shape[0], 0, 1, 0, 3), np.ascontiguousarray(linear * 50))
+    assert out.write(str(hdr))
+    grey = np.asarray(Image.open(SAMPLES / "brick_albedo.png").convert("L"), np.float64) / 255
+    faint = tmp_path / "faint.png"
+    Image.fromarray((1000 + grey * 1000).astype(np.uint16)).save(faint)  # 1.5 % of the 16-bit range
+    for item in check_paths([hdr, faint]).items:
+        shown = np.asarray(Image.open(io.BytesIO(base64.b64decode(item.thumbnail[0].split(",", 1)[1]))).convert("L"),
+                           np.float64)
+        assert shown.std() > 20 and 20 < shown.mean() < 235, (item.name, shown.mean(), shown.std())
+        word = "exposed" if item.name.endswith(".exr") else "stretched"
+        assert f"the picture is shown {word}" in item.card().words, item.card().words

@@ -45,7 +45,7 @@ class CheckItem:
     note: str = ""  # what to know of how it was judged: a recorded source gone or changed (judged against itself
     #   instead), tiles of its stack not beside it, a normal map that does not read as one
     seconds: float = 0.0
-    thumbnail: tuple = field(default=(), repr=False)  # (data URI, (w, h), texel scale) of the first map, 2 x 2
+    thumbnail: tuple = field(default=(), repr=False)  # (data URI, (w, h), texel scale, how shown) of the first map, 2 x 2
 
     def words(self) -> str:
         """Where its seams run and what is outside its tolerance, or why it could not be judged."""
@@ -68,9 +68,10 @@ class CheckItem:
         title = self.name if self.source == self.name else f"{self.name} in {self.source}"  # a stack: its stage too
         if not self.thumbnail:
             return SheetCard(title, status, words)
-        uri, size, scale = self.thumbnail
+        uri, size, scale, shown = self.thumbnail
         seams = [{**s, "position": s["position"] * scale, "start": s["start"] * scale, "end": s["end"] * scale}
                  for s in self.verdict.get("seams", [])]
+        words = f"{words} (the picture is {shown})" if shown else words  # an HDR or a faint picture
         return SheetCard(title, status, words, uri, size, seams)
 
     @property
@@ -172,8 +173,8 @@ def _alone(item: CheckItem, files: list) -> None:
     # a float file's colour is linear light: shown through the sRGB transfer, as a viewer shows it
     linear = headers[0] is not None and headers[0].dtype in ("half", "float") and not files[0].is_normal \
         and len(files[0].channels) >= 3
-    uri, size, scale = thumbnail(reading, linear=linear)
-    item.thumbnail = (uri, size, scale * reading.shape[1] / verdict.size[1])  # thumbnail px per full-size texel
+    uri, size, scale, shown = thumbnail(reading, linear=linear)
+    item.thumbnail = (uri, size, scale * reading.shape[1] / verdict.size[1], shown)  # px per full-size texel
 
 
 def _header(m):

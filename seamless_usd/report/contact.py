@@ -17,7 +17,7 @@ from seamless_usd.metrics import preview_uint8
 from seamless_usd.report.htmlparts import esc, page, seams_svg
 from seamless_usd.report.webimage import image_data_uri
 
-__all__ = ["THUMB", "SheetCard", "thumbnail", "render_contact_sheet", "write_contact_sheet"]
+__all__ = ["THUMB", "FAINT", "SheetCard", "thumbnail", "displayed", "render_contact_sheet", "write_contact_sheet"]
 
 #: Side (px) of one repeat of a card's picture.
 THUMB = 96
@@ -46,22 +46,47 @@ class SheetCard:
     seams: list[dict] = field(default_factory=list)  # Seam.as_dict() in the thumbnail's pixels of one repeat
 
 
-def thumbnail(pixels: np.ndarray, side: int = THUMB, linear: bool = False) -> tuple[str, tuple[int, int], float]:
+def thumbnail(pixels: np.ndarray, side: int = THUMB, linear: bool = False
+              ) -> tuple[str, tuple[int, int], float, str]:
     """A picture ``(H, W, C)`` in ``[-1, 1]`` as a 2 x 2 repeat of at most ``side`` px a repeat (data URI), the
-    repeat's ``(w, h)`` and the scale from the picture's texels to the thumbnail's pixels. ``linear``: its values
-    are linear light (a float OpenEXR's colour), shown through the sRGB transfer as a viewer shows them."""
+    repeat's ``(w, h)``, the scale from the picture's texels to the thumbnail's pixels and what was done to show it
+    (:func:`displayed`). ``linear``: its values are linear light (a float OpenEXR's colour), shown through the sRGB
+    transfer as a viewer shows them."""
     a = np.asarray(pixels)
     scale = min(1.0, side / max(a.shape[:2]))
     h, w = max(1, round(a.shape[0] * scale)), max(1, round(a.shape[1] * scale))
     ys = (np.arange(h) * a.shape[0] / h).astype(int)
     xs = (np.arange(w) * a.shape[1] / w).astype(int)
-    small = a[ys][:, xs]
+    small = np.asarray(a[ys][:, xs], dtype=np.float64)
+    small, said = displayed(small, linear)
+    rgb = preview_uint8(small)
+    return image_data_uri(np.tile(rgb, (2, 2, 1))), (w, h), scale, said
+
+
+#: A picture whose values span less than this share of the range is shown stretched to its own range.
+FAINT = 0.04
+
+
+def displayed(small: np.ndarray, linear: bool) -> tuple[np.ndarray, str]:
+    """``small`` (network domain) as the thumbnail shows it, and what was done to show it ('' when nothing): linear
+    light brought down so its 99th percentile is white when it goes above (an HDR picture was a white square), then
+    through the sRGB transfer; a picture whose values span under :data:`FAINT` of the range (a 16-bit height map
+    holding a few per cent) stretched to its own range (it was a flat square)."""
+    said = ""
+    v = (small + 1.0) / 2.0  # file values
     if linear:
         from seamless_usd.imaging.transfer import eotf_inverse_srgb
 
-        small = eotf_inverse_srgb(np.clip((small + 1.0) / 2.0, 0.0, 1.0)) * 2.0 - 1.0
-    rgb = preview_uint8(small)
-    return image_data_uri(np.tile(rgb, (2, 2, 1))), (w, h), scale
+        top = float(np.percentile(v, 99))
+        if top > 1.0:
+            v = v / top
+            said = f"shown exposed x{1 / top:.3g} (its values reach {top:.3g})"
+        v = eotf_inverse_srgb(np.clip(v, 0.0, 1.0))
+    lo, hi = (float(x) for x in np.percentile(v, (0.5, 99.5)))
+    if 0.0 < hi - lo < FAINT:
+        v = (v - lo) / (hi - lo)
+        said = f"shown stretched x{1 / (hi - lo):.3g} (its values span {100 * (hi - lo):.2g} % of the range)"
+    return np.clip(v, 0.0, 1.0) * 2.0 - 1.0, said
 
 
 def _segments(card: SheetCard) -> list[tuple[float, float, float, float, str]]:
