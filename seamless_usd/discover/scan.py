@@ -16,7 +16,7 @@ from seamless_usd.discover.triagememo import TriageMemo
 from seamless_usd.discover.maps import HeaderCache, TextureUse, build_maps
 from seamless_usd.discover.stacks import build_stacks
 from seamless_usd.discover.tokens import MTLX_SUFFIX, Codes
-from seamless_usd.textures import ExploredSelection, ScanResult, TextureStack, VariantExploration
+from seamless_usd.textures import ExploredSelection, ScanResult, TextureStack, VariantExploration, describe_selection
 from seamless_usd.discover.variants import VariantSpace
 from seamless_usd.errors import InputError
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
@@ -48,10 +48,13 @@ def open_stage(path: str | Path) -> Usd.Stage:
 @contextlib.contextmanager
 def quiet_mtlx():
     """usd-core cannot compose .mtlx references; discovery reads them itself, so USD's warnings
-    about them (at each composition) are noise. Every other diagnostic is passed on."""
+    about them (at each composition) are noise. So are the composition errors it prints as it composes (a sublayer
+    or reference that cannot be opened): the scan reports each as a ``composition-error`` finding, under every
+    variant selection explored. Every other diagnostic is passed on."""
     with Tf.DiagnosticTrap() as trap:
         yield
-        trap.EraseMatching(lambda d: MTLX_SUFFIX in str(d.commentary).lower())
+        trap.EraseMatching(lambda d: MTLX_SUFFIX in str(d.commentary).lower()
+                           or str(d.sourceFunction).endswith("UsdStage::_ReportErrors"))
 
 
 def _tf_message(text: str) -> str:
@@ -121,8 +124,7 @@ class _Scan:
                 if (err.where, err.message) not in seen_errors:
                     seen_errors.add((err.where, err.message))
                     self.result.findings.append(err)
-            if not selection:
-                self._composition_errors(composed, source)
+            self._composition_errors(composed, source, selection, seen_errors)
             for ref in refs:
                 key = (ref.prim, ref.document, ref.target)
                 if key not in seen_refs:
@@ -148,14 +150,19 @@ class _Scan:
             first = use
         self.geometry.seen(first, index)
 
-    def _composition_errors(self, stage: Usd.Stage, source: str) -> None:
+    def _composition_errors(self, stage: Usd.Stage, source: str, selection: tuple, seen: set) -> None:
+        """The stage's composition errors under ``selection`` as findings, each once (``seen``)."""
         for err in stage.GetCompositionErrors():
             text = str(err.ToString()) if hasattr(err, "ToString") else str(err)
             if MTLX_SUFFIX in text.lower():
                 continue  # .mtlx references are read below
-            self.result.findings.append(
-                Finding(Severity.WARNING, Codes.COMPOSITION_ERROR, asset_ref(source), text.splitlines()[0])
-            )
+            line = text.splitlines()[0]
+            if ("composition", line) in seen:
+                continue
+            seen.add(("composition", line))
+            where = f" (in {describe_selection(selection)})" if selection else ""
+            self.result.findings.append(Finding(Severity.WARNING, Codes.COMPOSITION_ERROR, asset_ref(source),
+                                                line + where))
 
     def _add_reference(self, ref) -> tuple[list[str], list[TextureUse]]:
         """Materials and uses of a ``.mtlx`` document referenced from a prim."""
