@@ -650,5 +650,6 @@ def test_worker_processes_stop_at_once_when_the_run_stops(tmp_path):
         signal.signal(signal.SIGINT, previous)
     assert stopped < 25, stopped
     workers = set(multiprocessing.active_children()) - before
-    assert not any(w.is_alive() for w in workers)
+    alive = [(w.name, w.pid) for w in workers if w.is_alive()]
+    assert not alive, alive
     assert not list((tmp_path / "out").glob("*.tile.*"))  # stopped before any tile: none written after

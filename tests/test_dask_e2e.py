@@ -227,7 +227,8 @@ def _kill_a_worker_mid_stack(deployment: Deployment, cache: Path, timeout: float
 def test_ctrl_c_to_a_run_on_its_own_local_cluster_stops_it_quietly(tmp_path):
     """Ctrl-C from a terminal reaches every process of its group: the client and its local cluster's workers. The
     workers leave it to the client, which reports the run as interrupted and closes the cluster; no worker prints a
-    traceback and Dask logs nothing (before: a traceback from every worker and warnings from every nanny)."""
+    traceback and Dask logs nothing (before: a traceback from every worker and warnings from every nanny), and the
+    run ends at once (each nanny waited 4 s for its busy worker)."""
     from fswatch import wait_until
 
     lib = _library(tmp_path / "lib")
@@ -240,7 +241,9 @@ def test_ctrl_c_to_a_run_on_its_own_local_cluster_stops_it_quietly(tmp_path):
                           stop=lambda: proc.poll() is not None)
     assert training and proc.poll() is None, "the run ended before its workers trained"
     os.killpg(proc.pid, signal.SIGINT)
+    stopped = time.monotonic()
     out, err = proc.communicate(timeout=120)
+    assert time.monotonic() - stopped < 3.0, "the run ends at once: its workers are ended, not waited for"
     text = err.decode()
     assert proc.returncode == 130, text[-3000:]
     assert "Traceback" not in text and "distributed." not in text, text[-3000:]
