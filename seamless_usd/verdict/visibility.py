@@ -28,29 +28,20 @@ VISIBLE = 2 * 1.5 / 255
 WIDTHS = (1, 2, 4, 8, 16)
 
 
-def _band_steps(a: np.ndarray, width: int) -> np.ndarray:
-    """(n,) for every horizontal line ``p`` of ``a`` (n, R, C) on a torus: the mean over the run of the norm of
-    (mean of rows p .. p + width - 1) less (mean of rows p - width .. p - 1)."""
-    n = a.shape[0]
-    c = np.concatenate([np.zeros((1,) + a.shape[1:]), np.cumsum(np.concatenate([a, a, a]), axis=0)])
-    p = np.arange(n) + n
-    after = (c[p + width] - c[p]) / width
-    before = (c[p] - c[p - width]) / width
-    return np.sqrt(((after - before) ** 2).sum(axis=-1)).mean(axis=1)
-
-
 def step_across(m: np.ndarray, axis: str, line: int, start: int, end: int) -> float:
     """The step across ``line`` of map ``m`` (H, W, C; ``axis`` ``"x"``: a vertical line at column ``line`` over
-    rows ``start`` to ``end``, on a torus), at the band width where it is largest."""
+    rows ``start`` to ``end``, on a torus), at the band width where it is largest: the mean over the run of the
+    norm of (mean of the ``width`` lines after it) less (mean of the ``width`` lines before it)."""
     a = m if axis == "y" else m.transpose(1, 0, 2)
     n, length = a.shape[:2]
     run = np.arange(start, end + 1) % length
-    a = np.asarray(a[:, run], dtype=np.float64)
     best = -np.inf
     for width in WIDTHS:
         if width > n // 4:
             break
-        best = max(best, float(_band_steps(a, width)[line % n]))
+        after = a[(line + np.arange(width)) % n][:, run].mean(axis=0)
+        before = a[(line - width + np.arange(width)) % n][:, run].mean(axis=0)
+        best = max(best, float(np.sqrt(((after - before) ** 2).sum(axis=-1)).mean()))
     return best
 
 
