@@ -16,6 +16,24 @@ from seamless_usd_cli.main import main
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
 
+
+def _quad(name: str, x0: int, uv: tuple[float, float], material: str) -> str:
+    """A quad at ``x0`` whose UVs run from ``uv[0]`` to ``uv[1]`` both ways, bound to ``material``."""
+    lo, hi = uv
+    return f"""    def Mesh "{name}" (
+        prepend apiSchemas = ["MaterialBindingAPI"]
+    )
+    {{
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [({x0}, -1, 0), ({x0 + 2}, -1, 0), ({x0 + 2}, 1, 0), ({x0}, 1, 0)]
+        texCoord2f[] primvars:st = [({lo}, {lo}), ({hi}, {lo}), ({hi}, {hi}), ({lo}, {hi})] (
+            interpolation = "vertex"
+        )
+        rel material:binding = <{material}>
+    }}
+"""
+
 SHARED = """#usda 1.0
 (
     defaultPrim = "World"
@@ -66,32 +84,9 @@ def Xform "World"
             }
         }
     }
-    def Mesh "A" (
-        prepend apiSchemas = ["MaterialBindingAPI"]
-    )
-    {
-        int[] faceVertexCounts = [4]
-        int[] faceVertexIndices = [0, 1, 2, 3]
-        point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
-        texCoord2f[] primvars:st = [(0, 0), (4, 0), (4, 4), (0, 4)] (
-            interpolation = "vertex"
-        )
-        rel material:binding = </World/Looks/M_tile>
-    }
-    def Mesh "B" (
-        prepend apiSchemas = ["MaterialBindingAPI"]
-    )
-    {
-        int[] faceVertexCounts = [4]
-        int[] faceVertexIndices = [0, 1, 2, 3]
-        point3f[] points = [(2, -1, 0), (4, -1, 0), (4, 1, 0), (2, 1, 0)]
-        texCoord2f[] primvars:st = [(0.1, 0.1), (0.45, 0.1), (0.45, 0.45), (0.1, 0.45)] (
-            interpolation = "vertex"
-        )
-        rel material:binding = </World/Looks/M_other>
-    }
+@MESHES@
 }
-"""
+""".replace("@MESHES@\n", _quad("A", -1, (0, 4), "/World/Looks/M_tile") + _quad("B", 2, (0.1, 0.45), "/World/Looks/M_other"))
 
 WRAP_VARIANTS = """#usda 1.0
 (
@@ -132,19 +127,7 @@ def Xform "World" (
             }
         }
     }
-
-    def Mesh "G" (
-        prepend apiSchemas = ["MaterialBindingAPI"]
-    )
-    {
-        int[] faceVertexCounts = [4]
-        int[] faceVertexIndices = [0, 1, 2, 3]
-        point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
-        texCoord2f[] primvars:st = [(0, 0), (4, 0), (4, 4), (0, 4)] (
-            interpolation = "vertex"
-        )
-        rel material:binding = </World/Looks/M_wrapvar>
-    }
+@MESHES@
     variantSet "wrapMode" = {
         "rep" {
             over "Looks"
@@ -180,7 +163,7 @@ def Xform "World" (
         }
     }
 }
-"""
+""".replace("@MESHES@\n", _quad("G", -1, (0, 4), "/World/Looks/M_wrapvar"))
 
 
 def _scene(tmp_path: Path, text: str) -> Path:
