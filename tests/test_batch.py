@@ -653,3 +653,18 @@ def test_worker_processes_stop_at_once_when_the_run_stops(tmp_path):
     alive = [(w.name, w.pid) for w in workers if w.is_alive()]
     assert not alive, alive
     assert not list((tmp_path / "out").glob("*.tile.*"))  # stopped before any tile: none written after
+
+
+def test_materials_leaves_out_the_findings_about_materials_it_does_not_select(tmp_path, capsys):
+    """``--materials Brick``: a missing texture of another material is not this run's to report (it was listed,
+    with its prim, among the run's findings); a finding about the run itself still is."""
+    from test_reliability_inputs import write_scene
+
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    layer = write_scene(tmp_path / "looks" / "two.usda",
+                        {"Brick": "../textures/brick_albedo.png", "Other": "../textures/not_there.png"})
+    _, everything = _run(str(layer), "--dry-run", capsys=capsys)
+    assert any("not_there.png" in f["where"] for f in everything["findings"])
+    _, brick = _run(str(layer), "--dry-run", "--materials", "Brick", capsys=capsys)
+    assert not any("not_there.png" in f["where"] + f["message"] for f in brick["findings"]), brick["findings"]
+    assert [s["material"] for s in brick["stacks"]] == ["</Root/Looks/Brick>"]

@@ -124,7 +124,7 @@ def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = 
 
 def _author_source(run: Run, src: _Source) -> None:
     authoring = authoring_module()
-    run.report.findings += src.scan.findings
+    run.report.findings += _selected_findings(run, src.scan)
     run.report.variants += [v.to_dict() for v in src.scan.variants]
     results, handed = stack_rows(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
     if not results and run.options.mode != authoring.WriteMode.DRY_RUN:
@@ -264,6 +264,14 @@ def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
                 "processed at all; add them to --materials"))
 
 
+def _selected_findings(run: Run, scan: ScanResult) -> list[Finding]:
+    """The scan's findings, less those about a material that ``--materials`` leaves out (a missing texture of a
+    material not asked for is not this run's to report)."""
+    if not run.options.materials:
+        return list(scan.findings)
+    return [f for f in scan.findings if not f.material or matches_any(f.material, run.options.materials)]
+
+
 def _block_shared_nodes(run: Run, scan: ScanResult, stacks: list[TextureStack], label: str) -> None:
     """Stacks whose texture nodes another use reads that is not made tileable fail (:func:`shared_node_stacks`)."""
     by_id = {s.id: s for s in scan.stacks}
@@ -358,7 +366,7 @@ def _interrupted(run: Run, sources: list[_Source], started: float) -> Report:
     run's is."""
     run.report.interrupted = True
     for src in sources:
-        run.report.findings += src.scan.findings
+        run.report.findings += _selected_findings(run, src.scan)
         stack_rows(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
     return _finish(run, started)
 
@@ -401,7 +409,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     label = root.identifier
     run.report.sources.append(label)
     scan = scan_stage(stage, *_triage(run.options))
-    run.report.findings += scan.findings
+    run.report.findings += _selected_findings(run, scan)
     run.report.variants += [v.to_dict() for v in scan.variants]
     stacks = select_stacks(scan, run.options.materials)
     # The open stage is authored as it is composed: stacks of other variant selections are named, not processed
