@@ -70,7 +70,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     interrupted: list[int] = []
     starting = [True]
 
-    def on_interrupt(signum, frame):  # noted: an interrupt some code turns into another error, or swallows, is still one
+    def on_interrupt(signum, frame):  # noted: an interrupt some code turns into another error or swallows is one
         interrupted.append(signum)
         if not starting[0]:
             raise KeyboardInterrupt

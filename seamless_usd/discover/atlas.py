@@ -122,6 +122,6 @@ def atlas_evidence(stack: TextureStack, cache: dict) -> str | None:
     if not found:
         return None
     figures, m = max(found, key=lambda f: f[0].islands)
-    return (f"pixels of @{m.asset}@: {figures.islands} {'island' if figures.islands == 1 else 'islands'} on a flat background covering "
-            f"{figures.background:.0%} (an atlas has at least {ISLANDS_MIN} on {BACKGROUND_MIN:.0%}; photos "
+    return (f"pixels of @{m.asset}@: {figures.islands} island{'' if figures.islands == 1 else 's'} on a flat "
+            f"background covering {figures.background:.0%} (an atlas has at least {ISLANDS_MIN} on {BACKGROUND_MIN:.0%}; photos "
             f"and tiling textures measure at most 5 islands)")

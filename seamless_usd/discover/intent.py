@@ -100,7 +100,8 @@ def judged_alone(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> di
     except (InputError, ValueError, RuntimeError, OSError) as exc:
         # a file whose header reads but whose pixels do not decode (truncated, corrupt): named, as a header that
         # does not read is (its material's stack cannot be made)
-        broken = [m.asset for m in stack.maps if isinstance(exc, UndecodableImage) and asset_ref(m.resolved) in str(exc)]
+        broken = [m.asset for m in stack.maps
+                  if isinstance(exc, UndecodableImage) and asset_ref(m.resolved) in str(exc)]
         return {"error": str(exc), **({"unreadable": broken[0]} if broken else {})}
     return {"verdict": verdict.as_dict(), "doubts": normal_doubts(files)}
 
@@ -139,7 +140,8 @@ def _geometry_decision(stack: TextureStack, factor, stats, bound: int, explored:
     worst = max(atlas, key=lambda s: s.islands)
     return IntentDecision(
         Intent.UV_ATLAS,
-        f"UVs {worst.lo[0]:.2f}-{worst.hi[0]:.2f} x {worst.lo[1]:.2f}-{worst.hi[1]:.2f}, {worst.islands} {'island' if worst.islands == 1 else 'islands'} "
+        f"UVs {worst.lo[0]:.2f}-{worst.hi[0]:.2f} x {worst.lo[1]:.2f}-{worst.hi[1]:.2f}, "
+        f"{worst.islands} island{'' if worst.islands == 1 else 's'} "
         f"on <{worst.mesh}>{_in(worst)}" + (f" (+{len(atlas) - 1} more mesh use(s))" if len(atlas) > 1 else "")
         + ": an unwrapped UV atlas",
     )

@@ -134,7 +134,8 @@ def set_aside_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[
     out: dict[str, list[Finding]] = {}
     for f in scan.findings:
         if (f.severity is Severity.SKIPPED and f.code in BLOCKING_SKIPS - UNREAD_SKIPS and f.material
-                and f.material not in have and f.material not in unread and (not patterns or _matches(f.material, patterns))):
+                and f.material not in have and f.material not in unread
+                and (not patterns or _matches(f.material, patterns))):
             out.setdefault(f.material, []).append(f)
     return out
 

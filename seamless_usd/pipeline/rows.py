@@ -21,7 +21,8 @@ from seamless_usd.pipeline.stackjob import JobSettings, StackJob, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
 
-__all__ = ["Run", "authoring_module", "stack_rows", "unread_rows", "set_aside_rows", "check_written", "record_authoring", "error_message"]
+__all__ = ["Run", "authoring_module", "stack_rows", "unread_rows", "set_aside_rows", "check_written", "record_authoring",
+           "error_message"]
 
 TILING, ALREADY_TILEABLE = "tiling", "already-tileable"  # discover.intent.Intent values
 
