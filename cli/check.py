@@ -51,14 +51,16 @@ def render(report: CheckReport, console: Console) -> None:
         state = "[green]passed[/]" if item.passed else "[red]error[/]" if item.error else "[yellow]not passed[/]"
         name = f"{item.name} in {item.source}" if len(scenes) > 1 and item.source != item.name else item.name
         table.add_row(escape(name), state, item.verdict.get("reference", "-"), escape(item.words()))
-    console.print(table)
+    if report.items:  # nothing judged (a path that is not there): the lines below say why, without an empty table
+        console.print(table)
     for why in report.unreadable:
         console.print(f"[red]unreadable[/] {escape(why)}", soft_wrap=True)
     if report.not_judged:
         shown = ", ".join(f"@{p}@" for p in report.not_judged[:3]) + (", ..." if len(report.not_judged) > 3 else "")
         console.print(f"not judged: {len(report.not_judged)} pictures in folders of stages or documents that none of "
                       f"them uses ({escape(shown)}); name them, or a folder of pictures, to judge them", soft_wrap=True)
-    console.print(f"{sum(i.passed for i in report.items)} of {len(report.items)} passed")
+    if report.items or not report.unreadable:
+        console.print(f"{sum(i.passed for i in report.items)} of {len(report.items)} passed")
 
 
 def _checked(args: argparse.Namespace, err: Console) -> CheckReport:
