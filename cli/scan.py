@@ -18,8 +18,6 @@ from rich.markup import escape
 from rich.table import Table
 
 from seamless_usd.discover import ScanResult, TextureMap, TextureStack, UVChain, scan_paths
-from seamless_usd.errors import InputError
-from seamless_usd.findings import asset_ref
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.textures import describe_selection
 
@@ -33,15 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _inputs(paths: list[str]) -> list[Path]:
-    """Stages and documents named, found in folders or matched by globs (as ``process`` takes them); an
-    :class:`InputError` for a folder that holds none."""
-    out: list[Path] = []
-    for item in paths:
-        found = expand_inputs([item])
-        if not found and Path(item).is_dir():
-            raise InputError(f"{asset_ref(item)}: no USD stage or MaterialX document found in this folder")
-        out += found
-    return out
+    """Stages and documents named, found in folders or matched by globs, as ``process`` takes them (an
+    ``InputError`` for a folder that holds none)."""
+    return expand_inputs(paths, require_scenes=True)
 
 
 def run(args: argparse.Namespace) -> int:

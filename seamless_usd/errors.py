@@ -16,7 +16,11 @@ class InputError(SeamlessUsdError):
 
 
 class UndecodableImage(InputError):
-    """An image whose header reads but whose pixels do not decode: truncated or corrupt."""
+    """An image whose header reads but whose pixels do not decode: truncated or corrupt (``path``: the file)."""
+
+    def __init__(self, message: str, path):
+        super().__init__(message)
+        self.path = path
 
 
 class UsageError(SeamlessUsdError):

@@ -24,6 +24,7 @@ The verdict's figures on labelled textures it was not tuned on are in ``docs/ver
 """
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from enum import Enum
@@ -100,8 +101,8 @@ def judged_alone(stack: TextureStack, thresholds: Thresholds = THRESHOLDS) -> di
     except (InputError, ValueError, RuntimeError, OSError) as exc:
         # a file whose header reads but whose pixels do not decode (truncated, corrupt): named, as a header that
         # does not read is (its material's stack cannot be made)
-        broken = [m.asset for m in stack.maps
-                  if isinstance(exc, UndecodableImage) and asset_ref(m.resolved) in str(exc)]
+        broken = [m.asset for m in stack.maps if isinstance(exc, UndecodableImage)
+                  and os.path.realpath(m.resolved) == os.path.realpath(exc.path)]
         return {"error": str(exc), **({"unreadable": broken[0]} if broken else {})}
     return {"verdict": verdict.as_dict(), "doubts": normal_doubts(files)}
 

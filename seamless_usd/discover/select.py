@@ -187,8 +187,9 @@ def from_recorded_sources(stacks: Sequence[TextureStack], source: str, left_alon
 def shared_node_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str,
                        kept: dict[tuple[str, str], str]) -> dict[tuple[str, str], str]:
     """Stacks that would change another use of their texture nodes: a node (one ``UsdUVTexture`` prim, or MaterialX
-    node) read by a material, or a variant selection of it, whose stack is not made (``kept``: (source, id) -> why,
-    left alone or not made for a reason of its own) or not selected (``stacks``: the selected ones). Its edits (the
+    node) read by a material, or a variant selection of it, whose stack is not made (``kept``: (source, id) -> why: its
+    intent when left alone, else the message of the reason it is not made) or not selected (``stacks``: the selected
+    ones). Its edits (the
     tile's path, repeat, the UV scale) are made on the node, so the other use would show the tile too: such a stack
     fails, naming that use, and is not made."""
     users: dict[tuple, list[TextureStack]] = {}
@@ -225,5 +226,6 @@ def _use(m) -> tuple:
 
 
 def _first_clause(reason: str) -> str:
-    """The reason a stack is not made, shortened to its first clause."""
+    """The reason a stack is not made, shortened to its first clause (a message's "not processed: " or "left alone: "
+    left out)."""
     return reason.split(";")[0].split(": ", 1)[-1].strip() or reason

@@ -230,8 +230,7 @@ def read_image(
     if pixels is None or not isinstance(pixels, np.ndarray) or error:
         raise UndecodableImage(
             f"{asset_ref(p)}: the image data cannot be decoded ({error or 'read failed'}); "
-            "the file is truncated or corrupt: re-export or re-download it"
-        )
+            "the file is truncated or corrupt: re-export or re-download it", p)
     pixels = np.asarray(pixels) if stored else np.asarray(pixels, dtype=np.float32)
     if pixels.ndim == 2:
         pixels = pixels[..., None]

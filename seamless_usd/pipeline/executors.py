@@ -199,7 +199,7 @@ class DaskExecutor:
                     result = exc
                 yield job, result
         except BaseException:  # Ctrl-C, or the run stopped reading: the jobs still running are dropped
-            level = _quiet(client, local=cluster is not None)
+            level = _quiet()
             try:
                 if cluster is not None:
                     _end_workers(cluster)
@@ -232,19 +232,14 @@ def _ctrl_c_ignored_by_children():
         signal.signal(signal.SIGINT, before)
 
 
-def _quiet(client, local: bool) -> int:
-    """Dask's own logs silenced before a run stopped part-way closes its cluster: jobs cancelled mid-task make the
-    workers and nannies log warnings and tracebacks that say nothing to the user (the report says what stopped).
-    On a cluster of its own the workers are silenced too; a remote scheduler's are left as they are. Returns the
-    client's level before, to put back."""
+def _quiet() -> int:
+    """Dask's own logs in this process silenced before a run stopped part-way closes its cluster: jobs cancelled
+    mid-task make the nannies and the client log warnings and tracebacks that say nothing to the user (the report
+    says what stopped; a cluster of its own has its workers ended first, :func:`_end_workers`, so they log nothing).
+    Returns the level before, to put back."""
     logger = logging.getLogger("distributed")
     level = logger.level
     logger.setLevel(logging.CRITICAL)
-    if local:
-        try:
-            client.run(_silence_dask, wait=True)
-        except BaseException:  # noqa: BLE001 - a worker that does not answer is closed all the same
-            pass
     return level
 
 
@@ -262,9 +257,6 @@ def _end_workers(cluster) -> None:
             except OSError:  # ended already
                 pass
 
-
-def _silence_dask() -> None:
-    logging.getLogger("distributed").setLevel(logging.CRITICAL)
 
 
 #: Seconds to wait for a remote Dask scheduler to answer before the run is refused.

@@ -7,7 +7,8 @@ import glob
 from collections.abc import Sequence
 from pathlib import Path
 
-from seamless_usd.errors import UsageError
+from seamless_usd.errors import InputError, UsageError
+from seamless_usd.findings import asset_ref
 
 __all__ = ["expand_inputs", "SCENE_SUFFIXES", "is_own_output"]
 
@@ -71,7 +72,7 @@ def _composed_by(files: Sequence[Path]) -> set[Path]:
     return used
 
 
-def expand_inputs(items: Sequence[str | Path], outputs: bool = False) -> list[Path]:
+def expand_inputs(items: Sequence[str | Path], outputs: bool = False, require_scenes: bool = False) -> list[Path]:
     """Files as given; folders walked recursively for USD and MaterialX files; globs expanded.
 
     Folder walks and globs leave out this tool's own outputs (``*.seamless.usda``,
@@ -79,8 +80,9 @@ def expand_inputs(items: Sequence[str | Path], outputs: bool = False) -> list[Pa
     them; ``outputs`` (``check``): a folder walk takes each scene as this tool left it instead (its new layer or
     document where there is one; see :func:`_walk`). A glob, like a folder walk, leaves out the layers its matched
     stages compose. A file named explicitly is always taken. Duplicates are removed, order is kept.
-    A glob that matches nothing is a usage error; a missing file is left for the caller to
-    report (it is unreadable input, not a usage error).
+    A glob that matches nothing is a usage error; with ``require_scenes`` (``process``, ``scan``) a folder that holds
+    no stage or document is an :class:`InputError` (a batch pointed at the wrong folder must not read as a run that
+    went well); a missing file is left for the caller to report (it is unreadable input, not a usage error).
 
     >>> expand_inputs([]) == []
     True
@@ -90,7 +92,10 @@ def expand_inputs(items: Sequence[str | Path], outputs: bool = False) -> list[Pa
         text = str(item)
         path = Path(text)
         if path.is_dir():
-            out.extend(_walk(path, outputs))
+            found = _walk(path, outputs)
+            if not found and require_scenes:
+                raise InputError(f"{asset_ref(path)}: no USD stage or MaterialX document found in this folder")
+            out.extend(found)
         elif _GLOB_CHARS & set(text) and not path.exists():
             matches = [
                 Path(m) for m in sorted(glob.glob(text, recursive=True))

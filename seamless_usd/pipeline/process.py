@@ -275,7 +275,7 @@ def _selected_findings(run: Run, scan: ScanResult) -> list[Finding]:
 def _block_shared_nodes(run: Run, scan: ScanResult, stacks: list[TextureStack], label: str) -> None:
     """Stacks whose texture nodes another use reads that is not made tileable fail (:func:`shared_node_stacks`)."""
     by_id = {s.id: s for s in scan.stacks}
-    kept = {key: f"left alone: {by_id[key[1]].intent}" for key in run.left_alone if key[0] == label and key[1] in by_id}
+    kept = {key: by_id[key[1]].intent for key in run.left_alone if key[0] == label and key[1] in by_id}
     kept.update({k: v for k, v in {**run.set_aside, **run.blocked}.items() if k[0] == label})
     run.blocked.update(shared_node_stacks(scan, stacks, label, kept))
 
@@ -316,10 +316,7 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
                          "(an open stage: process_stage())")
     run = _new_run(_as_options(options))
     sources = []
-    inputs = expand_inputs(paths)
-    for item in paths:  # as scan: a batch pointed at the wrong folder must not read as a run that went well
-        if Path(item).is_dir() and not expand_inputs([item]):
-            raise InputError(f"{asset_ref(item)}: no USD stage or MaterialX document found in this folder")
+    inputs = expand_inputs(paths, require_scenes=True)
     modes = authoring_module().WriteMode
     packages = [p for p in inputs if p.suffix.lower() == ".usdz"]
     if packages and modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
