@@ -51,3 +51,26 @@ def test_atlases_bound_by_collection_parent_or_purpose_are_left_alone(tmp_path):
         assert got == "uv-atlas" and f"</World/{mesh}>" in why, (name, got, why)
     # the child's own binding loses to its parent's: no geometry shows it
     assert "no bound geometry" in intent["</World/Looks/M_child>"][1]
+
+
+def test_a_material_on_an_atlas_and_a_repeating_floor_is_left_alone(tmp_path):
+    """One material bound to a floor whose UVs repeat it and to a crate unwrapped as an atlas: its tile and UV scale
+    would change the crate too. It was called tiling (the floor's span decided) and the atlas resampled."""
+    sys.path.insert(0, str(ROOT / "sample_assets"))
+    from usdkit import atlas_mesh, bind, new_layer, plane, preview_material
+
+    shutil.copy(ROOT / "sample_assets" / "textures" / "brick_albedo.png", tmp_path / "albedo.png")
+    stage = new_layer(tmp_path / "scene.usda", "World")
+    UsdGeom.Xform.Define(stage, "/World")
+    preview_material(stage, "/World/Looks/M", {"diffuseColor": ("./albedo.png", "rgb", "sRGB")})
+    bind(plane(stage, "/World/Floor", 4, 4).GetPrim(), "/World/Looks/M")
+    bind(atlas_mesh(stage, "/World/Crate", 0.1, 0.9, 4, 2).GetPrim(), "/World/Looks/M")
+    stage.Save()
+    before = (tmp_path / "scene.usda").read_bytes()
+    [stack] = seamless_usd.scan(tmp_path / "scene.usda").stacks
+    assert stack.intent == "uv-atlas"
+    assert "</World/Crate>" in stack.intent_reason and "</World/Floor>" in stack.intent_reason
+    assert "material of its own" in stack.intent_reason
+    report = seamless_usd.process_paths(tmp_path / "scene.usda", seamless_usd.Options(preset="tiny"))
+    assert [r.status.value for r in report.stacks] == ["left-alone"]
+    assert not (tmp_path / "tileable").exists() and (tmp_path / "scene.usda").read_bytes() == before

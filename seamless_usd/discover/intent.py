@@ -10,7 +10,8 @@ and some that are already tile. Each stack gets one class, with the measured rea
   (a swatch quad, box faces); or no geometry binds it under any explored variant selection (a
   library material) and its pixels do not look like an atlas;
 - ``uv-atlas``: the bound meshes keep their UVs inside one period, as unwrapped islands (bindings
-  and UVs read under the variant selection they are authored in, see ``bound.py``);
+  and UVs read under the variant selection they are authored in, see ``bound.py``); or one of them does while
+  another repeats it: the material's edits would change the atlas too;
 - ``uv-atlas (pixels)``: nothing binds it, but its pixels show an atlas's layout (islands on a
   flat background; see ``atlas.py``): flagged for review, processed only when forced;
 - ``already-tileable``: a would-be *tiling* stack in which the verdict (:mod:`seamless_usd.verdict`),
@@ -126,11 +127,24 @@ def _geometry_decision(stack: TextureStack, factor, stats, bound: int, explored:
         return IntentDecision(Intent.TILING, _unbound(explored))
     if not stats:
         return IntentDecision(Intent.TILING, f"bound geometry ({bound} mesh use(s)) has no UVs to measure")
-    widest = max(stats, key=lambda s: max(s.span[0] * factor[0], s.span[1] * factor[1]))
+    def periods(s) -> float:
+        return max(s.span[0] * factor[0], s.span[1] * factor[1])
+
+    widest = max(stats, key=periods)
     span = (widest.span[0] * factor[0], widest.span[1] * factor[1])
     where = f"<{widest.mesh}>{_in(widest)}" + (f" and {len(stats) - 1} more" if len(stats) > 1 else "")
     rng = f"UVs {widest.lo[0]:.2f}-{widest.hi[0]:.2f} x {widest.lo[1]:.2f}-{widest.hi[1]:.2f}"
     if max(span) > THRESHOLDS.repeat_span:
+        # a material that also textures an unwrapped atlas: a tile (and its UV scale) would change the atlas too
+        atlas = [s for s in stats if s.islands != s.full_islands and periods(s) <= THRESHOLDS.repeat_span]
+        if atlas:
+            worst = max(atlas, key=lambda s: s.islands)
+            return IntentDecision(
+                Intent.UV_ATLAS,
+                f"bound to an unwrapped UV atlas ({worst.islands} island{'' if worst.islands == 1 else 's'} on "
+                f"<{worst.mesh}>{_in(worst)}) as well as repeating ({rng} on <{widest.mesh}>{_in(widest)}: "
+                f"{span[0]:.2f} x {span[1]:.2f} periods): a tile would change the atlas too; give the repeating "
+                "mesh a material of its own to make it tileable")
         return IntentDecision(Intent.TILING, f"{rng} on {where}: {span[0]:.2f} x {span[1]:.2f} periods")
     if all(s.islands == s.full_islands for s in stats):
         islands = sum(s.islands for s in stats)
