@@ -217,3 +217,52 @@ def test_a_left_alone_variant_keeps_its_texture_when_the_file_is_authored_outsid
     layer = scene.with_name("scene.seamless.usda")
     if layer.exists():  # whatever else it holds, the clamped variant still reads the photo
         assert _file(layer, "/World/Looks/M_wrapvar/Tex", ("wrapMode", "clp")) == "../textures/brick_roughness.png"
+
+
+def _variant_albedo_shared_roughness(folder: Path) -> Path:
+    """A wall whose material sets its albedo inside each variant of ``shading`` (clean: brick, dirty: wood) and reads
+    one roughness authored outside the variants, as a look that swaps one map per variant is often built."""
+    import sys
+
+    from pxr import Sdf, UsdGeom
+
+    sys.path.insert(0, str(SAMPLES))
+    from usdkit import bind, new_layer, plane, preview_material
+
+    shutil.copytree(SAMPLES / "textures", folder / "tex")
+    stage = new_layer(folder / "scene.usda", "World")
+    UsdGeom.Xform.Define(stage, "/World")
+    bind(plane(stage, "/World/Wall", 4, 3).GetPrim(), "/World/Looks/M")
+    preview_material(stage, "/World/Looks/M", {"diffuseColor": ("./tex/brick_albedo.png", "rgb", "sRGB"),
+                                               "roughness": ("./tex/brick_roughness.png", "r", "raw")})
+    UsdShade.Shader.Get(stage, "/World/Looks/M/diffuseColorTex").GetInput("file").GetAttr().Clear()
+    shading = stage.GetPrimAtPath("/World/Looks/M").GetVariantSets().AddVariantSet("shading")
+    for variant, texture in (("clean", "./tex/brick_albedo.png"), ("dirty", "./tex/wood_tileable.jpg")):
+        shading.AddVariant(variant)
+        shading.SetVariantSelection(variant)
+        with shading.GetVariantEditContext():
+            UsdShade.Shader.Get(stage, "/World/Looks/M/diffuseColorTex").CreateInput(
+                "file", Sdf.ValueTypeNames.Asset).Set(texture)
+    shading.SetVariantSelection("clean")
+    stage.Save()
+    return folder / "scene.usda"
+
+
+def test_a_variant_that_swaps_one_map_lists_all_it_reads_and_a_node_both_read_is_not_edited(tmp_path, model_cache,
+                                                                                            capsys):
+    """The dirty variant's stack was its albedo alone (the roughness, found first under the clean selection, was the
+    clean stack's only): judged without it, and the roughness node, edited outside the variants for the clean stack's
+    tile and UV scale, changed the dirty look and misaligned its maps."""
+    scene = _variant_albedo_shared_roughness(tmp_path)
+    import seamless_usd
+
+    stacks = {s.selection and s.selection[0].variant: s for s in seamless_usd.scan(scene).stacks}
+    assert {Path(m.asset).name for m in stacks["dirty"].maps} == {"wood_tileable.jpg", "brick_roughness.png"}
+    assert {Path(m.asset).name for m in stacks[()].maps} == {"brick_albedo.png", "brick_roughness.png"}
+    before = hashlib.sha256(scene.read_bytes()).hexdigest()
+    code, payload = _process(scene, model_cache, capsys)
+    assert code == 1 and [s["status"] for s in payload["stacks"]] == ["failed", "failed"], payload["stacks"]
+    for row in payload["stacks"]:
+        assert "</World/Looks/M/roughnessTex>" in row["message"] and "inside each variant" in row["message"]
+    assert not (tmp_path / "tileable").exists() and not scene.with_name("scene.seamless.usda").exists()
+    assert hashlib.sha256(scene.read_bytes()).hexdigest() == before

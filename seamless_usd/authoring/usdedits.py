@@ -206,18 +206,22 @@ def check_uv_composed(author, results: Sequence[StackResult], result: AuthoringR
             written = author.layer_names.get(layer) or layer.realPath or layer.identifier
             not_composed(result, node, (
                 f"its new UV scale is authored in {asset_ref(written)}, but the texture-coordinate connection "
-                f"{asset_ref(strongest_layer(attr))} holds is stronger and the stage keeps it, so the tile would show "
-                "at the wrong scale (an st connection outside the variant that sets the file): connect st inside "
-                "each variant, or write the edits into that layer"))
+                f"{asset_ref(strongest_layer(attr, author.layer_names))} holds is stronger and the stage keeps it, so the "
+                "tile would show at the wrong scale (an st connection outside the variant that sets the file): connect "
+                "st inside each variant, or write the edits into that layer"))
     finally:
         if composed:
             apply_selection(session, ())
 
 
-def strongest_layer(attr: Usd.Attribute | None) -> str:
-    """The file (or identifier) of the layer holding ``attr``'s strongest opinion, for a message."""
+def strongest_layer(attr: Usd.Attribute | None, names: dict | None = None) -> str:
+    """The file (or identifier) of the layer holding ``attr``'s strongest opinion, for a message; ``names``: the
+    layers being written, by the file each becomes (a layer is written to a temporary file first)."""
     specs = attr.GetPropertyStack() if attr else []
-    return (specs[0].layer.realPath or specs[0].layer.identifier) if specs else "another layer"
+    if not specs:
+        return "another layer"
+    layer = specs[0].layer
+    return (names or {}).get(layer) or layer.realPath or layer.identifier
 
 
 def not_composed(result: AuthoringResult, node: str, why: str) -> None:

@@ -11,7 +11,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 from seamless_usd.discover import uvgeom
-from seamless_usd.textures import Selection, TextureStack, describe_selection
+from seamless_usd.discover.stacks import chain_key
+from seamless_usd.textures import Selection, TextureMap, TextureStack, describe_selection
 
 __all__ = ["Geometry"]
 
@@ -40,6 +41,52 @@ class Geometry:
     def seen(self, use, index: int) -> None:
         """A texture use (first seen under ``use.selection``) was walked again in leaf ``index``."""
         self._seen.setdefault((use.material, use.node, use.selection), set()).add(index)
+
+    def complete(self, maps: list[TextureMap]) -> list[TextureMap]:
+        """``maps`` (each found first under its ``selection``), with every map a material reads under a variant
+        selection where its maps differ from the stack found first, added under that selection.
+
+        A use is kept once, under the selection it was first found in, so a material whose shading variant sets
+        its albedo inside the variant and reads a roughness authored outside the variants was a stack of one map
+        (the albedo) under that variant: judged without its roughness, and the roughness node edited for the
+        other variant's stack changed this one's look. Here each walk of a selection (leaf) gives, per material and
+        UV chain, the maps it read; where those are not one stack's maps, the stack of that selection gets them all
+        (the maps found first elsewhere added under the leaf's selection), and leaves that read the same maps share
+        one such stack. A map's leaves are then only those where its material read its own stack's maps, so each
+        stack's bound geometry is measured where it is the material's stack."""
+        by_key = {(m.material, m.node, m.selection): m for m in maps}
+        walked: dict[int, list[tuple]] = {}
+        for key, leaves in self._seen.items():
+            if key in by_key:
+                for leaf in leaves:
+                    walked.setdefault(leaf, []).append(key)
+        homes: dict[tuple, frozenset] = {}  # (material, chain, selection) -> the keys of the maps found first there
+        for key, m in by_key.items():
+            homes.setdefault((m.material, chain_key(m.uv, m.node), m.selection), frozenset())
+            homes[(m.material, chain_key(m.uv, m.node), m.selection)] |= {key}
+        added: dict[tuple, Selection] = {}  # (material, chain, keys read) -> the selection of their stack
+        out = list(maps)
+        for leaf in sorted(walked):
+            selection = self.leaves[leaf][1]
+            groups: dict[tuple, set] = {}
+            for key in walked[leaf]:
+                m = by_key[key]
+                groups.setdefault((m.material, chain_key(m.uv, m.node)), set()).add(key)
+            for (material, chain), keys in groups.items():
+                keys = frozenset(keys)
+                if any(homes.get((material, chain, k[2])) == keys for k in keys):
+                    continue  # the leaf read exactly one stack's maps
+                home = added.setdefault((material, chain, keys), selection)
+                for key in keys:
+                    self._seen[key].discard(leaf)
+                    if key[2] == home:
+                        self._seen[key].add(leaf)
+                        continue
+                    own = (key[0], key[1], home)
+                    if own not in self._seen:
+                        out.append(replace(by_key[key], selection=home))
+                    self._seen.setdefault(own, set()).add(leaf)
+        return out
 
     def _leaves_of(self, stack: TextureStack) -> list[int]:
         found: set[int] = set()

@@ -199,7 +199,7 @@ class _Scan:
     def finish(self) -> ScanResult:
         maps, findings = build_maps(self.uses, self.cache)
         self.result.findings.extend(findings)
-        stacks = build_stacks(maps)
+        stacks = build_stacks(self.geometry.complete(maps))
         if self.result.sources:  # the stage or document scanned (a document it references is listed after it)
             stacks = [replace(s, source=self.result.sources[0]) for s in stacks]
         with quiet_mtlx():  # composing each selection again

@@ -202,19 +202,26 @@ def shared_node_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source:
         if (source, stack.id) in kept:
             continue
         for m in stack.maps:
-            others = [o for o in users.get(_use(m), []) if o.id != stack.id
-                      and ((source, o.id) in kept or o.id not in selected)]
-            if others:
-                other = others[0]
+            users_here = [o for o in users.get(_use(m), []) if o.id != stack.id]
+            others = [o for o in users_here if (source, o.id) in kept or o.id not in selected]
+            # a use made tileable too, from other maps (a variant's own albedo beside a roughness authored outside the
+            # variants): one edit of the node cannot line up with both stacks' tiles
+            differing = [o for o in users_here if o not in others and o.content_key != stack.content_key]
+            if others or differing:
+                other = (others or differing)[0]
                 where = f" in {describe_selection(other.selection)}" if other.selection else ""
-                why = kept.get((source, other.id)) or "not selected (--materials)"
-                fix = ("author the texture's file inside each variant (its edits then stay in the variant)"
-                       if other.material == stack.material else
-                       "give each material a texture node of its own, or process both (--force-materials)")
+                same = other.material == stack.material
+                fix = ("author the texture's file inside each variant (its edits then stay in the variant)" if same
+                       else "give each material a texture node of its own" + ("" if differing and not others else
+                                                                              ", or process both (--force-materials)"))
+                if others:
+                    why = kept.get((source, other.id)) or "not selected (--materials)"
+                    said = f"which is not made tileable ({_first_clause(why)})"
+                else:
+                    said = "whose tile is made from other maps, so one edit of the node cannot line up with both"
                 out[(source, stack.id)] = (
                     f"not processed: its texture node {prim_ref(m.node)} is also read by {other.material}{where}, "
-                    f"which is not made tileable ({_first_clause(why)}); editing the node would change that use too: "
-                    f"{fix}")
+                    f"{said}; editing the node would change that use too: {fix}")
                 break
     return out
 
