@@ -166,3 +166,30 @@ def test_the_classifiers_blur_along_a_line_is_the_binomial_kernel(periodic):
         assert np.allclose(got[2:-2], expected[2:-2], atol=1e-12)
         assert np.allclose(got[0], (10 * a[0] + 5 * a[1] + a[2]) / 16, atol=1e-12)
         assert np.allclose(got[-1], (10 * a[-1] + 5 * a[-2] + a[-3]) / 16, atol=1e-12)
+
+
+
+def test_a_stack_one_of_whose_maps_was_cut_again_on_its_own_is_judged_as_copies_map_by_map():
+    """The bundled brick's lattice cut (three maps), its albedo's right half then slid down 50 rows, the other maps
+    left as they were (a written tile edited by hand): the maps together are no longer copies of the source stack,
+    and the classifier passed it with its mortar broken at 1x. Each map is still made of its own source's texels, so
+    each is judged as copies and the albedo's cuts are found."""
+    from seamless_usd.synthesis import MapInput
+    from seamless_usd.synthesis.candidates import check_cut
+
+    def read(name: str, channels: int | None = None) -> np.ndarray:
+        a = 2.0 * oiio.ImageBuf(str(TEXTURES / name)).get_pixels(oiio.FLOAT) - 1.0
+        return a if channels is None else a[..., :channels]
+
+    maps = [MapInput("albedo", read("brick_albedo.png")), MapInput("normal", read("brick_normal.png"), True),
+            MapInput("rough", read("brick_roughness.png", 1))]
+    cut = check_cut(maps, True)
+    tiles, sources = [cut.tiles[m.name] for m in maps], [m.pixels for m in maps]
+    normals, names = [m.is_normal for m in maps], [m.name for m in maps]
+    assert cut.kind == "lattice" and judge(tiles, sources, normals, names).passed
+    moved = tiles[0].copy()
+    half = moved.shape[1] // 2
+    moved[:, half:] = np.roll(moved[:, half:], 50, 0)
+    v = judge([moved, *tiles[1:]], sources, normals, names)
+    assert not v.seamless and v.method == "copies", v.reasons()
+    assert {s.map for s in v.seams} == {"albedo"} and {s.position for s in v.seams} >= {0, half}

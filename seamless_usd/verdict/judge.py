@@ -35,7 +35,7 @@ from .across import unrelated_lines
 from .breaks import line_breaks, working
 from .classifier import SeamClassifier, fit
 from .ghosts import ghost_bands
-from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, MAP_THRESHOLD, copy_seams
+from .copies import COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, INFER, MAP_THRESHOLD, copy_origins, copy_seams
 from .lines import Seam, runs, seams_from_scores
 from .prepare import WORK_SIDE, joint, map_weights, to_working
 from .visibility import visible
@@ -109,7 +109,7 @@ def _copied(reading: Reading) -> tuple[list[Seam], float] | None:
     ref = reading.reference
     origin, share = reading.origins
     if share < EXACT_SHARE or (origin[..., 0] >= 0).mean() < COPY_SHARE:
-        return None
+        return _copied_each(reading)
     seams, strongest = copy_seams(reading.joint, ref.joint, origin, "stack", COPY_RUN, units=ref.units())
     if len(reading.maps) > 1:
         for k, (tile, source, name) in enumerate(zip(reading.maps, ref.maps, reading.names)):
@@ -117,6 +117,32 @@ def _copied(reading: Reading) -> tuple[list[Seam], float] | None:
             found, _ = copy_seams(np.ascontiguousarray(tile), np.ascontiguousarray(source), origin, name, COPY_RUN,
                                   MAP_THRESHOLD, units=ref.units(k))
             seams += found
+    seams.sort(key=lambda x: -x.figure)
+    return seams, strongest
+
+
+def _copied_each(reading: Reading) -> tuple[list[Seam], float] | None:
+    """Seams of a stack whose maps are each made of their source's texels but not from the same places (one map of a
+    written stack cut or moved again on its own): each map judged as copies of its own source, its seams named by
+    map; None when any map is not made of copies (:func:`_copied`'s shares), or the stack has one map. Such a stack
+    used to fall to the classifier, which passed an albedo whose right half had been slid down 50 rows (its mortar
+    broken at 1x)."""
+    if len(reading.maps) < 2:
+        return None
+    ref = reading.reference
+    placed = []
+    for tile, source in zip(reading.maps, ref.maps):
+        tile, source = np.ascontiguousarray(tile), np.ascontiguousarray(source)
+        origin, share = copy_origins(tile, source, INFER)
+        if share < EXACT_SHARE or (origin[..., 0] >= 0).mean() < COPY_SHARE:
+            return None
+        placed.append((tile, source, origin))
+    seams: list[Seam] = []
+    strongest = 0.0
+    for k, ((tile, source, origin), name) in enumerate(zip(placed, reading.names)):
+        found, top = copy_seams(tile, source, origin, name, COPY_RUN, MAP_THRESHOLD, units=ref.units(k))
+        seams += found
+        strongest = max(strongest, top * COPY_THRESHOLD / MAP_THRESHOLD)  # on the maps-together scale
     seams.sort(key=lambda x: -x.figure)
     return seams, strongest
 
