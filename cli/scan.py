@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"seamless-usd: error: {f.where}: {f.message}", file=sys.stderr)
     if args.json:
         print(json.dumps(result.to_dict(), indent=2))
-    else:
+    elif result.sources:  # when nothing could be read, the error lines above are the whole answer
         # A pipe or file gets a wide table rather than rich's 80-column fallback.
         width = None if sys.stdout.isatty() else 160
         render(result, Console(file=sys.stdout, width=width, soft_wrap=False))

@@ -42,8 +42,21 @@ def test_unreadable_stage_exits_2_naming_the_file(tmp_path, capsys):
     bad = tmp_path / "broken.usda"
     bad.write_text("#usda 1.0\ndef Xform \"A\" {\n  this is not usd\n")
     assert main(["scan", str(bad)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "broken.usda" in err and len(err.splitlines()) == 1
+    out, err = capsys.readouterr()
+    assert "broken.usda" in err and len(err.strip().splitlines()) == 1
+    assert not out.strip()  # nothing was read: no "scanned" line naming nothing, no table repeating the error
+
+
+def test_a_picture_given_to_scan_or_process_is_pointed_to_check(tmp_path, samples_dir, capsys):
+    picture = samples_dir / "textures" / "brick_albedo.png"
+    for command in ("scan", "process"):
+        assert main([command, str(picture)]) == 2
+        err = capsys.readouterr().err
+        assert "is a picture" in err and "seamless-usd check" in err and "Cannot determine file format" not in err
+    other = tmp_path / "notes.txt"
+    other.write_text("not a scene")
+    assert main(["scan", str(other)]) == 2
+    assert "neither a USD stage nor a MaterialX document" in capsys.readouterr().err
 
 
 def test_missing_path_exits_2(tmp_path, capsys):

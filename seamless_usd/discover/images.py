@@ -19,7 +19,10 @@ from seamless_usd.discover.tokens import TILE_TOKENS, tile_token
 from seamless_usd.textures import ImageInfo
 from seamless_usd.pngchunks import png_stated_color_space
 
-__all__ = ["read_image_info", "is_package_path", "udim_tiles", "ImageReadError"]
+__all__ = ["IMAGE_SUFFIXES", "read_image_info", "is_package_path", "udim_tiles", "ImageReadError"]
+
+#: The file suffixes read as pictures (``check`` on a folder, and a picture given where a stage is wanted).
+IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".exr", ".tif", ".tiff", ".tx", ".tga", ".bmp", ".hdr", ".webp"})
 
 # Formats whose reader fills "oiio:ColorSpace" with a default rather than from the file.
 _GUESSED_COLORSPACE_FORMATS = frozenset({"png", "jpeg", "bmp", "targa", "gif", "webp", "ico"})

@@ -11,6 +11,7 @@ from pxr import Sdf, Tf, Usd
 
 from seamless_usd.discover import mtlx, usd, uvgeom
 from seamless_usd.discover.bound import Geometry as _Geometry
+from seamless_usd.discover.images import IMAGE_SUFFIXES
 from seamless_usd.discover.intent import THRESHOLDS, classify_stacks
 from seamless_usd.discover.triagememo import TriageMemo
 from seamless_usd.discover.maps import HeaderCache, TextureUse, build_maps
@@ -24,6 +25,14 @@ from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 __all__ = ["scan_paths", "scan_stage", "scan_mtlx", "open_stage"]
 
 
+def not_a_scene(path: Path) -> InputError:
+    """The error for a file given as a stage or document that is neither (a picture: ``check`` judges it)."""
+    picture = path.suffix.lower() in IMAGE_SUFFIXES
+    return InputError(f"{asset_ref(path)} is {'a picture' if picture else 'neither a USD stage nor a MaterialX document'}"
+                      ": scan and process read USD stages (.usd, .usda, .usdc, .usdz) and MaterialX documents (.mtlx)"
+                      + ("; judge a picture on its own with `seamless-usd check`" if picture else ""))
+
+
 def open_stage(path: str | Path) -> Usd.Stage:
     """Open a USD stage with all payloads loaded; InputError naming the file when it cannot be."""
     path = Path(path)
@@ -31,6 +40,8 @@ def open_stage(path: str | Path) -> Usd.Stage:
         raise InputError(f"{asset_ref(path)} is a folder, not a USD stage")
     if not path.is_file():
         raise InputError(f"{asset_ref(path)}: no such file")
+    if not Sdf.FileFormat.FindByExtension(path.suffix.lstrip(".").lower() or "-"):
+        raise not_a_scene(path)
     try:
         with quiet_mtlx():
             stage = Usd.Stage.Open(str(path.resolve()), Usd.Stage.LoadAll)

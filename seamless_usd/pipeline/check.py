@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from seamless_usd.errors import InputError, SeamlessUsdError
+from seamless_usd.discover.images import IMAGE_SUFFIXES
 from seamless_usd.findings import asset_ref
 from seamless_usd.pipeline.inputs import SCENE_SUFFIXES, expand_inputs, is_own_output
 from seamless_usd.pipeline.recorded import keystone_of, recorded_source, stack_sources
@@ -29,7 +30,6 @@ from seamless_usd.report.contact import SheetCard, thumbnail
 
 __all__ = ["IMAGE_SUFFIXES", "CheckItem", "CheckReport", "check_paths"]
 
-IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".exr", ".tif", ".tiff", ".tx", ".tga", ".bmp", ".hdr", ".webp"})
 _JUDGED_INTENTS = ("tiling", "already-tileable")
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
+from seamless_usd.discover.scan import not_a_scene
 from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, from_recorded_sources, instanced_stacks,
                                           matches_any, select_stacks, set_aside_stacks, unmatched_patterns)
 from seamless_usd.discover.select import left_alone_stacks as _left_alone, shared_node_stacks
@@ -116,7 +117,7 @@ def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = 
         stage = open_stage(path)
         scan, kind = scan_stage(stage, triage_dir, keep_triage), "usd"
     else:
-        raise InputError(f"{asset_ref(path)} is neither a USD stage (.usd/.usda/.usdc/.usdz) nor a .mtlx document")
+        raise not_a_scene(path)
     stacks = select_stacks(scan, patterns)
     instanced = instanced_stacks(stage, stacks, str(path)) if kind == "usd" else {}
     return _Source(path, kind, scan, stacks, instanced)
