@@ -57,10 +57,13 @@ def render(report: CheckReport, console: Console) -> None:
         console.print(f"[red]unreadable[/] {escape(why)}", soft_wrap=True)
     if report.not_judged:
         shown = ", ".join(f"@{p}@" for p in report.not_judged[:3]) + (", ..." if len(report.not_judged) > 3 else "")
-        console.print(f"not judged: {len(report.not_judged)} pictures in folders of stages or documents that none of "
+        n = len(report.not_judged)
+        console.print(f"not judged: {n} picture{'s' if n != 1 else ''} in folders of stages or documents that none of "
                       f"them uses ({escape(shown)}); name them, or a folder of pictures, to judge them", soft_wrap=True)
     if report.items or not report.unreadable:
-        console.print(f"{sum(i.passed for i in report.items)} of {len(report.items)} passed")
+        unread = len(report.unreadable)
+        console.print(f"{sum(i.passed for i in report.items)} of {len(report.items)} passed"
+                      + (f"; {unread} input{'s' if unread != 1 else ''} could not be read" if unread else ""))
 
 
 def _checked(args: argparse.Namespace, err: Console) -> CheckReport:

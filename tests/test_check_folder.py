@@ -308,3 +308,11 @@ def test_an_hdr_and_a_faint_picture_are_shown_readable_on_the_sheet_and_say_so(t
         assert shown.std() > 20 and 20 < shown.mean() < 235, (item.name, shown.mean(), shown.std())
         word = "exposed" if item.name.endswith(".exr") else "stretched"
         assert f"the picture is shown {word}" in item.card().words, item.card().words
+
+
+def test_the_last_line_counts_the_inputs_that_could_not_be_read(tmp_path, capsys):
+    """``check good.png missing.usda`` ended '1 of 1 passed' with exit code 2: the count now says what was not read."""
+    _write(tmp_path / "good.png", _wood())
+    assert main(["check", str(tmp_path / "good.png"), str(tmp_path / "missing.usda")]) == 2
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last == "1 of 1 passed; 1 input could not be read"
