@@ -316,3 +316,23 @@ def test_the_last_line_counts_the_inputs_that_could_not_be_read(tmp_path, capsys
     assert main(["check", str(tmp_path / "good.png"), str(tmp_path / "missing.usda")]) == 2
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last.endswith(" of 1 passed; 1 input could not be read")
+
+
+def test_each_seams_figure_is_written_once_beside_its_own_line_on_the_sheet():
+    """A picture seamed at both wraps had both figures written at its corner, the weaker over the stronger, and every
+    seam's figure four times (once a repeat): each is now written once, on the copy through the middle."""
+    import re
+
+    from seamless_usd.report.contact import SheetCard, _segments
+    from seamless_usd.report.htmlparts import seams_svg
+
+    card = SheetCard("p.png", "not-passed", "", size=(100, 80), seams=[
+        {"axis": "y", "position": 0, "start": 0, "end": 99, "figure": 1.01, "map": "stack"},
+        {"axis": "x", "position": 0, "start": 0, "end": 79, "figure": 5.98, "map": "stack"}])
+    svg = seams_svg((200, 160), _segments(card))
+    texts = re.findall(r'<text x="([\d.]+)" y="([\d.]+)">([^<]+)</text>', svg)
+    assert sorted(t[2] for t in texts) == ["+1.01", "+5.98"] and svg.count("<line") == 8
+    (x1, y1), (x2, y2) = [(float(x), float(y)) for x, y, _ in texts]
+    assert abs(x1 - x2) > 40 or abs(y1 - y2) > 14  # apart, each beside its line through the middle
+    by_figure = {t[2]: (float(t[0]), float(t[1])) for t in texts}
+    assert abs(by_figure["+5.98"][0] - 104) < 1 and abs(by_figure["+1.01"][1] - 94) < 1

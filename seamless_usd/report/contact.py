@@ -89,17 +89,26 @@ def displayed(small: np.ndarray, linear: bool) -> tuple[np.ndarray, str]:
     return np.clip(v, 0.0, 1.0) * 2.0 - 1.0, said
 
 
-def _segments(card: SheetCard) -> list[tuple[float, float, float, float, str]]:
+def _segments(card: SheetCard) -> list[tuple[float, float, float, float, str, bool]]:
+    """Each seam of the card on the picture repeated 2 x 2, four times, strongest first; its figure written on the
+    copy nearest the middle only (a wrap's: the line through the middle)."""
     w, h = card.size
+
+    def near_middle(value: float, side: int) -> int:  # the repeat (0 or side) that puts ``value`` nearer ``side``
+        return side if value <= side / 2 else 0
+
     out = []
-    for s in card.seams:
+    for s in sorted(card.seams, key=lambda s: -s["figure"]):
         label = f"{s['figure']:+.2f}: {s.get('map', 'stack')}"
+        run, at, first, last = (s["start"] + s["end"]) / 2, s["position"], s["start"], s["end"] + 1
         for ry in (0, h):
             for rx in (0, w):
                 if s["axis"] == "x":
-                    out.append((rx + s["position"], ry + s["start"], rx + s["position"], ry + s["end"] + 1, label))
+                    shown = rx == near_middle(at, w) and ry == near_middle(run, h)
+                    out.append((rx + at, ry + first, rx + at, ry + last, label, shown))
                 else:
-                    out.append((rx + s["start"], ry + s["position"], rx + s["end"] + 1, ry + s["position"], label))
+                    shown = rx == near_middle(run, w) and ry == near_middle(at, h)
+                    out.append((rx + first, ry + at, rx + last, ry + at, label, shown))
     return out
 
 

@@ -97,19 +97,29 @@ def overlay_svg(size: tuple[int, int], borders: tuple[list[float], list[float]],
             f'{"".join(parts)}</svg>')
 
 
-def seams_svg(size: tuple[int, int], segments: list[tuple[float, float, float, float, str]]) -> str:
-    """An always-visible SVG over a picture of ``size = (W, H)``: each seam ``(x1, y1, x2, y2, label)`` as a
-    red line, its label (the seam's figure) beside it and in its tooltip."""
+def seams_svg(size: tuple[int, int], segments: list[tuple]) -> str:
+    """An always-visible SVG over a picture of ``size = (W, H)``: each seam ``(x1, y1, x2, y2, label[, shown])`` as a
+    red line with its label in its tooltip, and the label's figure written beside the middle of the line unless
+    ``shown`` is False (a repeat of a seam already written) or a stronger seam's figure is written there already
+    (segments come strongest first: two wraps both seamed put both figures at the picture's corner, the weaker
+    drawn over the stronger)."""
     if not segments:
         return ""
     w, h = size
-    parts = []
-    for x1, y1, x2, y2, label in segments:
-        parts.append(f'<line x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}"><title>{esc(label)}</title></line>')
-        if label:
-            parts.append(f'<text x="{min(x1 + 4, w - 40):.1f}" y="{max(y1 + 14, 14):.1f}">{esc(label.split(":")[0])}</text>')
+    lines, texts, placed = [], [], []
+    for x1, y1, x2, y2, label, *rest in segments:
+        lines.append(f'<line x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}"><title>{esc(label)}</title></line>')
+        if not label or (rest and not rest[0]):
+            continue
+        vertical = abs(x2 - x1) < abs(y2 - y1)
+        tx = x1 + 4 if vertical else (x1 + x2) / 2
+        ty = (y1 + y2) / 2 if vertical else y1 + 14
+        tx, ty = min(max(tx, 2.0), w - 40.0), min(max(ty, 14.0), h - 4.0)
+        if all(abs(tx - px) > 40 or abs(ty - py) > 14 for px, py in placed):
+            placed.append((tx, ty))
+            texts.append(f'<text x="{tx:.1f}" y="{ty:.1f}">{esc(label.split(":")[0])}</text>')
     return (f'<svg class="seams" viewBox="0 0 {w} {h}" preserveAspectRatio="none" role="img" '
-            f'aria-label="seams found">{"".join(parts)}</svg>')
+            f'aria-label="seams found">{"".join(lines + texts)}</svg>')
 
 
 def figure(pixels: np.ndarray | None, caption: str, overlay: str = "", lossless: bool = False) -> str:
