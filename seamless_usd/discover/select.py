@@ -212,8 +212,8 @@ def shared_node_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source:
                 where = f" in {describe_selection(other.selection)}" if other.selection else ""
                 same = other.material == stack.material
                 fix = ("author the texture's file inside each variant (its edits then stay in the variant)" if same
-                       else "give each material a texture node of its own" + ("" if differing and not others else
-                                                                              ", or process both (--force-materials)"))
+                       else "give each material a texture node of its own"
+                       + (", or process both (--force-materials)" if others else ""))
                 if others:
                     why = kept.get((source, other.id)) or "not selected (--materials)"
                     said = f"which is not made tileable ({_first_clause(why)})"
