@@ -48,3 +48,68 @@ def test_a_shared_interface_uvtiling_is_scaled_once(tmp_path):
     mx.readFromXmlFile(doc, str(written))
     assert doc.getDescendant("NG/tiling").getValueString() == "2.5, 3.0"
     assert [f for f in author_mtlx(tmp_path / "tiled.mtlx", [result]).findings if f.code == "shared-texture-conflict"] == []
+
+
+SHARED_FILE = """<?xml version="1.0"?>
+<materialx version="1.39">
+  <nodegraph name="NG" fileprefix="../tex/">
+    <input name="albedo_file" type="filename" value="brick_albedo.png" colorspace="srgb_texture" />
+    <image name="tiled" type="color3"><input name="file" type="filename" interfacename="albedo_file" /></image>
+    <image name="decal" type="color3"><input name="file" type="filename" interfacename="albedo_file" />
+      <input name="uaddressmode" type="string" value="clamp" />
+      <input name="vaddressmode" type="string" value="clamp" />
+    </image>
+    <image name="rough" type="float"><input name="file" type="filename" value="brick_roughness.png" /></image>
+    <image name="other" type="color3"><input name="file" type="filename" interfacename="albedo_file" /></image>
+    <output name="tiled_out" type="color3" nodename="tiled" /><output name="decal_out" type="color3" nodename="decal" />
+    <output name="rough_out" type="float" nodename="rough" /><output name="other_out" type="color3" nodename="other" />
+  </nodegraph>
+  <standard_surface name="SR_tile" type="surfaceshader"><input name="base_color" type="color3" nodegraph="NG" output="tiled_out" />
+    <input name="specular_roughness" type="float" nodegraph="NG" output="rough_out" /></standard_surface>
+  <surfacematerial name="M_tile" type="material"><input name="surfaceshader" type="surfaceshader" nodename="SR_tile" /></surfacematerial>
+  <standard_surface name="SR_decal" type="surfaceshader"><input name="base_color" type="color3" nodegraph="NG" output="decal_out" /></standard_surface>
+  <surfacematerial name="M_decal" type="material"><input name="surfaceshader" type="surfaceshader" nodename="SR_decal" /></surfacematerial>
+  <standard_surface name="SR_other" type="surfaceshader"><input name="base_color" type="color3" nodegraph="NG" output="other_out" /></standard_surface>
+  <surfacematerial name="M_other" type="material"><input name="surfaceshader" type="surfaceshader" nodename="SR_other" /></surfacematerial>
+</materialx>
+"""
+
+
+def test_an_interface_file_input_three_images_read_keeps_each_ones_file(tmp_path, model_cache, capsys):
+    """A nodegraph's interface input read by a tiling image (with a roughness beside it), a clamped decal left alone,
+    and another material's image (a stack of its own): the tile was written to the interface input, so the decal
+    showed a crop of the tile, and the last stack's tile replaced the first's (its maps misaligned, both passed).
+    Each tiling image now reads its own file input; the decal keeps reading the photo; a run again changes nothing."""
+    import json
+
+    from runchecks import PLUMBING
+
+    from seamless_usd_cli.main import main
+
+    (tmp_path / "tex").mkdir()
+    for name in ("brick_albedo.png", "brick_roughness.png"):
+        shutil.copyfile(TEXTURES / name, tmp_path / "tex" / name)
+    (tmp_path / "docs").mkdir()
+    source = tmp_path / "docs" / "shared.mtlx"
+    source.write_text(SHARED_FILE)
+    args = ["process", *PLUMBING, "--max-size", "112", "--json", "--cache-dir", str(model_cache), str(source)]
+    main(args)
+    rows = {s["material"]: s for s in json.loads(capsys.readouterr().out)["stacks"]}
+    assert rows["<M_decal>"]["status"] == "left-alone"
+    assert {rows[m]["status"] for m in ("<M_tile>", "<M_other>")} <= {"passed", "not-passed"}
+    written = source.with_name("shared.seamless.mtlx")
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(written))
+    assert doc.validate()[0]
+    decal = doc.getDescendant("NG/decal/file")
+    assert decal.getInterfaceName() == "albedo_file" and decal.getInterfaceInput().getResolvedValueString().endswith(
+        "brick_albedo.png")  # the photo, through the fileprefix
+    files = {n: doc.getDescendant(f"NG/{n}/file") for n in ("tiled", "other")}
+    tiles = {n: (inp if not inp.getInterfaceName() else inp.getInterfaceInput()).getValueString()
+             for n, inp in files.items()}
+    assert all("tileable/" in t for t in tiles.values()) and tiles["tiled"] != tiles["other"]  # each its own tile
+    assert doc.getDescendant("NG/tiled/file").getColorSpace() == "srgb_texture"  # kept from the interface input
+    before = written.read_text()
+    main(args)
+    capsys.readouterr()
+    assert written.read_text() == before
