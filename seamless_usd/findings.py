@@ -20,6 +20,7 @@ class Finding:
     where: str  # USD notation: "<prim/path>" or "@asset/path@" (or both, space separated)
     message: str  # one line: what is wrong and what to do
     material: str = ""  # "<material path>" the finding belongs to, when it belongs to one
+    source: str = ""  # the stage or document of a run's inputs it was found in (a material path recurs across files)
 
     def __str__(self) -> str:
         return f"{self.severity.value}: {self.where}: {self.message}"
@@ -27,8 +28,9 @@ class Finding:
     def to_dict(self) -> dict:
         d = asdict(self)
         d["severity"] = self.severity.value
-        if not self.material:
-            del d["material"]
+        for name in ("material", "source"):
+            if not d[name]:
+                del d[name]
         return d
 
 

@@ -334,3 +334,27 @@ def test_a_high_seam_ratio_is_a_figure_not_a_verdict():
         page = render_html(Report(sources=["s.usda"], stacks=[stack]))
         assert "seam visible" not in page and "strong line" not in page and 'class="v bad"' not in page
         assert "<td>1.53</td>" in page and "Passed: seamless and faithful." in page
+
+
+def test_a_library_of_scene_usda_files_names_each_by_its_folder_and_keeps_each_files_findings(tmp_path):
+    """Every file of a library was a 'scene.usda' on its card and page title, and a file's page listed another file's
+    findings about a material of the same path (every </World/Looks/Brick>), calling a file that passed 'needs a
+    look'. Each finding now names the file it was found in."""
+    from seamless_usd.findings import Finding, Severity
+
+    good, bad = str(tmp_path / "brick" / "scene.usda"), str(tmp_path / "missing" / "scene.usda")
+    stacks = [StackReport(id="B-1", material="</World/Looks/Brick>", source=good, status=StackStatus.PASSED),
+              StackReport(id="B-2", material="</World/Looks/Brick>", source=bad, status=StackStatus.FAILED,
+                          message="nope.png is missing")]
+    missing = Finding(Severity.SKIPPED, "missing-file", "@../textures/nope.png@", "file not found",
+                      material="</World/Looks/Brick>", source=bad)
+    report = Report(sources=[good, bad], stacks=stacks, findings=[missing])
+    index = write_library_html(report, tmp_path / "library.html").read_text()
+    assert re.findall(r'<div class="file">([^<]+)</div>', index) == ["brick/scene.usda", "missing/scene.usda"]
+    pages = {p.read_text().split("<title>")[1].split("</title>")[0]: p.read_text()
+             for p in (tmp_path / "library.files").glob("*.html")}
+    assert set(pages) == {"seamless-usd: brick/scene.usda", "seamless-usd: missing/scene.usda"}
+    assert "nope.png" not in pages["seamless-usd: brick/scene.usda"]
+    assert "nope.png" in pages["seamless-usd: missing/scene.usda"]
+    files = re.findall(r"<tr><td><a [^>]+>([^<]+)</a></td>.*?<td>([a-z ]+)</td></tr>", index)
+    assert dict(files) == {good: "ok", bad: "needs a look"}

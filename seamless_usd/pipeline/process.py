@@ -11,7 +11,7 @@ import itertools
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from seamless_usd.version import __version__
@@ -355,6 +355,9 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
         except KeyboardInterrupt:  # the sources before are edited; this one's rows (if any) and the rest say stopped
             del run.report.stacks[rows:], run.report.findings[findings:]
             raise Interrupted(_interrupted(run, sources[done:], started)) from None
+        # each finding names its file: a library's files share material paths (every </World/Looks/Brick>)
+        run.report.findings[findings:] = [f if f.source else replace(f, source=str(src.path))
+                                          for f in run.report.findings[findings:]]
     return _finish(run, started)
 
 

@@ -308,7 +308,8 @@ def source_report(report: Report, source: str) -> Report:
     return Report(
         sources=[source],
         stacks=stacks,
-        findings=[f for f in report.findings if f.material in materials or source in f.where],
+        findings=[f for f in report.findings  # each finding of a run's file names it; else, by material or place
+                  if (f.source == source if f.source else f.material in materials or source in f.where)],
         tool_version=report.tool_version,
         unreadable=[u for u in report.unreadable if u == source],
         variants=[v for v in report.variants if v["source"] == source],

@@ -7,6 +7,7 @@ a stack left alone, the error of a failed one. A card links to the stack on its 
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from seamless_usd.fileio import atomic_write_text
@@ -64,7 +65,19 @@ def _filter_id(status: StackStatus) -> str:
     return f"f-{status.value}"
 
 
-def _card(stack: StackReport, link: str | None) -> str:
+def shown_names(sources: list[str]) -> dict[str, str]:
+    """Each source file as the library's pages name it: its path under the folder all of them share (every file
+    of a library may be a ``scene.usda``), or its name when it is the only one."""
+    if len(sources) < 2:
+        return {s: Path(s).name for s in sources}
+    try:
+        common = os.path.commonpath([os.path.dirname(os.path.abspath(s)) for s in sources])
+    except ValueError:  # different drives
+        return {s: s for s in sources}
+    return {s: os.path.relpath(os.path.abspath(s), common) for s in sources}
+
+
+def _card(stack: StackReport, link: str | None, shown: str) -> str:
     thumb = stack.previews.thumbnail
     name = stack.material.strip("<>")
     if thumb is not None:
@@ -80,7 +93,7 @@ def _card(stack: StackReport, link: str | None) -> str:
     return (
         f'<div class="card s-{esc(stack.status.value)}" data-status="{esc(stack.status.value)}">{picture}'
         f'<div>{title}<span class="badge {esc(stack.status.value)}">{esc(stack.status.value)}</span></div>'
-        f'<div class="file">{esc(Path(stack.source).name)}'
+        f'<div class="file">{esc(shown)}'
         f'{esc(f" (variant {stack.variant})") if stack.variant else ""}</div>'
         f'<div class="reason">{esc(stack_reason(stack))}</div></div>'
     )
@@ -126,7 +139,8 @@ def render_index(report: Report, pages: dict[str, str], title: str = "seamless-u
     ``pages`` maps a source to the relative link of its own report page.
     """
     inputs, labels, rules = _filters(report)
-    cards = "".join(_card(s, pages.get(s.source)) for s in report.stacks)
+    names = shown_names(report.sources)
+    cards = "".join(_card(s, pages.get(s.source), names.get(s.source, Path(s.source).name)) for s in report.stacks)
     problems = "".join(
         f"<li><code>{esc(f.severity.value)}</code> {esc(f.where)}: {esc(f.message)}</li>"
         for f in report.findings if f.severity.value == "error"
@@ -151,9 +165,10 @@ def write_library_html(report: Report, path: Path) -> Path:
     folder = path.with_name(f"{path.stem}.files")
     folder.mkdir(parents=True, exist_ok=True)
     pages: dict[str, str] = {}
+    names = shown_names(report.sources)
     for n, source in enumerate(report.sources, 1):
         target = folder / f"{n:04d}-{slug(Path(source).stem, 40)}.html"
-        atomic_write_text(target, render_html(source_report(report, source), title=f"seamless-usd: {Path(source).name}"))
+        atomic_write_text(target, render_html(source_report(report, source), title=f"seamless-usd: {names[source]}"))
         pages[source] = f"{folder.name}/{target.name}"
     clear_stale_pages(path, frozenset(Path(p).name for p in pages.values()))  # an earlier run's other pages
     atomic_write_text(path, render_index(report, pages))
