@@ -336,3 +336,28 @@ def test_each_seams_figure_is_written_once_beside_its_own_line_on_the_sheet():
     assert abs(x1 - x2) > 40 or abs(y1 - y2) > 14  # apart, each beside its line through the middle
     by_figure = {t[2]: (float(t[0]), float(t[1])) for t in texts}
     assert abs(by_figure["+5.98"][0] - 104) < 1 and abs(by_figure["+1.01"][1] - 94) < 1
+
+
+def test_a_material_with_a_udim_set_is_left_alone_by_check_as_by_process(tmp_path, capsys):
+    """A material reading a UDIM set beside a plain roughness: process leaves it alone (tiling the roughness alone
+    would misalign it), and check judged the roughness against itself, not passed, exit 1."""
+    import shutil
+
+    tex = tmp_path / "tex"
+    tex.mkdir()
+    shutil.copyfile(SAMPLES / "brick_albedo.png", tex / "u.1001.png")
+    shutil.copyfile(SAMPLES / "brick_roughness.png", tex / "brick_roughness.png")
+    doc = tmp_path / "udim.mtlx"
+    doc.write_text(
+        '<?xml version="1.0"?>\n<materialx version="1.39">'
+        '<image name="a" type="color3"><input name="file" type="filename" value="tex/u.&lt;UDIM&gt;.png"/></image>'
+        '<image name="r" type="float"><input name="file" type="filename" value="tex/brick_roughness.png"/></image>'
+        '<standard_surface name="S" type="surfaceshader"><input name="base_color" type="color3" nodename="a"/>'
+        '<input name="specular_roughness" type="float" nodename="r"/></standard_surface>'
+        '<surfacematerial name="M_udim" type="material"><input name="surfaceshader" type="surfaceshader" nodename="S"/>'
+        '</surfacematerial></materialx>\n')
+    assert main(["process", "--dry-run", "--json", str(doc)]) == 0
+    [row] = json.loads(capsys.readouterr().out)["stacks"]
+    assert row["status"] == "left-alone" and "udim" in row["message"]
+    assert main(["check", "--json", str(doc)]) == 0
+    assert json.loads(capsys.readouterr().out)["items"] == []

@@ -75,13 +75,20 @@ def blocked_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str
     return out
 
 
+def set_aside_reasons(scan: ScanResult, stack: TextureStack) -> list[str]:
+    """The textures of ``stack``'s material this tool does not make tileable (a UDIM set, a picture too small, an
+    animated file), each ``@file@ (code)``: while there is one, the stack is left alone (:func:`set_aside_stacks`) and
+    ``check`` does not judge it either."""
+    return _skipped(scan, stack, BLOCKING_SKIPS - UNREAD_SKIPS)
+
+
 def set_aside_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
     """Stacks left alone because a texture of their material is one this tool does not make tileable (a UDIM
     set, a picture too small): tiling the other maps would misalign them. Not a failure; a broken texture of the
     same material (:func:`blocked_stacks`) comes first."""
     out = {}
     for stack in stacks:
-        reasons = _skipped(scan, stack, BLOCKING_SKIPS - UNREAD_SKIPS)
+        reasons = set_aside_reasons(scan, stack)
         if reasons and not _skipped(scan, stack, UNREAD_SKIPS):
             out[(source, stack.id)] = (
                 f"left alone: {', '.join(reasons)} of this material is not made tileable, and tiling the other "

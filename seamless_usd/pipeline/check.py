@@ -356,7 +356,7 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
     if scenes:  # USD and MaterialX are imported only for scenes: a picture is judged without them
         from seamless_usd.discover import scan_paths
         from seamless_usd.discover.scan import open_stage
-        from seamless_usd.discover.select import unread_findings
+        from seamless_usd.discover.select import set_aside_reasons, unread_findings
     total = len(scenes) + len(pictures)
     done = 0
 
@@ -378,7 +378,8 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
         used.update(_real(m.resolved) for st in result.stacks for m in st.maps if m.resolved)
         judged, seen = [], set()
         for s in result.stacks:  # a stack the same as one judged is judged once (its twin may be one not judged)
-            if s.intent in _JUDGED_INTENTS and s.content_key not in seen:
+            # a material with a UDIM set or a picture too small is left alone by process: not judged here either
+            if s.intent in _JUDGED_INTENTS and s.content_key not in seen and not set_aside_reasons(result, s):
                 seen.add(s.content_key)
                 judged.append(s)
         unread = unread_findings(result)
