@@ -176,3 +176,32 @@ def test_a_colour_space_stated_on_the_interface_input_that_holds_the_file(tmp_pa
 """)
     [stack] = scan_mtlx(tmp_path / "look.mtlx").stacks
     assert stack.maps[0].color_space is ColorSpace.SRGB and "srgb_texture" in stack.maps[0].color_space_reason
+
+
+def test_a_node_of_the_documents_own_definition_that_takes_a_file_is_named_and_its_material_left_alone(tmp_path):
+    """A studio's definition wrapping ``image`` (its nodegraph implements a nodedef the document declares): the
+    material was listed without stacks and no finding, its roughness beside it would have been tiled alone."""
+    doc = _write(tmp_path / "custom.mtlx", """
+  <nodedef name="ND_mytex_color3" node="mytex"><input name="file" type="filename" value="" uniform="true" />
+    <output name="out" type="color3" /></nodedef>
+  <nodegraph name="NG_mytex_color3" nodedef="ND_mytex_color3">
+    <image name="img" type="color3"><input name="file" type="filename" interfacename="file" /></image>
+    <output name="out" type="color3" nodename="img" /></nodegraph>
+  <mytex name="wood_tex" type="color3"><input name="file" type="filename" value="wood.png" /></mytex>
+  <image name="rough" type="float"><input name="file" type="filename" value="rough.png" /></image>
+  <standard_surface name="SR" type="surfaceshader"><input name="base_color" type="color3" nodename="wood_tex" />
+    <input name="specular_roughness" type="float" nodename="rough" /></standard_surface>
+  <surfacematerial name="M" type="material"><input name="surfaceshader" type="surfaceshader" nodename="SR" />
+  </surfacematerial>""")
+    import shutil
+
+    shutil.copyfile(Path(__file__).resolve().parents[1] / "sample_assets" / "textures" / "brick_roughness.png",
+                    tmp_path / "rough.png")
+    result = scan_mtlx(doc)
+    [found] = [f for f in result.findings if f.code == "file-node-not-read"]
+    assert found.where == "<wood_tex> @wood.png@" and found.material == "<M>"
+    assert "ND_mytex_color3" in found.message and "flattenSubgraphs" in found.message
+    from seamless_usd.discover.select import set_aside_stacks
+
+    [stack] = result.stacks  # the roughness: left alone, not tiled without the albedo
+    assert set_aside_stacks(result, [stack], str(doc))

@@ -73,15 +73,20 @@ def walk_document(
             name = f"<{material.getNamePath()}>"
         materials.append(name)
         try:
-            uses.extend(_material_uses(material, name, document))
+            found, custom = _material_uses(material, name, document)
+            uses.extend(found)
+            errors.extend(_file_node_finding(node, consumer, name, document) for node, consumer in custom)
         except Exception as exc:  # noqa: BLE001 - one bad material must not stop the scan
             errors.append(Finding(Severity.ERROR, Codes.DISCOVERY_ERROR, f"{name} {asset_ref(document)}",
                                   f"cannot follow the material network: {type(exc).__name__}: {exc}"))
     return materials, uses, errors
 
 
-def _material_uses(material: mx.Node, name: str, document: str) -> list[TextureUse]:
+def _material_uses(material: mx.Node, name: str, document: str) -> tuple[list[TextureUse], list[tuple[mx.Node, str]]]:
+    """The material's texture uses, and the nodes of custom definitions with a file input its shaders read
+    (:func:`_trace`), each with the shader input reading it."""
     uses: list[TextureUse] = []
+    custom: dict[str, tuple[mx.Node, str]] = {}
     shaders = []
     for shader_type in Terminals.MTLX_SHADER_TYPES:
         shaders.extend(mx.getShaderNodes(material, shader_type))
@@ -89,8 +94,28 @@ def _material_uses(material: mx.Node, name: str, document: str) -> list[TextureU
         for inp in shader.getInputs():
             consumer = f"<{shader.getNamePath()}.{inp.getName()}>"
             for tex, channels, flip in _trace(inp, None, 0, False):
-                uses.append(_texture_use(name, tex, RoleUse(inp.getName(), channels, consumer), flip, document))
-    return uses
+                if channels is None:
+                    custom.setdefault(tex.getNamePath(), (tex, consumer))
+                else:
+                    uses.append(_texture_use(name, tex, RoleUse(inp.getName(), channels, consumer), flip, document))
+    return uses, list(custom.values())
+
+
+def _file_node_finding(node: mx.Node, consumer: str, material: str, document: str) -> Finding:
+    """A skipped finding for a node that takes a file but is no image node this tool reads: a node of a definition
+    the document makes itself (a studio's wrapper round ``image``), whose texture is inside the definition and shared
+    by every node of it, or a standard one such as ``triplanarprojection``."""
+    files = [i.getValueString() for i in node.getInputs() if i.getType() == MtlxInputs.FILENAME_TYPE]
+    shown = f" {asset_ref(files[0])}" if files and files[0] else ""
+    definition = mtlxgraph.node_type_name(node)
+    custom = node.getDocument().getChild(definition) is not None  # defined in the document, not a standard library
+    what = (f"a node of the document's own definition {definition}, whose image is inside the definition (shared "
+            "by every node of it): flatten the document's custom nodes into their graphs (MaterialX "
+            "flattenSubgraphs) to process it" if custom else
+            f"a {node.getCategory()} node ({definition}), which this tool does not make tileable")
+    return Finding(Severity.SKIPPED, Codes.FILE_NODE_NOT_READ, f"<{node.getNamePath()}>{shown}",
+                   f"{consumer} reads a file through {what} (material {material} in {asset_ref(document)})",
+                   material=material)
 
 
 def _compose(inner: tuple[int, ...], outer: tuple[int, ...] | None) -> tuple[int, ...]:
@@ -115,6 +140,10 @@ def _trace(inp: mx.Input, pick, depth: int, flip: bool, seen: set | None = None)
         return
     seen.add(visit)
     category = node.getCategory()
+    if category not in MtlxCategories.TEXTURES and any(i.getType() == MtlxInputs.FILENAME_TYPE
+                                                       for i in node.getInputs()):
+        yield node, None, flip  # a node reading a file that is no image node read: named (see _file_node_finding)
+        return
     if category in MtlxCategories.TEXTURES:
         channels = mtlxgraph.channels_of(node.getType(), out_name) or "rgb"
         if pick is not None:

@@ -16,7 +16,8 @@ __all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "unmatched_pattern
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
 # the other maps tileable (and rescaling their UVs) would misalign them with the skipped one.
-BLOCKING_SKIPS = frozenset({"missing-file", "unreadable-file", "udim", "too-small", "animated-file"})
+BLOCKING_SKIPS = frozenset({"missing-file", "unreadable-file", "udim", "too-small", "animated-file",
+                            "file-node-not-read"})
 #: Of those, the skips that are a broken asset rather than a texture this tool does not handle.
 UNREAD_SKIPS = frozenset({"missing-file", "unreadable-file"})
 
