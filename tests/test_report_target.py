@@ -4,6 +4,7 @@ replaced."""
 from __future__ import annotations
 
 import hashlib
+import json
 import shutil
 from pathlib import Path
 
@@ -104,3 +105,15 @@ def test_a_library_reports_pages_replace_only_its_own_and_leave_no_earlier_run_b
     assert len(list(pages.glob("*.html"))) == 2
     assert main(["process", scenes[0], "--dry-run", "--report", str(report)]) == 0  # one source: one page
     assert report.is_file() and not pages.exists()
+
+
+def test_an_empty_file_the_shell_made_for_stdout_is_no_users_file(tmp_path, capsys):
+    """``process --report out/r.html --json > out/r.json``: the shell makes r.json empty before the run, and the run
+    refused it as a file of the user's (exit 2). An empty file holds nothing to lose: the report's JSON goes there."""
+    scene = tmp_path / "brick" / "scene.usda"
+    shutil.copytree(SAMPLES / "brick", scene.parent)
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    (tmp_path / "run.json").write_text("")
+    assert main(["process", str(scene), "--dry-run", "--report", str(tmp_path / "run.html")]) == 0
+    capsys.readouterr()
+    assert json.loads((tmp_path / "run.json").read_text())["stacks"] and (tmp_path / "run.html").exists()

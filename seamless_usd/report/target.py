@@ -3,7 +3,7 @@
 ``--report scene.usda`` or ``--report albedo.png`` must not replace the stage or the picture with a page, and a
 page or JSON file of someone else's must not be lost either. A report path that does not end in ``.html`` gets
 that suffix (the JSON report of ``process`` goes beside it, ending in ``.json``), and an existing file there is
-replaced only when it is one of this tool's own reports.
+replaced only when it is one of this tool's own reports, or empty.
 """
 from __future__ import annotations
 
@@ -75,7 +75,9 @@ def report_target(path: str | Path, suffix: str = ".html") -> Path:
     target = p if p.suffix.lower() in kept else p.with_suffix(suffix)
     if target.is_dir():
         raise InputError(f"{asset_ref(target)} is a folder: name a file for the report (e.g. report.html)")
-    if target.exists() and not is_own_report(target):
+    # an empty file holds nothing to lose: the shell made it (``--report out/r.html --json > out/r.json``)
+    empty = target.is_file() and target.stat().st_size == 0
+    if target.exists() and not empty and not is_own_report(target):
         raise InputError(f"{asset_ref(target)} exists and is not a report this tool wrote: it is not replaced; "
                          "remove it or name another report path")
     folder = _pages_folder(target)
