@@ -155,3 +155,27 @@ def test_tiles_deleted_after_an_in_place_run_are_made_again_from_their_recorded_
     assert stack["status"] == first["stacks"][0]["status"] and stack["origin"] == "cache"
     assert [f["code"] for f in again["findings"]].count("tile-missing") == 2
     assert _file_inputs(scene) == made and all(Path(tile).is_file() for tile, _, _ in made.values())
+
+
+def test_a_file_set_by_hand_after_an_in_place_run_is_left_as_it_is_and_its_stack_fails(tmp_path, capsys):
+    """An artist set the albedo back to the photo after an in-place run: a run again took the node's provenance at
+    its word (already tileable, passed, exit 0), the scan agreed, check did not, and the photo stayed under the tile's
+    UV scale. The stack now fails naming the file, which is left as it is; scan judges the pixels, as check does."""
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene = tmp_path / "brick" / "scene.usda"
+    run = ["process", str(scene), "--preset", "tiny", "--max-size", "128", "--in-place", "--cache-dir",
+           str(tmp_path / "cache"), "--json"]
+    main(run)
+    assert json.loads(capsys.readouterr().out)["stacks"][0]["status"] == "passed"
+    text = scene.read_text()
+    tile = next(p for p in text.split("@") if "tileable/brick_albedo" in p)
+    scene.write_text(text.replace(f"@{tile}@", "@../textures/brick_albedo.png@"))
+    before = scene.read_bytes()
+    assert main(run) == 1
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    assert stack["status"] == "failed" and "set by hand" in stack["message"] and "brick_albedo.png" in stack["message"]
+    assert scene.read_bytes() == before
+    assert main(["scan", "--json", str(scene)]) == 0
+    [scanned] = json.loads(capsys.readouterr().out)["stacks"]
+    assert scanned["intent"] == "tiling" and "set by hand since" in scanned["intent_reason"]

@@ -26,6 +26,7 @@ The verdict's figures on labelled textures it was not tuned on are in ``docs/ver
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from enum import Enum
@@ -170,6 +171,16 @@ def _changed_sources(stack: TextureStack) -> list[str]:
             and source_changed(m.resolved, m.recorded_source.resolved)]
 
 
+def hand_set(stack: TextureStack) -> list:
+    """The maps of ``stack`` whose node records a tile this tool wrote (its ``seamless:`` provenance) but reads a file
+    that is no tile of this tool's (not tagged as one, not named ``*.tile.*``): set by hand since, in the layer the
+    run edited in place. Their provenance says nothing of the file they read."""
+    from seamless_usd.imaging.tag import read_tag
+
+    return [m for m in stack.maps if m.recorded_source and m.resolved and not m.tile_missing
+            and ".tile." not in Path(m.resolved).name and read_tag(m.resolved) is None]
+
+
 def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo, explored: int = 1) -> IntentDecision:
     """Class of one stack from its maps, its bound geometry's UV stats and the pixel measures (kept in ``memo``)."""
     clamped = [m for m in stack.maps if m.wrap_s in _CLAMPED or m.wrap_t in _CLAMPED]
@@ -185,7 +196,11 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo,
         if decision.intent is not Intent.TILING:
             return decision
     recorded = [m.recorded_passed for m in stack.maps]
-    if all(r is not None for r in recorded):  # tiles this tool wrote: the verdict against their recorded source
+    hand = hand_set(stack) if all(r is not None for r in recorded) else []
+    if hand:  # the provenance is of a tile the node no longer reads: its pixels are judged, as check judges them
+        decision = IntentDecision(decision.intent, f"{decision.reason}; {asset_ref(hand[0].asset)} is not the tile "
+                                                   "seamless-usd wrote there (set by hand since)")
+    elif all(r is not None for r in recorded):  # tiles this tool wrote: the verdict against their recorded source
         missing = [m for m in stack.maps if m.tile_missing]
         if missing:
             return IntentDecision(Intent.TILING, f"{decision.reason}; made by seamless-usd, and its tile "

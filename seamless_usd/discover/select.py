@@ -5,13 +5,13 @@ from __future__ import annotations
 import fnmatch
 from collections.abc import Sequence
 
-from seamless_usd.discover.intent import Intent
+from seamless_usd.discover.intent import Intent, hand_set
 from seamless_usd.discover.tokens import Codes
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["BLOCKING_SKIPS", "UNREAD_SKIPS", "select_stacks", "unmatched_patterns", "blocked_stacks", "set_aside_stacks",
-           "instanced_stacks", "left_alone_stacks", "from_recorded_sources", "matches_any",
+           "instanced_stacks", "hand_set_stacks", "left_alone_stacks", "from_recorded_sources", "matches_any",
            "unread_findings", "unread_materials", "unread_files"]
 
 # A texture of a material skipped for one of these reasons blocks the material's stacks: making
@@ -98,6 +98,24 @@ def set_aside_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: s
             out[(source, stack.id)] = (
                 f"left alone: {asset_ref(packed[0].resolved)} is inside a .usdz package, and its maps are not read "
                 "from inside one; unpack the package (it is a zip file) and process the unpacked stage")
+    return out
+
+
+def hand_set_stacks(stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
+    """Stacks with a node whose ``seamless:`` provenance records a tile this tool wrote while the node reads another
+    file (:func:`.intent.hand_set`: set by hand since, in a layer a run edited in place): they fail, the file left as
+    it is, as a file set by hand in a run's new layer is. A run again took the provenance's word, called the stack
+    already tileable and left the photo under the tile's UV scale."""
+    out = {}
+    for stack in stacks:
+        hand = hand_set(stack)
+        if hand:
+            m = hand[0]
+            out[(source, stack.id)] = (
+                f"not processed: {prim_ref(m.node.strip('<>'))} reads {asset_ref(m.asset)}, set by hand since this tool "
+                f"wrote its tile there (the node's seamless: attributes record the source "
+                f"{asset_ref(m.recorded_source.asset)}): it is left as it is; set the file back to the tile, or remove "
+                "the node's seamless: attributes (seamless_* in MaterialX) to have it made again")
     return out
 
 

@@ -17,8 +17,9 @@ from pathlib import Path
 from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
 from seamless_usd.discover.scan import not_a_scene
-from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, from_recorded_sources, instanced_stacks,
-                                          matches_any, select_stacks, set_aside_stacks, unmatched_patterns)
+from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, from_recorded_sources, hand_set_stacks,
+                                          instanced_stacks, matches_any, select_stacks, set_aside_stacks,
+                                          unmatched_patterns)
 from seamless_usd.discover.select import left_alone_stacks as _left_alone, shared_node_stacks
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, Interrupted, SeamlessUsdError, UsageError
@@ -288,6 +289,7 @@ def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
         try:
             src = _scan_source(path, run.options.materials, *_triage(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
+            run.blocked.update(hand_set_stacks(src.stacks, str(src.path)))
             run.blocked.update(src.instanced)
             run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
             unread_rows(run, src.scan, str(src.path))
@@ -420,6 +422,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     stacks = [s for s in stacks if not s.selection]
     _check_patterns(run, [_Source(Path(label), "usd", scan, stacks)])
     run.blocked.update(blocked_stacks(scan, stacks, label))
+    run.blocked.update(hand_set_stacks(stacks, label))
     run.blocked.update(instanced_stacks(stage, stacks, label))
     run.set_aside.update(set_aside_stacks(scan, stacks, label))
     unread_rows(run, scan, label)
