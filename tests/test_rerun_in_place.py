@@ -179,3 +179,43 @@ def test_a_file_set_by_hand_after_an_in_place_run_is_left_as_it_is_and_its_stack
     assert main(["scan", "--json", str(scene)]) == 0
     [scanned] = json.loads(capsys.readouterr().out)["stacks"]
     assert scanned["intent"] == "tiling" and "set by hand since" in scanned["intent_reason"]
+
+
+def test_a_map_added_to_a_material_after_an_in_place_run_joins_its_stack(tmp_path, capsys):
+    """An occlusion map wired in after an in-place run reads the texture coordinates directly, the run's maps read
+    its UV transform: the scan made two stacks under one id, the new one took the other's left-alone status, and the
+    run said nothing was to be done (exit 0). It now joins the stack, made again with it, every map at one UV scale."""
+    from pxr import Sdf
+
+    for name in ("brick", "textures"):
+        shutil.copytree(SAMPLES / name, tmp_path / name)
+    scene = tmp_path / "brick" / "scene.usda"
+    run = ["process", str(scene), "--preset", "tiny", "--max-size", "128", "--in-place", "--cache-dir",
+           str(tmp_path / "cache"), "--json"]
+    main(run)
+    capsys.readouterr()
+    stage = Usd.Stage.Open(str(scene))
+    look = "/World/Looks/Brick"
+    occl = UsdShade.Shader.Define(stage, f"{look}/Occl")
+    occl.CreateIdAttr("UsdUVTexture")
+    occl.CreateInput("file", Sdf.ValueTypeNames.Asset).Set("../textures/brick_orm.png")
+    occl.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
+    occl.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
+        UsdShade.Shader.Get(stage, f"{look}/StReader").ConnectableAPI(), "result")
+    occl.CreateOutput("r", Sdf.ValueTypeNames.Float)
+    UsdShade.Shader.Get(stage, f"{look}/Surface").CreateInput("occlusion", Sdf.ValueTypeNames.Float).ConnectToSource(
+        occl.ConnectableAPI(), "r")
+    stage.GetRootLayer().Save()
+    main(["scan", "--json", str(scene)])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    assert len(stack["maps"]) == 4 and stack["intent"] == "tiling"
+    main(run)
+    [made] = json.loads(capsys.readouterr().out)["stacks"]
+    assert made["status"] in ("passed", "not-passed") and len(made["maps"]) == 4
+    stage = Usd.Stage.Open(str(scene))
+    scales = set()
+    for node in ("Albedo", "Occl"):
+        shader = UsdShade.Shader.Get(stage, f"{look}/{node}")
+        assert "tileable/" in shader.GetInput("file").Get().path
+        scales.add(tuple(shader.GetInput("st").GetConnectedSources()[0][0].source.GetInput("scale").Get()))
+    assert len(scales) == 1  # one UV scale for every map of the stack

@@ -20,6 +20,15 @@ def chain_key(uv: UVChain, texture_node: str) -> str:
     def ours(node: str) -> bool:
         return node.rsplit("/", 1)[-1] == Recorded.MTLX_UV_NODE
 
+    inserted = any(t.ours for t in uv.transforms) and not any(ours(t.node) for t in uv.transforms)
+    if uv.before_ours is not None and inserted:
+        # a USD chain through the UV transform this tool inserted: grouped as it read before the run, so a map added
+        # to the material since, reading the texture coordinates directly, joins its stack (the two were one stack
+        # under one id, and the new map's stack took the processed one's left-alone status)
+        primvar, reader, connected = uv.before_ours
+        transforms = [[t.kind, list(t.scale), t.rotation, list(t.translation), list(t.pivot), t.operation_order]
+                      if t.node == texture_node else t.node for t in uv.transforms if not t.ours]
+        return json.dumps([primvar, reader, transforms, connected])
     transforms = [
         [t.kind, list(t.scale), t.rotation, list(t.translation), list(t.pivot), t.operation_order]
         if t.node == texture_node or ours(t.node) else t.node
