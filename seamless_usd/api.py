@@ -81,6 +81,8 @@ def check(paths: Sequence[str | os.PathLike] | str | os.PathLike, *, jobs: int =
         paths = [paths]  # one path given as itself, not as its letters
     elif not isinstance(paths, Sequence) or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise UsageError(f"check() takes a path or a list of paths, not {type(paths).__name__}")
+    if not paths:  # the command takes at least one path: nothing to judge is not a pass
+        raise UsageError("check() was given no path: give a stage, document, picture or folder")
     if not isinstance(jobs, int) or isinstance(jobs, bool) or jobs < 1:
         raise UsageError(f"check(jobs={jobs!r}): a whole number of worker processes, at least 1")
     return check_paths([Path(p) for p in paths], progress=progress, jobs=jobs)

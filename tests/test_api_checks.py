@@ -187,3 +187,18 @@ def test_a_file_with_unsaved_changes_in_this_process_is_not_read_as_if_on_disk(t
                                                               str(checked.to_dict()))
     stage.GetRootLayer().Save()
     assert seamless_usd.check([scene]).exit_code == 0
+
+
+def test_options_of_the_wrong_type_an_empty_setting_and_no_paths_are_said_plainly(tmp_path, monkeypatch):
+    """``Options(output_dir=5)`` and ``Options(materials=(5,))`` raised raw TypeErrors part-way; ``cache_dir=""`` (a
+    hook's empty field) put the cache in the working folder; ``check([])`` and ``process_paths([])`` returned exit
+    code 0 having judged nothing (the command takes at least one path)."""
+    for values in ({"output_dir": 5}, {"materials": (5,)}, {"report": 1.5}):
+        with pytest.raises(UsageError):
+            seamless_usd.Options(preset="tiny", **values)
+    assert seamless_usd.Options(preset="tiny", cache_dir="").cache_dir is None
+    assert seamless_usd.Options(preset="tiny", materials=["*Brick"]).materials == ("*Brick",)
+    with pytest.raises(UsageError):
+        seamless_usd.check([])
+    with pytest.raises(UsageError):
+        seamless_usd.process_paths([], seamless_usd.Options(preset="tiny"))

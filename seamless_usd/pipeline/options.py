@@ -1,6 +1,8 @@
 """One options dataclass shared by the Python API, the CLI and the DCC hooks."""
 from __future__ import annotations
 
+import os
+
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -75,6 +77,16 @@ class Options:
         for name in ("materials", "force_materials"):  # one pattern given as itself, not as its letters
             if isinstance(getattr(self, name), str):
                 object.__setattr__(self, name, (getattr(self, name),))
+            patterns = getattr(self, name)
+            if not isinstance(patterns, (tuple, list)) or not all(isinstance(p, str) for p in patterns):
+                raise UsageError(f"Options.{name} must be a pattern or a list of patterns (strings); got {patterns!r}")
+            object.__setattr__(self, name, tuple(patterns))
+        for name in ("output_layer", "output_dir", "report", "cache_dir"):
+            value = getattr(self, name)
+            if value == "":  # an empty setting (a hook's empty field): the default, not the working folder
+                object.__setattr__(self, name, None)
+            elif value is not None and not isinstance(value, (str, os.PathLike)):
+                raise UsageError(f"Options.{name} must be a path; got {value!r}")
         for name in ("seed", "seeds", "iterations", "max_pixels", "max_size", "jobs"):
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, int)):

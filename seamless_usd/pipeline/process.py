@@ -317,6 +317,8 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
     if not isinstance(paths, (list, tuple)) or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise UsageError(f"process_paths() takes a path or a list of paths, not {type(paths).__name__} "
                          "(an open stage: process_stage())")
+    if not paths:  # the command takes at least one path: nothing processed is not a pass
+        raise UsageError("process_paths() was given no path: give a stage, document, folder or pattern")
     run = _new_run(_as_options(options))
     sources = []
     inputs = expand_inputs(paths, require_scenes=True)
