@@ -417,3 +417,14 @@ def test_a_stack_that_failed_is_logged_once_not_again_as_its_finding(tmp_path):
     lines = [ln.text for ln in common.report_lines(report)]
     assert sum(stack.message in text for text in lines) == 1, lines
     assert any("brick_roughness.png" in text and "cannot read the image header" in text for text in lines)
+
+
+def test_a_failed_run_fails_the_export_only_when_strict(tmp_path):
+    """Blender's ``on_export`` returned the run's own ``ok``, so a stack that did not pass failed Blender's export
+    even without ``strict``, where Maya's chaser let it go on; both now answer through :func:`common.export_ok`."""
+    _real_options()
+    run = common.run_hook(_stage_on_disk(tmp_path), HookSettings(), emit=lambda _: None,
+                          process=_Recorder(error=InputError("@x.png@ cannot be read")))
+    assert not run.ok
+    assert common.export_ok(run, HookSettings()) and not common.export_ok(run, HookSettings(strict=True))
+    assert common.export_ok(common.HookRun(), HookSettings(strict=True))

@@ -50,6 +50,7 @@ __all__ = [
     "resolve_output_dir",
     "options_for_stage",
     "report_lines",
+    "export_ok",
     "progress_logger",
     "HookRun",
     "run_hook",
@@ -162,6 +163,12 @@ class HookRun:
     report: object | None = None
     lines: list[LogLine] = field(default_factory=list)
     ok: bool = True
+
+
+def export_ok(run: HookRun, settings: HookSettings) -> bool:
+    """What a hook tells its DCC (False: the export failed): a stack that failed or did not pass fails the export only
+    with ``strict``; otherwise it is logged and the export goes on (Blender's ``on_export``, Maya's chaser)."""
+    return run.ok or not settings.strict
 
 
 def run_hook(

@@ -77,7 +77,7 @@ class SeamlessUsdChaser(mayaUsdLib.ExportChaser):
             run = common.run_hook(self._stage, self._settings, emit=_emit)
         except HookError:  # strict: already logged; mayaUSD reports a chaser's false as a failed export
             return False
-        return run.ok or not self._settings.strict
+        return common.export_ok(run, self._settings)
 
 
 def _strict_argument(job_args) -> bool:

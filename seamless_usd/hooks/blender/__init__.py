@@ -159,7 +159,7 @@ def on_export(export_context, settings: HookSettings) -> bool:
     stage = export_context.get_stage()
     wm = getattr(bpy.context, "window_manager", None)
     if wm is None or bpy.app.background:
-        return common.run_hook(stage, settings, emit=console_emit).ok
+        return common.export_ok(common.run_hook(stage, settings, emit=console_emit), settings)
     wm.progress_begin(0, 1000)  # the export blocks the UI while stacks train: show where it is
 
     def progress(event) -> None:
@@ -167,7 +167,7 @@ def on_export(export_context, settings: HookSettings) -> bool:
         wm.progress_update(int(1000 * done / max(event.total, 1)))
 
     try:
-        return common.run_hook(stage, settings, emit=console_emit, on_progress=progress).ok
+        return common.export_ok(common.run_hook(stage, settings, emit=console_emit, on_progress=progress), settings)
     finally:
         wm.progress_end()
 
