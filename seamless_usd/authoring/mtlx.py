@@ -16,7 +16,8 @@ from typing import Sequence
 
 import MaterialX as mx
 
-from seamless_usd.authoring.mtlxinputs import MtlxNames, UnauthoredInput, fmt, gltf_identity, set_vector2, vector2
+from seamless_usd.authoring.mtlxinputs import (MtlxNames, UnauthoredInput, fmt, gltf_identity, own_file_input,
+                                               set_vector2, vector2)
 from seamless_usd.authoring.mtlxuv import _PlaceUV
 from seamless_usd.authoring.files import (SET_BY_HAND, backup_once, layer_lock, relative_asset_path, set_by_hand,
                                           write_atomically)
@@ -246,31 +247,6 @@ class _MtlxAuthor(_PlaceUV):
             inp.setValueString(rel)
             self._plan(f"set {prim_ref(inp.getNamePath())} = {asset_ref(rel)}")
 
-    def _own_file(self, node: mx.Node, file_input):
-        """The input to write ``node``'s tile to: ``file_input`` (where its file value is authored), unless that is
-        a nodegraph's interface input another node reads too (a decal left alone, another material's image): then
-        the node's own file input, its read of the interface input cut and the interface's colour space kept on it,
-        so the other node keeps its file (as a USD texture node's own file is set where a material input is shared).
-        The interface input was set, and the other node showed the tile."""
-        own = node.getInput(MtlxNames.FILE)
-        name = own.getInterfaceName() if own is not None else ""
-        graph = node.getParent()
-        if own is not None and not name and own.getValueString() and file_input is not own:
-            return own  # cut by an earlier run, on the document it wrote: the node reads its own input
-        if not name or file_input is own or not isinstance(graph, mx.NodeGraph):
-            return file_input
-        others = [n.getNamePath() for n in graph.getNodes() if n != node
-                  and any(i.getInterfaceName() == name for i in n.getInputs())]
-        if not others:
-            return file_input
-        space = file_input.getActiveColorSpace() if isinstance(file_input, mx.Input) else ""
-        own.removeAttribute("interfacename")
-        if space and not own.getColorSpace():
-            own.setColorSpace(space)
-        self._plan(f"read {prim_ref(node.getNamePath())}'s file from its own input, not from "
-                   f"{prim_ref(graph.getNamePath())}.{name}, which {prim_ref(others[0])} reads too")
-        return own
-
     def _authored(self, node: mx.Node, name: str, type_name: str) -> mx.Input:
         """The input holding ``name``'s value: the interface input it reads, or the node's own."""
         inp = node.getInput(name)
@@ -343,7 +319,9 @@ class _MtlxAuthor(_PlaceUV):
             owner.getInput(at.attribute) if owner is not None and hasattr(owner, "getInput") else None)
         if file_input is None:
             file_input = self._authored(node, MtlxNames.FILE, MtlxNames.FILENAME)
-        file_input = self._own_file(node, file_input)
+        file_input, cut = own_file_input(node, file_input)
+        if cut:
+            self._plan(cut)
         current = file_input.getResolvedValueString()
         if current and set_by_hand(str(self.out.parent / current), tex_map.resolved):
             self.result.not_written.append((node_key(tex_map), SET_BY_HAND.format(

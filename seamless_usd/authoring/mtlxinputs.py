@@ -1,10 +1,11 @@
 """Small helpers of :mod:`.mtlx` on MaterialX inputs: the names it uses, an input a node does not have yet, vector2
-values written with full float precision, and whether a gltf image node's own UV transform is the identity."""
+values written with full float precision, whether a gltf image node's own UV transform is the identity, and which
+input a node's tile goes to."""
 from __future__ import annotations
 
 import MaterialX as mx
 
-__all__ = ["MtlxNames", "UnauthoredInput", "set_vector2", "gltf_identity", "vector2", "fmt"]
+__all__ = ["MtlxNames", "UnauthoredInput", "set_vector2", "gltf_identity", "vector2", "fmt", "own_file_input"]
 
 
 class MtlxNames:
@@ -105,3 +106,28 @@ def vector2(text: str) -> tuple[float, float]:
 
 def fmt(values) -> str:
     return ", ".join(repr(float(v)) if isinstance(v, float) else str(v) for v in values)
+
+
+def own_file_input(node: mx.Node, file_input) -> tuple:
+    """(the input to write ``node``'s tile to, what was changed to make it so or None): ``file_input`` (where its file
+    value is authored), unless that is a nodegraph's interface input another node reads too (a decal left alone,
+    another material's image): then the node's own file input, its read of the interface input cut and the
+    interface's colour space kept on it, so the other node keeps its file (as a USD texture node's own file is set
+    where a material input is shared). The interface input was set, and the other node showed the tile."""
+    own = node.getInput(MtlxNames.FILE)
+    name = own.getInterfaceName() if own is not None else ""
+    graph = node.getParent()
+    if own is not None and not name and own.getValueString() and file_input is not own:
+        return own, None  # cut by an earlier run, on the document it wrote: the node reads its own input
+    if not name or file_input is own or not isinstance(graph, mx.NodeGraph):
+        return file_input, None
+    others = [n.getNamePath() for n in graph.getNodes() if n != node
+              and any(i.getInterfaceName() == name for i in n.getInputs())]
+    if not others:
+        return file_input, None
+    space = file_input.getActiveColorSpace() if isinstance(file_input, mx.Input) else ""
+    own.removeAttribute("interfacename")
+    if space and not own.getColorSpace():
+        own.setColorSpace(space)
+    return own, (f"read <{node.getNamePath()}>'s file from its own input, not from <{graph.getNamePath()}>.{name}, "
+                 f"which <{others[0]}> reads too")
