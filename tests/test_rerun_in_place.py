@@ -93,12 +93,17 @@ def test_a_not_passed_tile_run_again_in_place_is_made_again_from_its_source(tmp_
     assert gone["stacks"][0]["status"] in ("passed", "not-passed")
 
 
-def test_a_passed_tile_whose_source_changed_is_made_again_from_it(tmp_path, capsys):
+def _brick_in_place(root: Path) -> tuple[Path, list[str]]:
+    """The bundled brick copied under ``root``, and the in-place run over it (a small tile, a cache of its own)."""
     for name in ("brick", "textures"):
-        shutil.copytree(SAMPLES / name, tmp_path / name)
-    scene = tmp_path / "brick" / "scene.usda"
-    run = ["process", str(scene), "--preset", "tiny", "--max-size", "128", "--in-place", "--cache-dir",
-           str(tmp_path / "cache"), "--json"]
+        shutil.copytree(SAMPLES / name, root / name)
+    scene = root / "brick" / "scene.usda"
+    return scene, ["process", str(scene), "--preset", "tiny", "--max-size", "128", "--in-place", "--cache-dir",
+                   str(root / "cache"), "--json"]
+
+
+def test_a_passed_tile_whose_source_changed_is_made_again_from_it(tmp_path, capsys):
+    scene, run = _brick_in_place(tmp_path)
     main(run)
     [stack] = json.loads(capsys.readouterr().out)["stacks"]
     assert stack["status"] == "passed"
@@ -161,11 +166,7 @@ def test_a_file_set_by_hand_after_an_in_place_run_is_left_as_it_is_and_its_stack
     """An artist set the albedo back to the photo after an in-place run: a run again took the node's provenance at
     its word (already tileable, passed, exit 0), the scan agreed, check did not, and the photo stayed under the tile's
     UV scale. The stack now fails naming the file, which is left as it is; scan judges the pixels, as check does."""
-    for name in ("brick", "textures"):
-        shutil.copytree(SAMPLES / name, tmp_path / name)
-    scene = tmp_path / "brick" / "scene.usda"
-    run = ["process", str(scene), "--preset", "tiny", "--max-size", "128", "--in-place", "--cache-dir",
-           str(tmp_path / "cache"), "--json"]
+    scene, run = _brick_in_place(tmp_path)
     main(run)
     assert json.loads(capsys.readouterr().out)["stacks"][0]["status"] == "passed"
     text = scene.read_text()
@@ -187,11 +188,7 @@ def test_a_map_added_to_a_material_after_an_in_place_run_joins_its_stack(tmp_pat
     run said nothing was to be done (exit 0). It now joins the stack, made again with it, every map at one UV scale."""
     from pxr import Sdf
 
-    for name in ("brick", "textures"):
-        shutil.copytree(SAMPLES / name, tmp_path / name)
-    scene = tmp_path / "brick" / "scene.usda"
-    run = ["process", str(scene), "--preset", "tiny", "--max-size", "128", "--in-place", "--cache-dir",
-           str(tmp_path / "cache"), "--json"]
+    scene, run = _brick_in_place(tmp_path)
     main(run)
     capsys.readouterr()
     stage = Usd.Stage.Open(str(scene))
