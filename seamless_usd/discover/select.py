@@ -20,6 +20,7 @@ BLOCKING_SKIPS = frozenset({"missing-file", "unreadable-file", "udim", "too-smal
                             "file-node-not-read"})
 #: Of those, the skips that are a broken asset rather than a texture this tool does not handle.
 UNREAD_SKIPS = frozenset({"missing-file", "unreadable-file"})
+_SET_ASIDE = BLOCKING_SKIPS - UNREAD_SKIPS  # a texture this tool does not handle: its material is left alone
 
 
 def _matches(stack: TextureStack | str, patterns: Sequence[str]) -> bool:
@@ -80,7 +81,7 @@ def set_aside_reasons(scan: ScanResult, stack: TextureStack) -> list[str]:
     """The textures of ``stack``'s material this tool does not make tileable (a UDIM set, a picture too small, an
     animated file), each ``@file@ (code)``: while there is one, the stack is left alone (:func:`set_aside_stacks`) and
     ``check`` does not judge it either."""
-    return _skipped(scan, stack, BLOCKING_SKIPS - UNREAD_SKIPS)
+    return _skipped(scan, stack, _SET_ASIDE)
 
 
 def set_aside_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
@@ -159,7 +160,7 @@ def set_aside_materials(scan: ScanResult, patterns: Sequence[str] = ()) -> dict[
     unread = unread_findings(scan)
     out: dict[str, list[Finding]] = {}
     for f in scan.findings:
-        if (f.severity is Severity.SKIPPED and f.code in BLOCKING_SKIPS - UNREAD_SKIPS and f.material
+        if (f.severity is Severity.SKIPPED and f.code in _SET_ASIDE and f.material
                 and f.material not in have and f.material not in unread
                 and (not patterns or _matches(f.material, patterns))):
             out.setdefault(f.material, []).append(f)

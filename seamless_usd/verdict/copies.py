@@ -28,7 +28,7 @@ from .features import moving_mean
 from .lines import Seam
 
 __all__ = ["COPY_SHARE", "COPY_THRESHOLD", "EXACT_SHARE", "INFER", "MAP_THRESHOLD", "SourceIndex", "continuation",
-           "copy_origins", "copy_seams", "step_unit"]
+           "copy_origins", "copy_seams", "sampled_share", "step_unit"]
 
 #: Share of a tile's texels that must be placed in the source (found or inferred) for the tile to be judged
 #: as copies.
@@ -101,6 +101,18 @@ class SourceIndex:
         right[by_key] = np.searchsorted(self.sorted_keys, in_order, side="right")
         idx = np.clip(idx, 0, len(self.sorted_keys) - 1)
         return self.sorted_keys[idx] == wanted, self.order[idx], right - idx
+
+
+def sampled_share(tile: np.ndarray, index: SourceIndex, bands: int = 16, rows: int = 8) -> float:
+    """The share of ``tile``'s texels found exactly in ``index``'s source, read on ``bands`` bands of ``rows`` rows
+    spread over it (each texel's 3 x 3 neighbourhood inside its band)."""
+    h = tile.shape[0]
+    if h <= bands * rows:
+        keys = _keys(tile, periodic=True).ravel()
+    else:
+        keys = np.concatenate([_keys(tile[y: y + rows], periodic=False).ravel()
+                               for y in np.linspace(0, h - rows, bands).astype(int)])
+    return float(index.lookup(keys)[0].mean())
 
 
 def copy_origins(tile: np.ndarray, source: np.ndarray, infer: int = 0, index: SourceIndex | None = None

@@ -35,8 +35,8 @@ from .across import unrelated_lines
 from .breaks import line_breaks, working
 from .classifier import SeamClassifier, fit
 from .ghosts import ghost_bands
-from .copies import (COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, INFER, MAP_THRESHOLD, SourceIndex, _keys, copy_origins,
-                     copy_seams)
+from .copies import (COPY_SHARE, COPY_THRESHOLD, EXACT_SHARE, INFER, MAP_THRESHOLD, SourceIndex, copy_origins,
+                     copy_seams, sampled_share)
 from .lines import Seam, runs, seams_from_scores
 from .prepare import WORK_SIDE, joint, map_weights, to_working
 from .visibility import visible
@@ -140,7 +140,7 @@ def _copied_each(reading: Reading) -> tuple[list[Seam], float] | None:
     for tile, source in zip(reading.maps, ref.maps):
         tile, source = np.ascontiguousarray(tile), np.ascontiguousarray(source)
         index = SourceIndex(source)
-        if _sampled_share(tile, index) < EXACT_SHARE / 2:  # new pixels (the GAN's): 0.1 s at 2K, not 9
+        if sampled_share(tile, index) < EXACT_SHARE / 2:  # new pixels (the GAN's): 0.1 s at 2K, not 9
             return None
         origin, share = copy_origins(tile, source, INFER, index)
         if share < EXACT_SHARE or (origin[..., 0] >= 0).mean() < COPY_SHARE:
@@ -154,18 +154,6 @@ def _copied_each(reading: Reading) -> tuple[list[Seam], float] | None:
         strongest = max(strongest, top * COPY_THRESHOLD / MAP_THRESHOLD)  # on the maps-together scale
     seams.sort(key=lambda x: -x.figure)
     return seams, strongest
-
-
-def _sampled_share(tile: np.ndarray, index: SourceIndex, bands: int = 16, rows: int = 8) -> float:
-    """The share of ``tile``'s texels found exactly in ``index``'s source, read on ``bands`` bands of ``rows`` rows
-    spread over it (each texel's 3 x 3 neighbourhood inside its band)."""
-    h = tile.shape[0]
-    if h <= bands * rows:
-        keys = _keys(tile, periodic=True).ravel()
-    else:
-        keys = np.concatenate([_keys(tile[y: y + rows], periodic=False).ravel()
-                               for y in np.linspace(0, h - rows, bands).astype(int)])
-    return float(index.lookup(keys)[0].mean())
 
 
 def _tone_seams(reading: Reading) -> list[Seam]:
