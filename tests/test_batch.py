@@ -208,9 +208,18 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
         assert s["status"] == "planned" and s["uv_scale"] == made[(s["source"], s["id"])]["uv_scale"]
         assert s["origin"] == "cache" and s["message"].startswith("from the cache: ")
     fresh = [s for s in again["stacks"] if not s["duplicate_of"]]
-    cached_lines = [line for line in again["plan"] if "from the cache" in line]
-    assert len(cached_lines) == len(fresh) and not any(line.startswith("make tiles of") for line in again["plan"])
+    # every tile is on disk as the run wrote it, so the run keeps them (writes nothing): the plan says so
+    kept = [line for line in again["plan"] if line.startswith("keep the tiles an earlier run wrote")]
+    assert len(kept) == len(fresh) and not any("from the cache" in line for line in again["plan"]), again["plan"]
+    assert not any(line.startswith("make tiles of") for line in again["plan"])
     assert not any("provenance" in line for line in again["plan"])  # the run's edits are there already
+    # one tile edited by hand: that stack's tiles are written again from the cache and judged again
+    edited = Path(first["stacks"][0]["maps"][0]["output"])
+    edited.write_bytes(edited.read_bytes() + b"\0")
+    _, touched = _run(str(lib), "--dry-run", "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    rewritten = [line for line in touched["plan"] if "from the cache" in line]
+    assert len(rewritten) == 1 and "judged again once written" in rewritten[0], touched["plan"]
+    assert len([line for line in touched["plan"] if line.startswith("keep the tiles")]) == len(fresh) - 1
     # an entry of another shape is planned as new, as the run makes it again
     shutil.copytree(tmp_path / "cold", tmp_path / "broken")
     for manifest in (tmp_path / "broken").glob("??/*/manifest.json"):

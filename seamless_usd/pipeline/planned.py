@@ -29,8 +29,9 @@ def wrap_only_result(stack: TextureStack):
 @dataclass(frozen=True)
 class CachedPlan:
     """What an earlier run made of a stack, as its cache entry holds it: the UV scale and crop of its tiles, and, when
-    they were written into the same folder and are still there, that run's result (``outcome``: its status, reasons
-    and provenance, as the run would give them again); None: judged again once written."""
+    they were written into the same folder and are still there byte for byte (so the run keeps them and writes
+    nothing), that run's result (``outcome``: its status, reasons and provenance, as the run would give them again);
+    None: written from the cache and judged again."""
 
     uv_scale: tuple[float, float]
     crop: tuple[int, int]
@@ -46,6 +47,7 @@ def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> Cach
     from seamless_usd.pipeline.madefrom import source_uv_scale
     from seamless_usd.pipeline.outcome import outcome_from_record
     from seamless_usd.pipeline.rerun import judged_key, record_paths
+    from seamless_usd.fileio import file_sha256
     from seamless_usd.report.model import Previews
     from seamless_usd.version import __version__ as version
 
@@ -63,8 +65,9 @@ def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> Cach
         return None
     try:
         record = json.loads(record_paths(folder, out_dir, judged_key(stack))[0].read_text(encoding="utf-8"))
-        if record.get("version") != version or not all(Path(o["path"]).is_file() for o in record["outputs"].values()):
-            return plan  # judged again once written, as the run will
+        if record.get("version") != version or not all(file_sha256(Path(o["path"])) == o["sha256"]
+                                                       for o in record["outputs"].values()):
+            return plan  # a tile gone or changed: written again and judged again, as the run will
         outcome = outcome_from_record(stack, meta, None, record, Previews(), True, out_dir, folder.name)
         return dataclasses.replace(plan, outcome=outcome)
     except Exception:  # noqa: BLE001 - a record of another shape: the run judges the tiles again
@@ -110,7 +113,9 @@ def plan_line(where: str, stack: TextureStack, out_dir: Path, uv: tuple[float, f
                 f"passes; and write them to {out_dir} ({scale} for a tile of the size planned; a tile of another size, "
                 "such as a cut of whole lattice periods, gives another scale)")
     outcome = cached.outcome
-    status = ("judged again once written" if outcome is None else "passed" if outcome.passed
-              else f"not passed: {'; '.join(outcome.reasons())}")
-    return (f"write the tiles an earlier run made of {where} ({maps}), from the cache with nothing trained or "
-            f"cut again, to {out_dir} ({scale}; {status})")
+    if outcome is None:
+        return (f"write the tiles an earlier run made of {where} ({maps}), from the cache with nothing trained or "
+                f"cut again, to {out_dir} ({scale}; judged again once written)")
+    status = "passed" if outcome.passed else f"not passed: {'; '.join(outcome.reasons())}"
+    return (f"keep the tiles an earlier run wrote of {where} ({maps}) in {out_dir}: they are there unchanged, so "
+            f"nothing is trained, cut or written ({scale}; {status})")
