@@ -168,3 +168,38 @@ def test_stacks_inside_instances_fail_before_any_tile_is_made(tmp_path, capsys):
     assert all("is inside an instance" in s["message"] and "</Inst" in s["message"] for s in stacks)
     code = main(["process", str(scene), "--preset", "tiny", "--json", "--cache-dir", str(tmp_path / "cache")])
     assert code == 1 and not (tmp_path / "tileable").exists()
+
+
+def test_stacks_inside_instances_are_edited_in_their_prototype_s_layer_in_place(tmp_path, capsys):
+    """With --in-place, a material an instanceable reference brings in is edited where its prototype is made: the
+    referenced asset's layer (backed up), so every instance shows the tile; the stage itself is not touched, and a
+    run again changes nothing. Without --in-place the failure names that layer and the flag."""
+    import json
+
+    from pxr import Usd
+
+    from seamless_usd.pipeline.check import check_paths
+    from seamless_usd_cli.main import main
+
+    write(tmp_path / "asset.usda", f'(defaultPrim = "Asset")\ndef Xform "Asset" {{{material("/Asset", "Mat")}\n}}')
+    body = "".join(f'def Xform "Inst{i}" (\n    instanceable = true\n    references = @./asset.usda@\n) {{}}\n'
+                   for i in (1, 2))
+    scene = write(tmp_path / "s.usda", body)
+    scene_text, asset_text = scene.read_text(), (tmp_path / "asset.usda").read_text()
+    run = ["process", str(scene), "--preset", "tiny", "--seeds", "1", "--json", "--cache-dir", str(tmp_path / "cache")]
+    assert main([*run[:2], "--dry-run", "--json"]) == 1
+    [failed, _] = json.loads(capsys.readouterr().out)["stacks"]
+    assert "--in-place" in failed["message"] and "asset.usda" in failed["message"], failed["message"]
+    code = main([*run, "--in-place"])
+    stacks = json.loads(capsys.readouterr().out)["stacks"]
+    assert [s["status"] for s in stacks] in (["passed", "reused"], ["not-passed", "not-passed"]), stacks
+    assert code == (0 if stacks[0]["status"] == "passed" else 1)
+    assert scene.read_text() == scene_text and (tmp_path / "asset.usda.bak").read_text() == asset_text
+    stage = Usd.Stage.Open(str(scene))
+    for i in (1, 2):
+        albedo = stage.GetPrimAtPath(f"/Inst{i}/Mat/Albedo").GetAttribute("inputs:file").Get()
+        assert Path(albedo.resolvedPath).parent == tmp_path / "tileable", albedo
+    assert [i.passed for i in check_paths([scene]).items] == [stacks[0]["status"] == "passed"]
+    edited = (tmp_path / "asset.usda").read_text()
+    assert main([*run, "--in-place"]) == code and (tmp_path / "asset.usda").read_text() == edited
+    capsys.readouterr()

@@ -57,12 +57,32 @@ def _in_place_target(prim: Usd.Prim, attr: Usd.Attribute | None, layer: Sdf.Laye
     problem = _editable(layer)
     if problem is not None:
         return problem
+    if prim.IsInstanceProxy():  # mapped through its own instance's arcs: the prototype's index is another instance's
+        return _instance_target(prim, layer)
     if node and layer in node.layerStack.layers and layer.GetPrimAtPath(node.path):
         return Usd.EditTarget(layer, node)
     for node in _prim_nodes(prim):
         if layer in node.layerStack.layers and layer.GetPrimAtPath(node.path):
             return Usd.EditTarget(layer, node)
     return Usd.EditTarget(layer)
+
+
+def _instance_target(prim: Usd.Prim, layer: Sdf.Layer):
+    """The edit target into ``layer`` for ``prim``, a prim inside an instance: through the instance's own
+    composition arcs, which map its namespace onto the spec the prototype is made from (edited there, every
+    instance of that prototype shows the edit)."""
+    instance = prim
+    while instance and not instance.IsInstance():
+        instance = instance.GetParent()
+    for node in _prim_nodes(instance):
+        if layer in node.layerStack.layers:
+            target = Usd.EditTarget(layer, node)
+            spec = target.MapToSpecPath(prim.GetPath())
+            if not spec.isEmpty and layer.GetPrimAtPath(spec.StripAllVariantSelections()):
+                return target
+    return Finding(Severity.SKIPPED, Codes.INSTANCE_PROXY, prim_ref(prim.GetPath()),
+                   f"inside an instance, and {asset_ref(layer.identifier)} holds none of its prototype: edit its "
+                   "prototype's source, or make it non-instanceable")
 
 
 def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: bool = False) -> AuthoringResult:

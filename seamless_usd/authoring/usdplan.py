@@ -141,8 +141,8 @@ class _Author(_UVPlanner):
             why = "texture node not found on the stage; nothing written for it"
             self._find(Severity.ERROR, Codes.MISSING_PRIM, prim_ref(node_path), why)
             return why
-        if prim.IsInstanceProxy():
-            why = ("texture inside an instance: edit its prototype's source or make it "
+        if prim.IsInstanceProxy() and not self.one_layer:  # in place, edits go into the prototype's own layer
+            why = ("texture inside an instance: edit its prototype's source (--in-place) or make it "
                    "non-instanceable")
             self._find(Severity.SKIPPED, Codes.INSTANCE_PROXY, prim_ref(node_path), why)
             return why

@@ -120,17 +120,23 @@ def hand_set_stacks(stacks: Sequence[TextureStack], source: str) -> dict[tuple[s
     return out
 
 
-def instanced_stacks(stage, stacks: Sequence[TextureStack], source: str) -> dict[tuple[str, str], str]:
+def instanced_stacks(stage, stacks: Sequence[TextureStack], source: str, open_stage: bool = False
+                     ) -> dict[tuple[str, str], str]:
     """Stacks of the open USD ``stage`` with a texture node inside an instance (an instance proxy, which no layer
-    over the stage can edit), with why: they fail before any tile is made for them."""
+    over the stage can edit), with why: they fail before any tile is made for them, unless edited in place (the
+    advice; ``open_stage``: a stage handed over open, which has no in-place mode)."""
     out = {}
     for stack in stacks:
         nodes = [m.node for m in stack.maps if m.origin.value == "usd" and not stack.selection]
-        inside = [n for n in nodes if (prim := stage.GetPrimAtPath(n.strip("<>"))) and prim.IsInstanceProxy()]
+        inside = [m for m in stack.maps if m.origin.value == "usd" and not stack.selection
+                  and (prim := stage.GetPrimAtPath(m.node.strip("<>"))) and prim.IsInstanceProxy()]
         if inside:
-            node = prim_ref(inside[0].strip("<>"))
-            out[(source, stack.id)] = (f"its texture node {node} is inside an instance, which an edit over the stage "
-                                       "cannot change: edit its prototype's source, or make it non-instanceable")
+            node, layer = prim_ref(inside[0].node.strip("<>")), inside[0].file_at and inside[0].file_at.layer
+            where = f" ({asset_ref(layer)}, where its prototype is made)" if layer else ""
+            out[(source, stack.id)] = (f"its texture node {node} is inside an instance, which a layer over the stage "
+                                       f"cannot change: {'edit' if open_stage else 'run with --in-place to edit'} "
+                                       f"its prototype's source{where}, which every instance shows, or make it "
+                                       "non-instanceable")
     return out
 
 

@@ -290,7 +290,8 @@ def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
             src = _scan_source(path, run.options.materials, *_triage(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
             run.blocked.update(hand_set_stacks(src.stacks, str(src.path)))
-            run.blocked.update(src.instanced)
+            if authoring_module().WriteMode.IN_PLACE not in (run.options.mode, run.options.plan_mode):  # in place:
+                run.blocked.update(src.instanced)  # ... edited in the prototype's own layer
             run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
             unread_rows(run, src.scan, str(src.path))
             set_aside_rows(run, src.scan, str(src.path))
@@ -425,7 +426,7 @@ def process_stage(stage, options: Options | None = None) -> Report:
     _check_patterns(run, [_Source(Path(label), "usd", scan, stacks)])
     run.blocked.update(blocked_stacks(scan, stacks, label))
     run.blocked.update(hand_set_stacks(stacks, label))
-    run.blocked.update(instanced_stacks(stage, stacks, label))
+    run.blocked.update(instanced_stacks(stage, stacks, label, open_stage=True))
     run.set_aside.update(set_aside_stacks(scan, stacks, label))
     unread_rows(run, scan, label)
     set_aside_rows(run, scan, label)
