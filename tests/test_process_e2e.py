@@ -188,7 +188,7 @@ def test_an_internal_error_exits_3_and_names_a_log_file(assets, model_cache, cap
     def broken(*args, **kwargs):
         raise RuntimeError("planted fault")
 
-    monkeypatch.setattr(pipeline, "_finish", broken)
+    monkeypatch.setattr(pipeline, "finish_run", broken)
     code = _process(str(assets / "brick" / "scene.usda"), "--dry-run", cache=model_cache)
     err = capsys.readouterr().err
     assert code == 3

@@ -14,7 +14,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from seamless_usd.version import __version__
 from seamless_usd.discover import open_stage, scan_mtlx, scan_stage
 from seamless_usd.discover.scan import not_a_scene
 from seamless_usd.discover.select import (BLOCKING_SKIPS, blocked_stacks, from_recorded_sources, hand_set_stacks,
@@ -25,14 +24,15 @@ from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, Interrupted, SeamlessUsdError, UsageError
 from seamless_usd.fileio import folder_problem, marked_writable
 from seamless_usd.findings import Finding, Severity, asset_ref
-from seamless_usd.pipeline.cache import JobIndex, StackCache, job_fingerprint
-from seamless_usd.pipeline.executors import InProcessExecutor, make_executor
-from seamless_usd.pipeline.options import Options, check_device
+from seamless_usd.pipeline.cache import JobIndex, job_fingerprint
+from seamless_usd.pipeline.executors import InProcessExecutor
+from seamless_usd.pipeline.options import Options
 from seamless_usd.pipeline.outputlayer import MTLX_SUFFIXES, check_output_layer
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.pipeline.outcome import StackOutcome
 from seamless_usd.pipeline.rows import (Run, authoring_module, check_written, error_message, record_authoring,
                                         set_aside_rows, stack_rows, unread_rows)
+from seamless_usd.pipeline.runstart import as_options, finish_run, new_run, triage_of
 from seamless_usd.pipeline.stackjob import StackJob
 from seamless_usd.report.model import Report
 
@@ -155,91 +155,6 @@ def _author_source(run: Run, src: _Source) -> None:
         check_written(run, handed, edit)
 
 
-def _finish(run: Run, started: float) -> Report:
-    from seamless_usd.report.html import write_html, write_json
-    from seamless_usd.report.index import write_library_html
-
-    report = run.report
-    report.tool_version = __version__
-    report.options = run.options.summary()
-    report.timings["total"] = time.perf_counter() - started
-    if run.options.report is not None:
-        html_path, json_path = _report_paths(run.options.report)
-        html_path.parent.mkdir(parents=True, exist_ok=True)
-        if len(report.sources) > 1:
-            write_library_html(report, html_path)
-        else:
-            write_html(report, html_path)
-        write_json(report, json_path)
-        report.options["report_html"] = str(html_path)
-        report.options["report_json"] = str(json_path)
-    return report
-
-
-def _report_paths(asked: Path) -> tuple[Path, Path]:
-    """The HTML report's path and the JSON report's beside it (:func:`.report.target.report_target`); a
-    :class:`UsageError` when either would replace a file that is not one of this tool's reports."""
-    from seamless_usd.report.target import report_target
-
-    try:
-        html_path = report_target(asked)
-        return html_path, report_target(html_path, ".json")
-    except InputError as exc:
-        raise UsageError(f"--report: {exc}") from None
-
-
-def _as_options(options) -> Options:
-    """``options``, or the defaults for None; anything else is a usage error."""
-    if options is None:
-        return Options()
-    if not isinstance(options, Options):
-        raise UsageError(f"options must be seamless_usd.Options; got {type(options).__name__}")
-    return options
-
-
-def _new_run(options: Options) -> Run:
-    authoring = authoring_module()
-    try:  # a mode it does not know is refused before any work (it failed once every tile was written)
-        options = options.with_(mode=authoring.WriteMode(options.mode or authoring.WriteMode.NEW_LAYER),
-                                plan_mode=None if options.plan_mode is None else authoring.WriteMode(options.plan_mode))
-    except ValueError:
-        modes = ", ".join(repr(m.value) for m in authoring.WriteMode)
-        raise UsageError(f"Options.mode / plan_mode must be a WriteMode ({modes}); got {options.mode!r} / "
-                         f"{options.plan_mode!r}") from None
-    from seamless_usd.synthesis import get_preset
-
-    try:
-        get_preset(options.preset)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    from seamless_usd.discover.tokens import MIN_CROP
-
-    if options.max_size is not None and options.max_size < MIN_CROP:
-        raise UsageError(
-            f"--max-size {options.max_size} is below the {MIN_CROP} px minimum crop; use {MIN_CROP} or more"
-        )
-    if options.device is not None:
-        check_device(options.device)
-    if options.report is not None:
-        _report_paths(options.report)  # refused before any work when it would replace a file of the user's
-    cache_root = StackCache(options.cache_dir).root
-    problem = folder_problem(cache_root)  # a file, or a folder that can neither be written nor holds results
-    if problem and not (cache_root.is_dir() and any(cache_root.iterdir())):
-        raise UsageError(f"--cache-dir: {problem}; name a folder this run can write (a read-only cache is used only "
-                         "when it holds results already)")
-    if options.output_dir is not None and options.mode is not authoring.WriteMode.DRY_RUN:
-        problem = folder_problem(options.output_dir)
-        if problem:
-            raise UsageError(f"--output-dir: {problem}")
-    return Run(options=options, executor=make_executor(options.scheduler, options.jobs))
-
-
-def _triage(options: Options) -> tuple[Path, bool]:
-    """Where the triage's pixel figures are kept between runs (beside the trained stacks), and whether this run
-    adds to them (a dry run writes nothing)."""
-    return StackCache(options.cache_dir).root / "triage", options.mode is not authoring_module().WriteMode.DRY_RUN
-
-
 def _check_patterns(run: Run, sources: Sequence[_Source]) -> None:
     """--materials that match no material of any input: a usage error (nothing would be done, and a typo must not
     read as success); some of them, or --force-materials, matching none: a warning."""
@@ -287,7 +202,7 @@ def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
     for path in inputs:
         run.report.sources.append(str(path))
         try:
-            src = _scan_source(path, run.options.materials, *_triage(run.options))
+            src = _scan_source(path, run.options.materials, *triage_of(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
             run.blocked.update(hand_set_stacks(src.stacks, str(src.path)))
             if authoring_module().WriteMode.IN_PLACE not in (run.options.mode, run.options.plan_mode):  # in place:
@@ -320,7 +235,7 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
                          "(an open stage: process_stage())")
     if not paths:  # the command takes at least one path: nothing processed is not a pass
         raise UsageError("process_paths() was given no path: give a stage, document, folder or pattern")
-    run = _new_run(_as_options(options))
+    run = new_run(as_options(options))
     sources = []
     inputs = expand_inputs(paths, require_scenes=True)
     modes = authoring_module().WriteMode
@@ -363,7 +278,7 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
         # each finding names its file: a library's files share material paths (every </World/Looks/Brick>)
         run.report.findings[findings:] = [f if f.source else replace(f, source=str(src.path))
                                           for f in run.report.findings[findings:]]
-    return _finish(run, started)
+    return finish_run(run, started)
 
 
 def _interrupted(run: Run, sources: list[_Source], started: float) -> Report:
@@ -374,7 +289,7 @@ def _interrupted(run: Run, sources: list[_Source], started: float) -> Report:
     for src in sources:
         run.report.findings += _selected_findings(run, src.scan)
         stack_rows(run, src.stacks, str(src.path), _output_dir(run.options, src.path))
-    return _finish(run, started)
+    return finish_run(run, started)
 
 
 def _locked_in_place(run: Run, src: _Source) -> dict[tuple[str, str], str]:
@@ -404,17 +319,17 @@ def process_stage(stage, options: Options | None = None) -> Report:
     if not isinstance(stage, Usd.Stage):
         raise UsageError(f"process_stage() takes an open Usd.Stage, not {type(stage).__name__} "
                          "(a file on disk: process_paths())")
-    options = _as_options(options)
+    options = as_options(options)
     root = stage.GetRootLayer()
     source = None if root.anonymous else Path(root.realPath)
     if options.output_dir is not None and not Path(options.output_dir).is_absolute() and source is not None:
         # a DCC's working folder is anywhere: a relative folder is the stage's, as the hooks take it
         options = options.with_(output_dir=source.parent / options.output_dir)
-    run = _new_run(options)
+    run = new_run(options)
     authoring = authoring_module()
     label = root.identifier
     run.report.sources.append(label)
-    scan = scan_stage(stage, *_triage(run.options))
+    scan = scan_stage(stage, *triage_of(run.options))
     run.report.findings += _selected_findings(run, scan)
     run.report.variants += [v.to_dict() for v in scan.variants]
     stacks = select_stacks(scan, run.options.materials)
@@ -442,4 +357,4 @@ def process_stage(stage, options: Options | None = None) -> Report:
         edit = authoring.author_usd_stage(stage, results)
         record_authoring(run, edit)
         check_written(run, handed, edit)
-    return _finish(run, started)
+    return finish_run(run, started)
