@@ -195,11 +195,12 @@ class ImageInfo:
     width: int
     height: int
     channels: int
-    dtype: str  # "uint8", "uint16", "half", "float" (OpenImageIO base type names)
+    dtype: str  # "uint8", "int8", "uint16", "int16", "uint32", "int32", "half", "float" (:func:`.imaging.io.sample_type`)
     file_format: str  # OpenImageIO format name: "png", "jpeg", "openexr", "tiff", ...
     channel_names: tuple[str, ...] = ()
     color_space: str | None = None  # "oiio:ColorSpace" or equivalent header metadata, if any
     texture: bool = False  # a tiled, MIP-mapped texture file (maketx's .tx: "textureformat" in its header)
+    associated_alpha: bool = False  # colour stored multiplied by alpha (a TIFF's ExtraSamples = 1): written so again
 
 
 @dataclass(frozen=True)

@@ -235,7 +235,13 @@ def test_write_pixels_records_colour_encoding(tmp_path: Path) -> None:
     srgb = write_pixels(tmp_path / "c.png", np.zeros((2, 2, 3)), like, ColorSpace.SRGB)
     raw = write_pixels(tmp_path / "d.png", np.zeros((2, 2, 3)), like, ColorSpace.RAW)
     assert read_info(srgb).color_space == "srgb_rec709_scene"
-    assert read_info(raw).color_space == "lin_rec709_scene"
+    assert read_info(raw).color_space is None  # a data map's source said nothing: neither does its tile (no gAMA)
+    stated = ImageInfo(2, 2, 3, "uint8", "png", color_space="lin_rec709_scene")
+    assert read_info(write_pixels(tmp_path / "e.png", np.zeros((2, 2, 3)), stated, ColorSpace.RAW)).color_space == (
+        "lin_rec709_scene")  # ... where it said linear, the tile says so too
+    for ext, fmt, dtype in ((".exr", "openexr", "half"), (".tif", "tiff", "uint16")):
+        path = write_pixels(tmp_path / f"f{ext}", np.zeros((2, 2, 3)), ImageInfo(2, 2, 3, dtype, fmt), ColorSpace.RAW)
+        assert read_info(path).color_space is None, ext
 
 
 def test_write_pixels_clips_and_rounds(tmp_path: Path) -> None:

@@ -24,8 +24,6 @@ __all__ = ["IMAGE_SUFFIXES", "read_image_info", "is_package_path", "udim_tiles",
 #: The file suffixes read as pictures (``check`` on a folder, and a picture given where a stage is wanted).
 IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".exr", ".tif", ".tiff", ".tx", ".tga", ".bmp", ".hdr", ".webp"})
 
-# Formats whose reader fills "oiio:ColorSpace" with a default rather than from the file.
-_GUESSED_COLORSPACE_FORMATS = frozenset({"png", "jpeg", "bmp", "targa", "gif", "webp", "ico"})
 
 
 class ImageReadError(Exception):
@@ -62,7 +60,9 @@ def _read_through_ar(resolved: str) -> bytes:
 
 
 def _read_header(path: str, raw) -> ImageInfo:
-    inp = oiio.ImageInput.open(path)
+    from seamless_usd.imaging.io import GUESSED_COLORSPACE_FORMATS, associated_alpha, reader_config, sample_type
+
+    inp = oiio.ImageInput.open(path, reader_config())
     if inp is None:
         lines = oiio.geterror().strip().splitlines()  # geterror() clears the message: read it once
         raise ImageReadError(lines[0] if lines else "unknown image format")
@@ -71,7 +71,7 @@ def _read_header(path: str, raw) -> ImageInfo:
         fmt = inp.format_name()
         if fmt == "png":
             stated = png_stated_color_space(raw)
-        elif fmt in _GUESSED_COLORSPACE_FORMATS:
+        elif fmt in GUESSED_COLORSPACE_FORMATS:
             stated = None
         else:
             stated = spec.get_string_attribute("oiio:ColorSpace") or None
@@ -79,11 +79,12 @@ def _read_header(path: str, raw) -> ImageInfo:
             width=spec.width,
             height=spec.height,
             channels=spec.nchannels,
-            dtype=str(spec.format),
+            dtype=sample_type(spec),
             file_format=fmt,
             channel_names=tuple(spec.channelnames),
             texture=bool(spec.get_string_attribute("textureformat")) and spec.tile_width > 0,
             color_space=stated,
+            associated_alpha=associated_alpha(spec, fmt),
         )
     finally:
         inp.close()

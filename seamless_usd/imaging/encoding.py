@@ -44,6 +44,7 @@ from seamless_usd.imaging.normals import (decode_normals, encode_normals, encodi
 __all__ = ["Tone", "ValueRange", "MapEncoding", "decode_map", "encode_map"]
 
 _INTEGER_TYPES = ("uint8", "uint16", "int8", "int16", "uint32", "int32")
+_SIGNED_TYPES = ("int8", "int16", "int32")  # read as [-1, 1]: their range is fitted to the data, as a float file's
 
 
 @dataclass(frozen=True)
@@ -193,7 +194,7 @@ class MapEncoding:
             doubt = None if normal is None else encoding_doubt(p[..., list(normal)], scale, bias)
             if doubt:
                 warnings.append(doubt)
-            if info.dtype not in _INTEGER_TYPES:  # float files: fit the range to the data
+            if info.dtype not in _INTEGER_TYPES or info.dtype in _SIGNED_TYPES:  # float files: fit the range
                 values = [i for i in channels if i != alpha and (normal is None or i not in normal)]
                 if values:
                     linear = to_linear(p[..., values], ColorSpace.RAW if perceptual else cs, info.dtype)
@@ -322,7 +323,7 @@ def encode_map(values: np.ndarray, encoding: MapEncoding) -> np.ndarray:
     """Network values -> file values, with the file's full channel layout.
 
     Normals are renormalised first; channels the network does not see get ``encoding.fill``.
-    Integer files' values are clipped to [0, 1] (the writer rounds them to codes); float values
+    Integer files' values are clipped to [0, 1] ([-1, 1] signed; the writer rounds them to codes); float values
     are returned unclipped.
 
     Parameters
@@ -356,5 +357,5 @@ def encode_map(values: np.ndarray, encoding: MapEncoding) -> np.ndarray:
     if alphas:
         out[..., [encoding.alpha]] = encoding.alpha_range.from_network(v[..., alphas])
     if encoding.is_integer:
-        np.clip(out, 0.0, 1.0, out=out)
+        np.clip(out, -1.0 if encoding.dtype in _SIGNED_TYPES else 0.0, 1.0, out=out)
     return out.astype(np.float32)

@@ -24,7 +24,10 @@ from seamless_usd.pngchunks import png_stated_color_space
 
 __all__ = [
     "DEFAULT_MAX_PIXELS",
+    "GUESSED_COLORSPACE_FORMATS",
     "OUTPUT_FAMILIES",
+    "associated_alpha",
+    "sample_type",
     "read_info",
     "read_image",
     "output_extension",
@@ -38,20 +41,38 @@ __all__ = [
 DEFAULT_MAX_PIXELS = 1 << 28  # 268 Mpx (16k x 16k): larger headers are refused before decoding
 
 # Output format family per source sample type: (extension, written sample type).
-# 8-bit sources -> PNG, deeper integers -> 16-bit PNG (TIFF when the source is TIFF),
-# half / float -> OpenEXR keeping half vs float.
+# 8-bit sources -> PNG, 16-bit -> 16-bit PNG (TIFF when the source is TIFF), signed and 32-bit integers -> TIFF of
+# the same type (PNG holds neither), half / float -> OpenEXR keeping half vs float.
 OUTPUT_FAMILIES: dict[str, tuple[str, str]] = {
     "uint8": (".png", "uint8"),
-    "int8": (".png", "uint8"),
+    "int8": (".tif", "int8"),
     "uint16": (".png", "uint16"),
-    "int16": (".png", "uint16"),
-    "uint32": (".png", "uint16"),
-    "int32": (".png", "uint16"),
+    "int16": (".tif", "int16"),
+    "uint32": (".tif", "uint32"),
+    "int32": (".tif", "int32"),
     "half": (".exr", "half"),
     "float": (".exr", "float"),
     "double": (".exr", "float"),
 }
 
+#: Formats whose reader fills "oiio:ColorSpace" with a default rather than from the file.
+GUESSED_COLORSPACE_FORMATS = frozenset({"png", "jpeg", "bmp", "targa", "gif", "webp", "ico"})
+
+#: OpenImageIO's names for 32-bit integers, as the rest of the project spells them.
+_SAMPLE_TYPES = {"uint": "uint32", "int": "int32"}
+
+
+def sample_type(spec: oiio.ImageSpec) -> str:
+    """The sample type of a header: OpenImageIO's base type name, 32-bit integers as ``uint32`` / ``int32``."""
+    name = str(spec.format)
+    return _SAMPLE_TYPES.get(name, name)
+
+
+def associated_alpha(spec: oiio.ImageSpec, file_format: str) -> bool:
+    """Whether a header read with :func:`reader_config` stores colour multiplied by its alpha where the format
+    can say either (TIFF): such a file is written back so (OpenEXR's colour always is; PNG's never)."""
+    return (file_format == "tiff" and spec.alpha_channel >= 0
+            and spec.get_int_attribute("oiio:UnassociatedAlpha", 0) != 1)
 
 
 def reader_config() -> oiio.ImageSpec:
@@ -90,7 +111,7 @@ def _open(path: Path) -> oiio.ImageInput:
 def _info_from(inp: oiio.ImageInput, path: Path) -> ImageInfo:
     spec = inp.spec()
     fmt = inp.format_name()
-    color_space = spec.get_string_attribute("oiio:ColorSpace") or None
+    color_space = None if fmt in GUESSED_COLORSPACE_FORMATS else spec.get_string_attribute("oiio:ColorSpace") or None
     if fmt == "png":  # OpenImageIO reports sRGB for every PNG; only a chunk says so
         try:
             with open(path, "rb") as fh:
@@ -101,11 +122,12 @@ def _info_from(inp: oiio.ImageInput, path: Path) -> ImageInfo:
         width=spec.width,
         height=spec.height,
         channels=spec.nchannels,
-        dtype=str(spec.format),
+        dtype=sample_type(spec),
         file_format=fmt,
         channel_names=tuple(spec.channelnames),
         texture=bool(spec.get_string_attribute("textureformat")) and spec.tile_width > 0,
         color_space=color_space,
+        associated_alpha=associated_alpha(spec, fmt),
     )
 
 
@@ -285,7 +307,10 @@ def output_extension(info: ImageInfo) -> str:
     if info.texture and info.file_format == "tiff":  # a .tx texture stays one (tiled, MIP-mapped)
         return ".tx"
     ext = OUTPUT_FAMILIES[info.dtype][0]
-    if ext == ".png" and (info.channels > 4 or (info.file_format == "tiff" and info.dtype != "uint8")):
+    if info.dtype == "uint32" and info.file_format == "openexr":  # OpenEXR holds 32-bit unsigned integers too
+        return ".exr"
+    if ext == ".png" and (info.channels > 4 or info.associated_alpha
+                          or (info.file_format == "tiff" and info.dtype != "uint8")):
         return ".tif"
     return ext
 

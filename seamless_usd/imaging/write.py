@@ -3,8 +3,9 @@
 The output keeps the source's format family and bit depth (8-bit -> PNG, 16-bit -> 16-bit PNG or
 TIFF, half / float -> OpenEXR half / float; see :func:`~seamless_usd.imaging.io.output_extension`),
 its channel count and layout (channels the network did not see are filled with a constant),
-straight alpha, the colour encoding the stage declares for the map (the map's colour space,
-also recorded in the file's colour metadata), and the source's embedded ICC colour profile where the output
+its alpha as stored (straight, or colour multiplied by it in a TIFF that says so), the colour encoding the stage
+declares for the map (the map's colour space, recorded in the file's colour metadata when it is sRGB or when the
+source's header names one), and the source's embedded ICC colour profile where the output
 format holds one (PNG, TIFF; not OpenEXR): the tile's texels are in the source's encoding, so an image editor
 shows its colours as it shows the source's.
 """
@@ -25,8 +26,10 @@ from seamless_usd.imaging.io import alpha_channel, norm_ext, output_dtype, outpu
 
 __all__ = ["write_map", "write_pixels", "output_path", "kept_attributes", "KEPT_ATTRIBUTES"]
 
-_OIIO_TYPES = {"uint8": oiio.UINT8, "uint16": oiio.UINT16, "half": oiio.HALF, "float": oiio.FLOAT}
-_NUMPY_TYPES = {"uint8": np.uint8, "uint16": np.uint16, "half": np.float16, "float": np.float32}
+_OIIO_TYPES = {"uint8": oiio.UINT8, "int8": oiio.INT8, "uint16": oiio.UINT16, "int16": oiio.INT16,
+               "uint32": oiio.UINT32, "int32": oiio.INT32, "half": oiio.HALF, "float": oiio.FLOAT}
+_NUMPY_TYPES = {"uint8": np.uint8, "int8": np.int8, "uint16": np.uint16, "int16": np.int16, "uint32": np.uint32,
+                "int32": np.int32, "half": np.float16, "float": np.float32}
 _COLORSPACE_NAMES = {ColorSpace.SRGB: "srgb_rec709_scene", ColorSpace.RAW: "lin_rec709_scene"}
 
 
@@ -192,11 +195,17 @@ def write_pixels(
     alpha = alpha_channel(like) if named or len(like.channel_names) != c else None
     if alpha is not None:
         spec.alpha_channel = alpha
-    spec.attribute("oiio:ColorSpace", _COLORSPACE_NAMES[ColorSpace(color_space)])
+    if ColorSpace(color_space) is ColorSpace.SRGB or like.color_space is not None:
+        spec.attribute("oiio:ColorSpace", _COLORSPACE_NAMES[ColorSpace(color_space)])
+    elif ext == ".png":  # linear and data maps are labelled only where the source's header says what it holds: a
+        # label it did not have would change how viewers show the tile (a PNG's gAMA) or contradict the stage's own
+        # name (ACEScg). A PNG unlabelled gets sRGB chunks from the writer; "raw" writes none
+        spec.attribute("oiio:ColorSpace", "raw")
     if ext == ".exr":
         spec.attribute("compression", "zip")
     else:
-        spec.attribute("oiio:UnassociatedAlpha", 1)  # values are straight alpha, store as is
+        if not like.associated_alpha:  # values are stored as the source stores them: straight, or multiplied
+            spec.attribute("oiio:UnassociatedAlpha", 1)
         if ext in (".tif", ".tx"):
             spec.attribute("compression", "zip")
     if keep_from is not None:
@@ -275,9 +284,10 @@ def _check_written(tmp: Path, target: Path, shape: tuple[int, ...]) -> None:
 
 def _quantise(pixels: np.ndarray, dtype: str) -> np.ndarray:
     values = pixels.astype(np.float64, copy=False)
-    if dtype in ("uint8", "uint16"):
-        top = float(np.iinfo(_NUMPY_TYPES[dtype]).max)
-        return np.rint(np.clip(values, 0.0, 1.0) * top).astype(_NUMPY_TYPES[dtype])
+    if dtype in _NUMPY_TYPES and np.issubdtype(_NUMPY_TYPES[dtype], np.integer):
+        top = float(np.iinfo(_NUMPY_TYPES[dtype]).max)  # signed: [-1, 1] as the reader gives it
+        low = -1.0 if np.issubdtype(_NUMPY_TYPES[dtype], np.signedinteger) else 0.0
+        return np.rint(np.clip(values, low, 1.0) * top).astype(_NUMPY_TYPES[dtype])
     if dtype == "half":
         return np.clip(values, -65504.0, 65504.0).astype(np.float16)
     return values.astype(np.float32)
