@@ -69,6 +69,7 @@ def author_mtlx(
         except Exception as exc:  # MaterialX raises its own ExceptionFileMissing / ExceptionParseError
             raise InputError(f"{asset_ref(src)}: cannot be read as a MaterialX document ({exc})") from None
     author = _MtlxAuthor(doc, src, out, result)
+    author.read_from = src if from_source else out  # recorded source assets are relative to the document read
     if from_source and out.parent != src.parent:
         author.rebase_files()
     if not in_place:  # what the new document was made from: a later run adds its edits to this one
@@ -166,6 +167,7 @@ def _same_path(a: str | None, b: Path) -> bool:
 class _MtlxAuthor(_PlaceUV):
     def __init__(self, doc: mx.Document, src: Path, out: Path, result: AuthoringResult):
         self.doc, self.src, self.out, self.result = doc, src, out, result
+        self.read_from = src  # the document ``doc`` was read from: its recorded source assets are relative to it
         self.changed = False
         self._uv_nodes: dict[tuple, str] = {}
         self._uv_updates: dict[str, tuple] = {}  # a place2d a run before inserted -> (total scale, turn): once a run
@@ -310,8 +312,8 @@ class _MtlxAuthor(_PlaceUV):
         self._done[node_path] = (out_file, scale, tex_map.material)
         before = len(self.result.plan)
         recorded = read_mtlx_provenance(node)
-        from_source = recorded is None or _same_path(
-            str(self.src.parent / recorded.source_asset), Path(tex_map.resolved))
+        recorded_source = None if recorded is None else self.read_from.parent / recorded.source_asset
+        from_source = recorded is None or _same_path(str(recorded_source), Path(tex_map.resolved))
         # file
         at = tex_map.file_at
         owner = self.doc.getDescendant(at.prim.strip("<>")) if at.prim else None
@@ -370,8 +372,8 @@ class _MtlxAuthor(_PlaceUV):
                 Severity.WARNING, Codes.UNSUPPORTED_UV, prim_ref(node_path),
                 f"{category} node: {TURN_NOT_AUTHORED}"))
         # provenance
-        if recorded and not from_source:
-            source = recorded.source_asset  # the tile was made from an earlier tile: keep the origin
+        if recorded and not from_source:  # the tile was made from an earlier tile: keep the origin
+            source = relative_asset_path(recorded_source, self.out.parent).removeprefix("./")
         elif tex_map.resolved:
             source = relative_asset_path(Path(tex_map.resolved), self.out.parent).removeprefix("./")
         else:
