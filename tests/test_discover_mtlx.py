@@ -29,8 +29,8 @@ def test_tiledimage_with_uvtiling_is_one_stack(samples_dir):
     assert tiling.kind == "uvtiling" and tiling.scale == (2.0, 2.0) and tiling.node == "NG_wood/wood_color"
     assert color.wrap_s == "periodic"
     assert color.color_space is ColorSpace.SRGB and "srgb_texture" in color.color_space_reason
-    # no colorspace on the input: the document's colorspace is inherited
-    assert rough.color_space is ColorSpace.RAW and "lin_rec709" in rough.color_space_reason
+    # a float image: MaterialX transforms colour images only
+    assert rough.color_space is ColorSpace.RAW and "never colour-transformed" in rough.color_space_reason
     assert [(r.role, r.channels) for r in rough.roles] == [("specular_roughness", "r")]
 
 
@@ -205,3 +205,53 @@ def test_a_node_of_the_documents_own_definition_that_takes_a_file_is_named_and_i
 
     [stack] = result.stacks  # the roughness: left alone, not tiled without the albedo
     assert set_aside_stacks(result, [stack], str(doc))
+
+
+def test_vector_images_are_read_as_stored_whatever_the_file_header_says(tmp_path):
+    """MaterialX applies a colour transform to color3 / color4 images only. A vector3 normal map and a packed
+    vector3 ORM in a document with no colorspace, their PNGs carrying sRGB chunks, were decoded as sRGB (the rule
+    for UsdUVTexture's auto): the normals tilted and the stack failed. They are read as stored; the colour map, a
+    color3 with no colorspace, keeps what its file's header says."""
+    import shutil
+
+    from seamless_usd.discover import scan_paths
+
+    textures = Path(__file__).resolve().parents[1] / "sample_assets" / "textures"
+    for name in ("brick_albedo.png", "brick_normal.png", "brick_orm.png"):
+        shutil.copy(textures / name, tmp_path / name)
+    for name in ("brick_normal.png", "brick_orm.png"):  # saved by an editor that tags every PNG sRGB
+        _tag_srgb(tmp_path / name)
+    (tmp_path / "look.mtlx").write_text("""<?xml version="1.0"?>
+<materialx version="1.39">
+  <image name="albedo" type="color3"><input name="file" type="filename" value="brick_albedo.png" /></image>
+  <image name="orm" type="vector3"><input name="file" type="filename" value="brick_orm.png" /></image>
+  <separate3 name="orm_split" type="multioutput"><input name="in" type="vector3" nodename="orm" /></separate3>
+  <image name="normal" type="vector3"><input name="file" type="filename" value="brick_normal.png" /></image>
+  <normalmap name="nmap" type="vector3"><input name="in" type="vector3" nodename="normal" /></normalmap>
+  <standard_surface name="SR" type="surfaceshader">
+    <input name="base_color" type="color3" nodename="albedo" />
+    <input name="specular_roughness" type="float" nodename="orm_split" output="outy" />
+    <input name="normal" type="vector3" nodename="nmap" />
+  </standard_surface>
+  <surfacematerial name="M" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="SR" />
+  </surfacematerial>
+</materialx>
+""")
+    result = scan_paths([tmp_path / "look.mtlx"])
+    maps = {Path(m.resolved).name: m for s in result.stacks for m in s.maps}
+    assert maps["brick_albedo.png"].color_space is ColorSpace.SRGB
+    for name in ("brick_normal.png", "brick_orm.png"):
+        assert maps[name].color_space is ColorSpace.RAW, (name, maps[name].color_space_reason)
+        assert "vector3 image, never colour-transformed" in maps[name].color_space_reason
+    assert not [f for f in result.findings if f.code == "colorspace-mismatch"], result.findings
+
+
+def _tag_srgb(path: Path) -> None:
+    """Rewrite the PNG at ``path`` with an sRGB chunk, as most image editors save one."""
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(str(path))
+    buf.specmod().attribute("oiio:ColorSpace", "srgb_rec709_scene")
+    assert buf.write(str(path) + ".tmp.png")
+    Path(str(path) + ".tmp.png").replace(path)

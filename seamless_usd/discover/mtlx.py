@@ -26,6 +26,9 @@ from seamless_usd.discover.tokens import (
 from seamless_usd.textures import NORMAL_ROLES, Origin, RecordedSource, RoleUse
 from seamless_usd.discover.uv import mtlx_uv_chain
 from seamless_usd.errors import InputError
+
+#: The image types a MaterialX colorspace applies to (a float, vector2/3/4 image's values are never transformed).
+COLOUR_TYPES = ("color3", "color4")
 from seamless_usd.findings import Finding, Severity, asset_ref
 
 __all__ = ["read_document", "walk_document"]
@@ -187,7 +190,9 @@ def _texture_use(material: str, tex: mx.Node, role: RoleUse, flip: bool, documen
     # they inherit (node graph, document)
     holders = [h for h in (file_inp, src) if h is not None]
     stated = [h.getColorSpace() for h in holders if h.hasColorSpace()] + [h.getActiveColorSpace() for h in holders]
-    if any(stated):
+    if tex.getType() not in COLOUR_TYPES:  # MaterialX transforms colour images only: the others read as stored
+        labels.append(Label("raw", f"MaterialX {tex.getType()} image, never colour-transformed"))
+    elif any(stated):
         labels.append(Label(next(c for c in stated if c), "MaterialX colorspace"))
     tiled = tex.getCategory() == MtlxCategories.TILEDIMAGE
     wrap_s = Wrap.MTLX_DEFAULT if tiled else mtlxgraph.input_value(tex, MtlxInputs.UADDRESSMODE, Wrap.MTLX_DEFAULT, document)[0]

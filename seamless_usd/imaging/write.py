@@ -4,8 +4,8 @@ The output keeps the source's format family and bit depth (8-bit -> PNG, 16-bit 
 TIFF, half / float -> OpenEXR half / float; see :func:`~seamless_usd.imaging.io.output_extension`),
 its channel count and layout (channels the network did not see are filled with a constant),
 its alpha as stored (straight, or colour multiplied by it in a TIFF that says so), the colour encoding the stage
-declares for the map (the map's colour space, recorded in the file's colour metadata when it is sRGB or when the
-source's header names one), and the source's embedded ICC colour profile where the output
+declares for the map (recorded in the file's colour metadata, for a linear or data map only where the source's
+header names a space), and the source's embedded ICC colour profile where the output
 format holds one (PNG, TIFF; not OpenEXR): the tile's texels are in the source's encoding, so an image editor
 shows its colours as it shows the source's.
 """
@@ -195,11 +195,13 @@ def write_pixels(
     alpha = alpha_channel(like) if named or len(like.channel_names) != c else None
     if alpha is not None:
         spec.alpha_channel = alpha
+    # a linear or data map's tile is labelled only where its source's header names a space (the source's name is kept
+    # below where it says the same encoding): a label the source did not have would change how viewers show the
+    # tile (a PNG's gAMA) or contradict the stage's own name (ACEScg). An unlabelled PNG gets sRGB chunks from the
+    # writer; "raw" writes none
     if ColorSpace(color_space) is ColorSpace.SRGB or like.color_space is not None:
         spec.attribute("oiio:ColorSpace", _COLORSPACE_NAMES[ColorSpace(color_space)])
-    elif ext == ".png":  # linear and data maps are labelled only where the source's header says what it holds: a
-        # label it did not have would change how viewers show the tile (a PNG's gAMA) or contradict the stage's own
-        # name (ACEScg). A PNG unlabelled gets sRGB chunks from the writer; "raw" writes none
+    elif ext == ".png":
         spec.attribute("oiio:ColorSpace", "raw")
     if ext == ".exr":
         spec.attribute("compression", "zip")
