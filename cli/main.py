@@ -2,7 +2,7 @@
 
 Exit codes: 0 success; 1 some items failed or did not pass (the rest were done); 2 usage error or
 unreadable input; 3 internal error (the traceback goes to a log file named in the message); 130 stopped by
-Ctrl-C; 141 the reader of its output went away (``| head``).
+Ctrl-C or SIGTERM (what ``kill`` and a farm's scheduler send); 141 the reader of its output went away (``| head``).
 """
 from __future__ import annotations
 
@@ -52,17 +52,26 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
-def _handle_interrupt(handler):
-    """Install ``handler`` for Ctrl-C where the default one is installed (the main thread; a host application's
-    own handler is left alone); returns the previous handler to put back, or None."""
+def _handle_interrupt(handler) -> dict:
+    """Install ``handler`` for Ctrl-C and for SIGTERM (what ``kill`` and a farm's scheduler send) where the default
+    ones are installed (the main thread; a host application's own handlers are left alone); returns the previous
+    handlers to put back."""
     import signal
     import threading
 
     if threading.current_thread() is not threading.main_thread():
-        return None
-    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        return None
-    return signal.signal(signal.SIGINT, handler)
+        return {}
+    previous = {}
+    for signum, default in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL)):
+        if signal.getsignal(signum) is default:
+            previous[signum] = signal.signal(signum, handler)
+    return previous
+
+
+def _stopped() -> int:
+    """The exit code of a run stopped by Ctrl-C or SIGTERM: 130, as its report says."""
+    print("seamless-usd: interrupted", file=sys.stderr)
+    return 130
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -92,14 +101,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"seamless-usd: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
-        print("seamless-usd: interrupted", file=sys.stderr)
-        return 130
+        return _stopped()
     except BrokenPipeError:  # the reader of stdout went away (``| head``): nothing more is said there
         return _pipe_closed()
     except Exception:  # noqa: BLE001 - the one place unexpected errors are turned into a log file
         if interrupted:  # Ctrl-C inside an extension module's import surfaces as ImportError
-            print("seamless-usd: interrupted", file=sys.stderr)
-            return 130
+            return _stopped()
         with tempfile.NamedTemporaryFile(
             "w", prefix="seamless-usd-crash-", suffix=".log", delete=False
         ) as log:
@@ -110,10 +117,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         return EXIT_INTERNAL
     finally:
-        if previous is not None:
-            import signal
+        import signal
 
-            signal.signal(signal.SIGINT, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 EXIT_PIPE_CLOSED = 141  # as a command ended by SIGPIPE: 128 + 13

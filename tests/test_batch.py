@@ -351,9 +351,12 @@ def test_a_run_killed_after_the_first_stack_resumes_to_the_same_outputs(tmp_path
     assert (lib / "looks" / "two.seamless.usda").is_file()
 
 
-def test_a_run_stopped_with_ctrl_c_says_as_json_how_far_each_stack_got(tmp_path, two_stacks):
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
+def test_a_run_stopped_with_ctrl_c_says_as_json_how_far_each_stack_got(tmp_path, two_stacks, signum):
     """Ctrl-C while tiles are made: the JSON report is still printed (exit code 130, ``interrupted``), and each stack's
-    row says how far it got and agrees with the disk (tiles written, no layer)."""
+    row says how far it got and agrees with the disk (tiles written, no layer). SIGTERM (``kill``, a farm's
+    scheduler) stops it the same way: it ended the process at once, with no report and worker processes left
+    running."""
     cmd = [sys.executable, "-m", "seamless_usd_cli.main", "process", *RUN, "--json"]
     lib = _library(tmp_path / "run", copies=0)
     cache = tmp_path / "run-cache"
@@ -368,7 +371,7 @@ def test_a_run_stopped_with_ctrl_c_says_as_json_how_far_each_stack_got(tmp_path,
     reached = wait_until(lambda: any(p.stat().st_mtime > 1e9 for p in tiles.glob("*.tile.png")), [lib], timeout=300,
                          stop=lambda: proc.poll() is not None)
     if reached and proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(signum)
     out, err = proc.communicate(timeout=120)
     assert reached and proc.returncode == 130, err.decode()[-2000:]
     payload = json.loads(out)
