@@ -47,14 +47,17 @@ def tile_filename(source_asset: str, stack_id: str, extension: str, source_diges
     return f"{slug(stem)}.{slug(stack_id, 64)}{digest}.tile{extension}"
 
 
-def stack_tile_filenames(maps, stack_id: str, extensions: list[str]) -> list[str]:
+def stack_tile_filenames(maps, stack_id: str, extensions: list[str], made_with: str = "") -> list[str]:
     """:func:`tile_filename` of each map of a stack (``TextureMap``), with a digest of its source's bytes and of the
     whole stack's (every map's tile is cut through one field made from all of them: two stacks of one material path
     that share a map but not the others make two tiles of it, neither overwriting the other, and a stack one of
     whose maps changed names every tile anew, so a layer written before keeps the tiles it names); maps of one file
     (two texture nodes reading its colour and its alpha) also name the channels they read, so that neither tile
     overwrites the other; two nodes reading the same channels of one file share one tile (the same texels cut
-    through the same field; the run knows each map by its file and channels).
+    through the same field; the run knows each map by its file and channels). The digest covers how each map is
+    read (colour space, scale and bias) and ``made_with`` (the job's settings that change a tile, "" for the
+    defaults): a stack made again with other settings, or one file read as sRGB by one stage and raw by another,
+    names other tiles, so the tiles another layer names are never replaced by ones it did not judge.
 
     >>> from types import SimpleNamespace as M
     >>> stack_tile_filenames([M(asset="rgba.png", resolved="", channels_used="rgb"),
@@ -62,7 +65,8 @@ def stack_tile_filenames(maps, stack_id: str, extensions: list[str]) -> list[str
     ['rgba.M-0123456789.rgb.tile.png', 'rgba.M-0123456789.a.tile.png']
     """
     digests = [source_digest(m.resolved) for m in maps]
-    whole = "|".join(sorted(f"{d}:{m.channels_used}" for d, m in zip(digests, maps)))
+    whole = "|".join(sorted(f"{d}:{m.channels_used}{_read_as(m)}" for d, m in zip(digests, maps)))
+    whole += f"|{made_with}" if made_with else ""
     names = [tile_filename(m.asset, stack_id, ext, hashlib.sha256(f"{d}|{whole}".encode()).hexdigest() if d else "")
              for m, d, ext in zip(maps, digests, extensions)]
     out = []
@@ -71,6 +75,14 @@ def stack_tile_filenames(maps, stack_id: str, extensions: list[str]) -> list[str
             name = name.replace(".tile", f".{m.channels_used}.tile", 1) if ".tile" in name else name
         out.append(name)
     return out
+
+
+def _read_as(m) -> str:
+    """How a map's file is read, where it is not as most are (sRGB or raw by the file, scale 1, bias 0): "" else."""
+    space = getattr(getattr(m, "color_space", None), "value", "")
+    scale, bias = tuple(getattr(m, "scale", (1.0,) * 4)), tuple(getattr(m, "bias", (0.0,) * 4))
+    plain = scale == (1.0,) * 4 and bias == (0.0,) * 4 and not getattr(m, "normal_y_flip", False)
+    return f":{space}" + ("" if plain else f":{scale}:{bias}:{getattr(m, 'normal_y_flip', False)}")
 
 
 def source_digest(path: str) -> str:

@@ -161,3 +161,43 @@ def test_two_nodes_reading_the_same_channels_of_one_file_share_one_tile(tmp_path
     stage = Usd.Stage.Open(str(scene.with_name("scene.seamless.usda")))
     read = {stage.GetAttributeAtPath(f"/World/Looks/Brick/{n}.inputs:file").Get().resolvedPath for n in ("Albedo", "Glow")}
     assert len(read) == 1 and Path(read.pop()).name in tiles
+
+
+def test_tiles_made_otherwise_never_replace_the_tiles_another_layer_names(tmp_path, capsys):
+    """Two stages in one folder read the same brick maps, so their tiles share ``tileable/``. Made again for one of
+    them with other settings (another seed, preset or --refine), or read as raw by it where the other reads sRGB,
+    the tiles got the same names and replaced those the other stage's layer names, judged and recorded as they were
+    (a passed 144 px tile became a 160 px not-passed one under the other's UV scale). Each now gets its own."""
+    import shutil
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    shutil.copytree(samples / "textures", tmp_path / "textures")
+    (tmp_path / "shots").mkdir()
+    scene = (samples / "brick" / "scene.usda").read_text()
+    (tmp_path / "shots" / "a.usda").write_text(scene)
+    (tmp_path / "shots" / "b.usda").write_text(scene)
+    run = ["process", "--preset", "tiny", "--seeds", "1", "--refine", "off", "--cache-dir", str(tmp_path / "cache"),
+           "--json"]
+    main([*run, "--max-size", "128", str(tmp_path / "shots")])
+    capsys.readouterr()
+
+    def named(stage: str) -> dict[str, bytes]:
+        layer = Usd.Stage.Open(str(tmp_path / "shots" / f"{stage}.seamless.usda"))
+        paths = [layer.GetPrimAtPath(f"/World/Looks/Brick/{n}").GetAttribute("inputs:file").Get().resolvedPath
+                 for n in ("Albedo", "Normal", "Roughness")]
+        return {p: Path(p).read_bytes() for p in paths}
+
+    b_before = named("b")
+    assert main([*run, "--max-size", "128", "--seed", "7", str(tmp_path / "shots" / "a.usda")]) in (0, 1)
+    capsys.readouterr()  # a made again with another seed
+    assert named("b") == b_before  # b's layer names the same tiles, byte for byte
+    assert not set(named("a")) & set(b_before)
+    # the albedo read as raw by a, sRGB by b: another tile of it, b's kept
+    (tmp_path / "shots" / "a.usda").write_text(scene.replace(
+        '@../textures/brick_albedo.png@', '@../textures/brick_albedo.png@\n                token inputs:sourceColorSpace = "raw"'))
+    assert main([*run, "--max-size", "128", str(tmp_path / "shots" / "a.usda")]) in (0, 1)
+    capsys.readouterr()
+    assert named("b") == b_before and not set(named("a")) & set(b_before)
+    for stage in ("a", "b"):  # check agrees with what each run recorded
+        [item] = check_paths([tmp_path / "shots" / f"{stage}.seamless.usda"]).items
+        assert item.verdict["reference"] == "source", item

@@ -74,14 +74,14 @@ def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> Cach
         return plan
 
 
-def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_of: str | None = None,
+def planned_result(stack: TextureStack, out_dir: Path, options: Options, made_with: str, tiles_of: str | None = None,
                    cached: CachedPlan | None = None):
     """What a dry run shows authoring: the tile paths that would be written, and the UV scale: from the cache when an
     earlier run made the tiles (``cached``), else that of a source-sized tile (scale 1; the paper's tile of the whole
     texture, c = working size, halves it). A dry run reads no pixels, so it cannot tell a stack whose written tile
     will be smaller (a lattice cut: a larger scale).
     ``tiles_of``: the id of an identical stack planned earlier into the same folder, whose tiles this one reuses
-    (as the run does)."""
+    (as the run does); ``made_with``: the job settings' :meth:`.JobSettings.tile_key`, which the names carry."""
     from seamless_usd.authoring import MapResult, Provenance, StackResult, uv_scale_for
     from seamless_usd.imaging import WorkingResolution, output_extension
 
@@ -94,7 +94,7 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options, tiles_o
     else:
         uv, crop = uv_scale_for(working, working), working
     read = [m for m in stack.maps if m.image is not None]
-    names = stack_tile_filenames(read, tiles_of or stack.id, [output_extension(m.image) for m in read])
+    names = stack_tile_filenames(read, tiles_of or stack.id, [output_extension(m.image) for m in read], made_with)
     maps = [MapResult(map=m, output_path=out_dir / name) for m, name in zip(read, names)]
     prov = Provenance(
         source_asset=", ".join(m.asset for m in stack.maps), crop_size=crop, uv_scale=uv, q_passed=None,

@@ -106,7 +106,8 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
                 cached.outcome.fill_report(report, stack, reused=duplicate_of is not None)
                 planned = cached.outcome.stack_result(stack)
             else:
-                planned = planned_result(stack, out_dir, run.options, tiles_of=tiles_of, cached=cached)
+                planned = planned_result(stack, out_dir, run.options, run.settings.tile_key(), tiles_of=tiles_of,
+                                         cached=cached)
             report.status, report.duplicate_of = StackStatus.PLANNED, duplicate_of
             report.maps = report.maps or [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps]
             report.uv_scale = planned.uv_scale
@@ -179,8 +180,9 @@ def _interrupted_row(run: Run, report: StackReport, stack: TextureStack, source_
         run.report.findings.append(Finding(Severity.ERROR, "stack-failed", prim_ref(stack.material.strip("<>")),
                                            report.message, stack.material))
     else:
-        planned = planned_result(stack, out_dir, run.options)  # the files the job writes, by name: those this run
-        written = [mr.output_path for mr in planned.maps if _written_since(mr.output_path, run.began)]  # wrote
+        # the files the job writes, by name: those this run wrote
+        planned = planned_result(stack, out_dir, run.options, run.settings.tile_key())
+        written = [mr.output_path for mr in planned.maps if _written_since(mr.output_path, run.began)]
         report.maps = [MapReport.for_map(mr.map, mr.output_path) for mr in planned.maps if mr.output_path in written]
         left = len(planned.maps) - len(written)
         report.message = INTERRUPTED_UNJUDGED.format(

@@ -49,6 +49,14 @@ class JobSettings:
     straighten: bool = False  # turn the stack's lines onto the axes before tiling (imaging.straighten)
     uv_turn: bool = False  # straighten, the turn authored in the asset's UVs (normal vectors keep theirs)
 
+    def tile_key(self) -> str:
+        """The settings that change a tile, where they differ from the defaults ("" for none): carried by the tiles'
+        names (:func:`.naming.stack_tile_filenames`), so tiles made otherwise never replace those a layer names."""
+        plain, kept = JobSettings(), ("cache_dir", "device", "max_pixels")  # these three change no tile
+        changed = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                   if f.name not in kept and getattr(self, f.name) != getattr(plain, f.name)}
+        return json.dumps(changed, sort_keys=True, default=str) if changed else ""
+
     @classmethod
     def from_options(cls, options, threads: int | None = None) -> "JobSettings":
         """The settings of ``options`` for a job with ``threads`` CPU threads (None: unknown): seeds not asked for
@@ -191,7 +199,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     sources = on_tile_grid(list(pixels.values), [m.is_normal for m in stack.maps], tile_hw, uv_scale)
     outcomes: dict[tuple[str, str], MapOutcome] = {}
     written_values = []
-    filenames = stack_tile_filenames(stack.maps, stack.id, [imaging.output_extension(info) for info in pixels.infos])
+    filenames = stack_tile_filenames(stack.maps, stack.id, [imaging.output_extension(info) for info in pixels.infos],
+                                     job.settings.tile_key())
     for name, m, source, encoding, info, filename in zip(names, stack.maps, sources, pixels.encodings, pixels.infos,
                                                          filenames):
         values = tiles[name]
