@@ -5,7 +5,7 @@ import hashlib
 import re
 from pathlib import Path
 
-__all__ = ["tile_filename", "stack_tile_filenames", "source_digest", "override_layer_path", "slug"]
+__all__ = ["tile_filename", "stack_tile_filenames", "source_digest", "slug"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 #: What :func:`tile_filename` adds after a stem: the stack id, the source's digest, ``.tile``.
@@ -94,9 +94,3 @@ def source_digest(path: str) -> str:
         return source_sha256(path)
     except OSError:
         return ""
-
-
-def override_layer_path(stage_path: Path) -> Path:
-    """``scene.usda`` -> ``scene.seamless.usda`` (``.usdc``/``.usd``/``.usdz`` -> ``.seamless.usda``)."""
-    stage_path = Path(stage_path)
-    return stage_path.with_name(f"{stage_path.stem}.seamless.usda")

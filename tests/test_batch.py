@@ -680,3 +680,23 @@ def test_materials_leaves_out_the_findings_about_materials_it_does_not_select(tm
     _, brick = _run(str(layer), "--dry-run", "--materials", "Brick", capsys=capsys)
     assert not any("not_there.png" in f["where"] + f["message"] for f in brick["findings"]), brick["findings"]
     assert [s["material"] for s in brick["stacks"]] == ["</Root/Looks/Brick>"]
+
+
+def test_two_stages_of_one_name_and_two_formats_in_one_folder_get_a_layer_each(tmp_path, capsys):
+    """``scene.usda`` and ``scene.usdc`` side by side both wrote ``scene.seamless.usda``, the second replacing the
+    first's edits, while the run said both were written (exit 0). Each now keeps its extension in its layer's name,
+    and a run again writes nothing."""
+    from pxr import Sdf
+
+    lib = _library(tmp_path, copies=1)
+    folder = lib / "brick0"
+    layer = Sdf.Layer.CreateNew(str(folder / "scene.usdc"))  # another look, its textures as near (../textures)
+    layer.ImportFromString(Sdf.Layer.FindOrOpen(str(lib / "looks" / "two.usda")).ExportToString())
+    layer.Save()
+    code, payload = _run(str(folder), "--cache-dir", str(tmp_path / "cache"), capsys=capsys)
+    written = sorted(Path(p).name for p in payload["layers_written"])
+    assert written == ["scene.usda.seamless.usda", "scene.usdc.seamless.usda"], written
+    for name in ("scene.usda", "scene.usdc"):
+        assert Sdf.Layer.FindOrOpen(str(folder / f"{name}.seamless.usda")).subLayerPaths == [f"./{name}"]
+    again, repeat = _run(str(folder), "--cache-dir", str(tmp_path / "cache"), capsys=capsys)
+    assert again == code and not repeat["layers_written"]

@@ -57,10 +57,18 @@ def referenced_output(document: Path, layer: Path) -> Path:
     return layer.with_name(f"{document.stem}.{layer.stem}.mtlx")
 
 
+#: The extensions of USD layers: two stages of one name and two of these in one folder get layers named apart.
+USD_EXTENSIONS = (".usd", ".usda", ".usdc", ".usdz")
+
+
 def default_output_layer(stage_path: Path) -> Path:
-    """``scene.usda`` -> ``scene.seamless.usda`` beside it (``.usdz`` / ``.usdc`` -> ``.usda``)."""
+    """``scene.usda`` -> ``scene.seamless.usda`` beside it (``.usdz`` / ``.usdc`` -> ``.usda``); where a stage of the
+    same name with another extension is beside it (``scene.usda`` and ``scene.usdc``), each keeps its extension in
+    the name (``scene.usdc.seamless.usda``): they wrote one layer, the second replacing the first's edits."""
     stage_path = Path(stage_path)
-    return stage_path.with_name(f"{stage_path.stem}{Names.OUTPUT_SUFFIX}.usda")
+    twins = [stage_path.with_suffix(ext) for ext in USD_EXTENSIONS if ext != stage_path.suffix.lower()]
+    stem = stage_path.name if any(t.is_file() for t in twins) else stage_path.stem
+    return stage_path.with_name(f"{stem}{Names.OUTPUT_SUFFIX}.usda")
 
 
 def author_usd(
