@@ -77,8 +77,10 @@ def author_usd(
     mode: WriteMode = WriteMode.NEW_LAYER,
     output_layer: Path | str | None = None,
     plan_mode: WriteMode = WriteMode.NEW_LAYER,
+    shared=None,
 ) -> AuthoringResult:
-    """Open the stage at ``stage_path`` and write ``results`` into it.
+    """Open the stage at ``stage_path`` and write ``results`` into it (``shared``: in place, a run's
+    :class:`.usdshared.SharedEdits` of the layers its stages share).
 
     ``NEW_LAYER`` writes ``output_layer`` (default :func:`default_output_layer`) that sublayers
     the original root layer and holds every override, with asset paths relative to it; no input
@@ -117,7 +119,7 @@ def author_usd(
                        for doc in documents]
         with Tf.DiagnosticTrap() as trap:
             if in_place:
-                result = _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN)
+                result = _author_in_place(stage_path, results, dry_run=mode is WriteMode.DRY_RUN, shared=shared)
             else:
                 retarget = {Path(doc).resolve(): r.output for doc, r in zip(documents, doc_results)
                             if r.output and (r.layers_written or (r.dry_run and r.plan))}

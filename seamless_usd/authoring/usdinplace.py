@@ -10,6 +10,7 @@ from seamless_usd.authoring.files import backup_once, check_layer, write_atomica
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult
 from seamless_usd.authoring.usdedits import check_uv_composed, keep_whole_stacks
 from seamless_usd.authoring.usdplan import _Author
+from seamless_usd.authoring.usdshared import SharedEdits, record_made, respect_other_stages
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import marked_writable
 from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
@@ -85,7 +86,9 @@ def _instance_target(prim: Usd.Prim, layer: Sdf.Layer):
                    "prototype's source, or make it non-instanceable")
 
 
-def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: bool = False) -> AuthoringResult:
+def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: bool = False,
+                     shared: SharedEdits | None = None) -> AuthoringResult:
+    """``shared``: what the run's other stages keep or edited already in the layers they share with this one."""
     result = AuthoringResult(dry_run=dry_run)
     if _is_packaged_path(stage_path):
         result.findings.append(Finding(
@@ -97,7 +100,11 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
     layers = {layer: layer.dirty for layer in stage.GetUsedLayers()}
     author = _Author(stage, result, anchor_dir=None)
     author.plan_all(results, _in_place_target, selections=True, one_layer=True)
+    if shared is not None:
+        respect_other_stages(author, results, result, shared, str(stage_path))
     if not author.edits:
+        if shared is not None:
+            record_made(author, results, shared, str(stage_path))
         if author.planned_maps and not result.refusals() and not result.not_written:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
                                            "every texture already has these edits; nothing saved"))
@@ -111,6 +118,8 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
             "shows the tiles now, from the tiles folder of this stage (leave out --in-place for a layer of its own)"))
     if dry_run:  # the plan, with the same warnings as the run
         author.apply()  # records the plan only
+        if shared is not None:
+            record_made(author, results, shared, str(stage_path))
         return result
     for layer in changed:
         if layers.get(layer):
@@ -132,6 +141,8 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
     finally:
         for layer in changed:
             layer.Reload(force=True)  # drop in-memory edits; saved ones come back from disk
+    if shared is not None:
+        record_made(author, results, shared, str(stage_path))
     return result
 
 

@@ -102,6 +102,7 @@ class _Source:
     scan: ScanResult
     stacks: list[TextureStack]
     instanced: dict[tuple[str, str], str] = field(default_factory=dict)  # stacks inside instances, with why
+    sites: dict[str, set] = field(default_factory=dict)  # USD: stack id -> where its file values are authored
 
 
 def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = None, keep_triage: bool = True
@@ -120,8 +121,12 @@ def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = 
     else:
         raise not_a_scene(path)
     stacks = select_stacks(scan, patterns)
-    instanced = instanced_stacks(stage, stacks, str(path)) if kind == "usd" else {}
-    return _Source(path, kind, scan, stacks, instanced)
+    if kind != "usd":
+        return _Source(path, kind, scan, stacks)
+    from seamless_usd.authoring.usdshared import file_sites
+
+    sites = {s.id: file_sites(stage, s.maps) for s in scan.stacks if not s.selection}
+    return _Source(path, kind, scan, stacks, instanced_stacks(stage, stacks, str(path)), sites)
 
 
 def _author_source(run: Run, src: _Source) -> None:
@@ -137,9 +142,8 @@ def _author_source(run: Run, src: _Source) -> None:
             edit = authoring.author_mtlx(src.path, results, mode=run.options.mode, plan_mode=plan,
                                          output_path=run.options.output_layer)
         else:
-            edit = authoring.author_usd(
-                src.path, results, mode=run.options.mode, output_layer=run.options.output_layer, plan_mode=plan
-            )
+            edit = authoring.author_usd(src.path, results, mode=run.options.mode,
+                                        output_layer=run.options.output_layer, plan_mode=plan, shared=run.shared)
     except Exception as exc:  # noqa: BLE001 - one source's edits failing must not stop the others
         # The tiles are written; the edits of this source are not. Say so; the other sources go on.
         if not isinstance(exc, (SeamlessUsdError, OSError)):
@@ -258,6 +262,8 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
         for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
             run.blocked.update(_locked_in_place(run, src))
     _check_patterns(run, sources)
+    if modes.IN_PLACE in (run.options.mode, run.options.plan_mode) and len(sources) > 1:
+        run.shared = _shared_edits(run, sources)
     if run.options.mode != modes.DRY_RUN:
         for src in sources:  # a source whose tiles' folder cannot be made: its stacks fail with why, before any work
             problem = folder_problem(_output_dir(run.options, src.path))
@@ -279,6 +285,31 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
         run.report.findings[findings:] = [f if f.source else replace(f, source=str(src.path))
                                           for f in run.report.findings[findings:]]
     return finish_run(run, started)
+
+
+def _shared_edits(run: Run, sources: list[_Source]):
+    """In place, where the stages' stacks that are not made read their files (a layer they share with another stage
+    must not change under them: :mod:`.authoring.usdshared`); the stacks that would change one fail."""
+    from seamless_usd.authoring.usdshared import SharedEdits
+
+    shared = SharedEdits()
+    for src in sources:
+        label, selected = str(src.path), {s.id for s in src.stacks}
+        for stack in src.scan.stacks:
+            key = (label, stack.id)
+            why = (stack.intent if key in run.left_alone else run.set_aside.get(key) or run.blocked.get(key)
+                   or (None if stack.id in selected else "not selected (--materials)"))
+            if why is not None and stack.id in src.sites:
+                shared.keep(src.sites[stack.id], label, why.split(";")[0])
+    for src in sources:  # a stack that would change such a use fails before its tiles are made
+        label = str(src.path)
+        for stack in src.stacks:
+            key = (label, stack.id)
+            if key not in run.left_alone and key not in run.set_aside and key not in run.blocked:
+                why = shared.refusal(src.sites.get(stack.id, ()), label)
+                if why is not None:
+                    run.blocked[key] = why
+    return shared
 
 
 def _interrupted(run: Run, sources: list[_Source], started: float) -> Report:

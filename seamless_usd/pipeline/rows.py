@@ -48,6 +48,7 @@ class Run:
     placed: dict[tuple[str, Path], StackOutcome | Exception] = field(default_factory=dict)  # (key, dir) -> tiles there
     claimed: dict[str, tuple[str, str]] = field(default_factory=dict)  # content key -> first (source, stack id)
     planned_first: dict[tuple[str, Path], str] = field(default_factory=dict)  # dry run: (key, dir) -> first stack id
+    shared: object | None = None  # in place: the layers the stages share (authoring.usdshared.SharedEdits)
     began: float = field(default_factory=time.time)  # when the run began (seconds since the epoch)
     total: int = 0
     index: int = 0
