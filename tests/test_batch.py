@@ -171,6 +171,20 @@ def test_a_folder_walk_takes_the_stages_and_not_the_layers_they_compose(tmp_path
     assert atlases and all(s["status"] == "left-alone" for s in atlases)
 
 
+def test_a_broken_layer_another_stage_references_is_still_reported_unreadable(tmp_path, capsys):
+    """A layer that does not parse was reported unreadable (exit 2) alone in the folder, but passed over once another
+    stage referenced it (taken for a layer that stage composes), and the run then exited 0 on the stage's warning."""
+    lib = _library(tmp_path, copies=1)
+    (lib / "broken").mkdir()
+    (lib / "broken" / "bad.usda").write_text('#usda 1.0\ndef Xform "World" {\n  this is not usd\n')
+    (lib / "shot").mkdir()
+    (lib / "shot" / "shot.usda").write_text('#usda 1.0\ndef Xform "World" (\n    references = @../broken/bad.usda@\n)\n{\n}\n')
+    assert "broken/bad.usda" in [p.relative_to(lib).as_posix() for p in expand_inputs([lib])]
+    code = main(["process", str(lib), "--dry-run", "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 2 and any(Path(u).name == "bad.usda" for u in payload["unreadable"]), payload["unreadable"]
+
+
 def test_make_executor_validates_names():
     assert isinstance(make_executor(None), InProcessExecutor)
     assert isinstance(make_executor("inprocess", 1), InProcessExecutor)

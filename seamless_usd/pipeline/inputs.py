@@ -67,9 +67,20 @@ def _composed_by(files: Sequence[Path]) -> set[Path]:
             continue
         for dep in layer.GetCompositionAssetDependencies():
             target = Path(dep) if Path(dep).is_absolute() else f.parent / dep
-            if target.exists():
+            if target.exists() and (target.suffix.lower() == ".mtlx" or _opens(target)):
                 used.add(target.resolve())
     return used
+
+
+def _opens(path: Path) -> bool:
+    """Whether ``path`` opens as a USD layer: one that does not is a scene of its own, reported as unreadable (the
+    stage that composes it only warns that its composition failed), as it is when it is alone in the folder."""
+    from pxr import Sdf
+
+    try:
+        return Sdf.Layer.FindOrOpen(str(path)) is not None
+    except Exception:  # noqa: BLE001 - Tf.ErrorException: not a layer
+        return False
 
 
 def expand_inputs(items: Sequence[str | Path], outputs: bool = False, require_scenes: bool = False) -> list[Path]:
