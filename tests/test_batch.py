@@ -216,7 +216,8 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
     assert outputs(planned) == outputs(first)  # the dry run plans the very files the run writes
     assert all(line.startswith("make tiles of") for line in planned["plan"] if "tiles" in line)
     # after the run, a dry run with its cache plans what the run would do: write the cached tiles, at their scale
-    _, again = _run(str(lib), "--dry-run", "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    again_code, again = _run(str(lib), "--dry-run", "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    assert again_code == code, (again_code, code)  # what the run says, where the cache knows it
     made = {(s["source"], s["id"]): s for s in first["stacks"]}
     for s in again["stacks"]:
         assert s["status"] == "planned" and s["uv_scale"] == made[(s["source"], s["id"])]["uv_scale"]

@@ -143,9 +143,11 @@ class Report:
 
     @property
     def ok(self) -> bool:
-        """True when every stack was done and passed the verdict (seamless and faithful) and nothing failed."""
+        """True when every stack was done and passed the verdict (seamless and faithful) and nothing failed; in a dry
+        run, when no stack planned from the cache is known not to pass (so its exit code says what the run's will)."""
         bad = {StackStatus.FAILED, StackStatus.NOT_PASSED}
-        return not any(s.status in bad for s in self.stacks) and not any(
+        known_bad = [s for s in self.stacks if s.status is StackStatus.PLANNED and s.verdict.get("passed") is False]
+        return not known_bad and not any(s.status in bad for s in self.stacks) and not any(
             f.severity is Severity.ERROR for f in self.findings
         )
 
