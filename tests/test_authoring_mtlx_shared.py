@@ -113,3 +113,57 @@ def test_an_interface_file_input_three_images_read_keeps_each_ones_file(tmp_path
     main(args)
     capsys.readouterr()
     assert written.read_text() == before
+
+
+WRAP_SHARED = """<?xml version="1.0"?>
+<materialx version="1.39" colorspace="lin_rec709">
+  <nodegraph name="NG">
+    <input name="wrap" type="string" value="clamp" uniform="true" />
+    <image name="a" type="color3">
+      <input name="file" type="filename" value="../tex/brick_albedo.png" colorspace="srgb_texture" />
+      <input name="uaddressmode" type="string" interfacename="wrap" />
+      <input name="vaddressmode" type="string" interfacename="wrap" />
+    </image>
+    <image name="decal" type="color3">
+      <input name="file" type="filename" value="../tex/wood_color.png" colorspace="srgb_texture" />
+      <input name="uaddressmode" type="string" interfacename="wrap" />
+      <input name="vaddressmode" type="string" interfacename="wrap" />
+    </image>
+    <output name="oa" type="color3" nodename="a" />
+    <output name="od" type="color3" nodename="decal" />
+  </nodegraph>
+  <standard_surface name="SR1" type="surfaceshader"><input name="base_color" type="color3" nodegraph="NG" output="oa" /></standard_surface>
+  <surfacematerial name="M1" type="material"><input name="surfaceshader" type="surfaceshader" nodename="SR1" /></surfacematerial>
+  <standard_surface name="SR2" type="surfaceshader"><input name="base_color" type="color3" nodegraph="NG" output="od" /></standard_surface>
+  <surfacematerial name="M2" type="material"><input name="surfaceshader" type="surfaceshader" nodename="SR2" /></surfacematerial>
+</materialx>
+"""
+
+
+def test_address_modes_from_an_interface_input_a_decal_reads_too_stay_clamped_for_it(tmp_path, model_cache, capsys):
+    """Two images read their address modes from one interface input (clamp); the first is tiled (forced), the
+    second, a decal, is left alone. The interface input was set to periodic, so the decal repeated. The tiled image
+    now gets periodic on its own inputs; the decal keeps reading clamp."""
+    import json
+
+    from runchecks import PLUMBING
+
+    from seamless_usd_cli.main import main
+
+    (tmp_path / "tex").mkdir()
+    for name in ("brick_albedo.png", "wood_color.png"):
+        shutil.copyfile(TEXTURES / name, tmp_path / "tex" / name)
+    (tmp_path / "docs").mkdir()
+    source = tmp_path / "docs" / "wrap.mtlx"
+    source.write_text(WRAP_SHARED)
+    main(["process", *PLUMBING, "--max-size", "112", "--force-materials", "M1", "--json", "--cache-dir",
+          str(model_cache), str(source)])
+    rows = {s["material"]: s for s in json.loads(capsys.readouterr().out)["stacks"]}
+    assert rows["<M2>"]["status"] == "left-alone" and rows["<M1>"]["status"] in ("passed", "not-passed")
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(source.with_name("wrap.seamless.mtlx")))
+    assert doc.validate()[0]
+    for mode in ("uaddressmode", "vaddressmode"):
+        assert doc.getDescendant(f"NG/a/{mode}").getValueString() == "periodic"
+        decal = doc.getDescendant(f"NG/decal/{mode}")
+        assert decal.getInterfaceName() == "wrap" and decal.getInterfaceInput().getValueString() == "clamp"

@@ -17,7 +17,7 @@ from typing import Sequence
 import MaterialX as mx
 
 from seamless_usd.authoring.mtlxinputs import (MtlxNames, UnauthoredInput, fmt, gltf_identity, own_file_input,
-                                               set_vector2, vector2)
+                                               own_input, set_vector2, vector2)
 from seamless_usd.authoring.mtlxuv import _PlaceUV
 from seamless_usd.authoring.files import (SET_BY_HAND, backup_once, layer_lock, relative_asset_path, set_by_hand,
                                           write_atomically)
@@ -269,6 +269,9 @@ class _MtlxAuthor(_PlaceUV):
             if inp.getValueString() != MtlxNames.PERIODIC:
                 already = False
                 if not dry:
+                    inp, cut = own_input(node, name, inp)  # an interface input a decal reads too stays as it is
+                    if cut:
+                        self._plan(cut)
                     inp.setValueString(MtlxNames.PERIODIC)
                     self._plan(f"set {prim_ref(inp.getNamePath())} = {MtlxNames.PERIODIC}")
         return already

@@ -121,8 +121,7 @@ def own_file_input(node: mx.Node, file_input) -> tuple:
         return own, None  # cut by an earlier run, on the document it wrote: the node reads its own input
     if not name or file_input is own or not isinstance(graph, mx.NodeGraph):
         return file_input, None
-    others = [n.getNamePath() for n in graph.getNodes() if n != node
-              and any(i.getInterfaceName() == name for i in n.getInputs())]
+    others = _other_readers(node, graph, name)
     if not others:
         return file_input, None
     space = file_input.getActiveColorSpace() if isinstance(file_input, mx.Input) else ""
@@ -131,3 +130,28 @@ def own_file_input(node: mx.Node, file_input) -> tuple:
         own.setColorSpace(space)
     return own, (f"read <{node.getNamePath()}>'s file from its own input, not from <{graph.getNamePath()}>.{name}, "
                  f"which <{others[0]}> reads too")
+
+
+def _other_readers(node: mx.Node, graph, name: str) -> list[str]:
+    """The nodes of ``graph`` other than ``node`` that read its interface input ``name``."""
+    return [n.getNamePath() for n in graph.getNodes() if n != node
+            and any(i.getInterfaceName() == name for i in n.getInputs())]
+
+
+def own_input(node: mx.Node, name: str, authored) -> tuple:
+    """(the input to edit ``node``'s ``name`` on, what was changed to make it so or None): ``authored`` (where the
+    value is authored), unless that is a nodegraph's interface input another node reads too (a decal's address
+    modes, left alone): then the node's own input, holding the interface's value, its read of the interface cut."""
+    own = node.getInput(name)
+    graph = node.getParent()
+    interface = own.getInterfaceName() if own is not None else ""
+    if not interface or authored is own or not isinstance(graph, mx.NodeGraph):
+        return authored, None
+    others = _other_readers(node, graph, interface)
+    if not others:
+        return authored, None
+    value = authored.getValueString()
+    own.removeAttribute("interfacename")
+    own.setValueString(value)
+    return own, (f"read <{node.getNamePath()}>'s {name} from its own input, not from <{graph.getNamePath()}>."
+                 f"{interface}, which <{others[0]}> reads too")
