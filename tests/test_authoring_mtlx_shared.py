@@ -167,3 +167,28 @@ def test_address_modes_from_an_interface_input_a_decal_reads_too_stay_clamped_fo
         assert doc.getDescendant(f"NG/a/{mode}").getValueString() == "periodic"
         decal = doc.getDescendant(f"NG/decal/{mode}")
         assert decal.getInterfaceName() == "wrap" and decal.getInterfaceInput().getValueString() == "clamp"
+
+
+def test_an_older_document_written_at_the_library_s_version_is_said(tmp_path, model_cache, capsys):
+    """The MaterialX library upgrades a 1.38 document as it reads it, so the new document is a 1.39 one: a pipeline
+    pinned to 1.38 readers was not told. A warning names both versions; a 1.39 document gets none."""
+    import json
+
+    from runchecks import PLUMBING
+
+    from seamless_usd_cli.main import main
+
+    (tmp_path / "tex").mkdir()
+    for name in ("brick_albedo.png", "wood_color.png"):
+        shutil.copyfile(TEXTURES / name, tmp_path / "tex" / name)
+    (tmp_path / "docs").mkdir()
+    for version in ("1.38", "1.39"):
+        source = tmp_path / "docs" / f"v{version}.mtlx"
+        source.write_text(WRAP_SHARED.replace('version="1.39"', f'version="{version}"'))
+        main(["process", *PLUMBING, "--max-size", "112", "--force", "--json", "--cache-dir", str(model_cache),
+              str(source)])
+        payload = json.loads(capsys.readouterr().out)
+        said = [f["message"] for f in payload["findings"] if f["code"] == "mtlx-version-upgraded"]
+        assert payload["layers_written"], payload
+        assert len(said) == (1 if version == "1.38" else 0), said
+        assert not said or ("1.38" in said[0] and "1.39" in said[0])

@@ -21,7 +21,7 @@ from seamless_usd.authoring.mtlxinputs import (MtlxNames, UnauthoredInput, fmt, 
 from seamless_usd.authoring.mtlxuv import _PlaceUV
 from seamless_usd.authoring.files import (SET_BY_HAND, backup_once, layer_lock, relative_asset_path, set_by_hand,
                                           write_atomically)
-from seamless_usd.authoring.mtlxtext import read_options, with_leading_comments
+from seamless_usd.authoring.mtlxtext import read_options, stated_version, with_leading_comments
 from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn,
                                           WriteMode, node_key, shared_with)
 from seamless_usd.textures import Origin
@@ -92,6 +92,13 @@ def author_mtlx(
             f"was made from another version of {asset_ref(src)}, so it is made again from the document as it is now "
             f"and the earlier edits of {', '.join(prim_ref(n) for n in lost)} are not kept: process the stages that "
             "use them again"))
+    older = stated_version(src)
+    if author.changed and older and older != doc.getVersionString():
+        result.findings.append(Finding(
+            Severity.WARNING, Codes.MTLX_VERSION_UPGRADED, asset_ref(out),
+            f"written as a MaterialX {doc.getVersionString()} document: {asset_ref(src)} is a {older} one, which the "
+            f"MaterialX library upgrades as it reads it; an application that reads {older} documents only may not "
+            "read it"))
     if not author.changed:
         if checked and not result.refusals() and not result.not_written:
             result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(src),

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import MaterialX as mx
 
-__all__ = ["read_options", "with_leading_comments"]
+__all__ = ["read_options", "stated_version", "with_leading_comments"]
 
 
 def read_options() -> mx.XmlReadOptions:
@@ -29,3 +29,14 @@ def with_leading_comments(text: str, src: Path | None) -> str:
         return text
     at = text.find("?>") + 2 if text.lstrip().startswith("<?xml") else 0
     return f"{text[:at]}\n{comments}{text[at:].lstrip(chr(10))}" if at else comments + text
+
+
+def stated_version(path: Path) -> str:
+    """The ``version`` a MaterialX document's root element states, as written ("" when it cannot be read): the
+    library upgrades an older document as it reads it."""
+    try:
+        head = path.read_text(encoding="utf-8", errors="replace")[:4096]
+    except OSError:
+        return ""
+    found = re.search(r"<materialx\b[^>]*\bversion\s*=\s*[\"']([^\"']+)[\"']", head)
+    return found.group(1) if found else ""

@@ -41,6 +41,7 @@ class Codes:
     EDIT_NOT_COMPOSED = "edit-not-composed"  # an edit a stronger opinion hides
     MTLX_EDITS_REPLACED = "mtlx-edits-replaced"  # a new document made again from a changed source
     EDITS_REPLACED = "edits-replaced"  # a new layer made again over a changed stage
+    MTLX_VERSION_UPGRADED = "mtlx-version-upgraded"  # an older document written at the library's version
     SHARED_LAYER_EDITED = "shared-layer-edited"  # in place: a referenced or payload layer other stages may use
 
 
