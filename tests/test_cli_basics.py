@@ -154,3 +154,14 @@ def test_process_on_a_folder_with_no_stage_in_it_is_an_error(tmp_path, capsys):
     (tmp_path / "notes.txt").write_text("not a stage")
     assert main(["process", "--preset", "tiny", str(tmp_path)]) == 2
     assert "no USD stage or MaterialX document found in this folder" in capsys.readouterr().err
+
+
+def test_an_unreadable_input_named_relative_is_named_once(tmp_path, monkeypatch, capsys):
+    """``process empty.mtlx`` said ``@empty.mtlx@: @/abs/empty.mtlx@: cannot read ...``: the file twice."""
+    from seamless_usd_cli.main import main
+
+    (tmp_path / "empty.mtlx").write_text("")
+    monkeypatch.chdir(tmp_path)
+    assert main(["process", "empty.mtlx"]) == 2
+    [line] = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("error:")]
+    assert line.count("empty.mtlx@") == 1 and "cannot read the MaterialX document" in line, line

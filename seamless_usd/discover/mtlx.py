@@ -115,7 +115,8 @@ def _file_node_finding(node: mx.Node, consumer: str, material: str, document: st
     what = (f"a node of the document's own definition {definition}, whose image is inside the definition (shared "
             "by every node of it): flatten the document's custom nodes into their graphs (MaterialX "
             "flattenSubgraphs) to process it" if custom else
-            f"a {node.getCategory()} node ({definition}), which this tool does not make tileable")
+            f"{'an' if node.getCategory()[:1].lower() in 'aeiou' else 'a'} {node.getCategory()} node ({definition}), "
+            "which this tool does not make tileable")
     return Finding(Severity.SKIPPED, Codes.FILE_NODE_NOT_READ, f"<{node.getNamePath()}>{shown}",
                    f"{consumer} reads a file through {what} (material {material} in {asset_ref(document)})",
                    material=material)

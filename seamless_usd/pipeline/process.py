@@ -221,7 +221,8 @@ def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
         except InputError as exc:
             run.report.unreadable.append(str(path))
             where = asset_ref(path)
-            said = str(exc).removeprefix(f"{where}: ")  # the finding names the file once, as its place
+            # the finding names the file once, as its place (the error names it as given, or resolved)
+            said = str(exc).removeprefix(f"{where}: ").removeprefix(f"{asset_ref(path.resolve())}: ")
             run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", where, said))
 
 
