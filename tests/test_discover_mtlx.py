@@ -255,3 +255,24 @@ def _tag_srgb(path: Path) -> None:
     buf.specmod().attribute("oiio:ColorSpace", "srgb_rec709_scene")
     assert buf.write(str(path) + ".tmp.png")
     Path(str(path) + ".tmp.png").replace(path)
+
+
+def test_a_document_that_does_not_validate_is_said(tmp_path):
+    """A shader input naming a node graph or node that is not there read as a material with no textures, and the
+    scan said nothing (exit 0): MaterialX's own validation is now a warning naming what it found."""
+    (tmp_path / "bad.mtlx").write_text("""<?xml version="1.0"?>
+<materialx version="1.39">
+  <standard_surface name="SR" type="surfaceshader">
+    <input name="base_color" type="color3" nodegraph="NG_missing" output="out" />
+    <input name="specular_roughness" type="float" nodename="nonode" />
+  </standard_surface>
+  <surfacematerial name="M" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="SR" />
+  </surfacematerial>
+</materialx>
+""")
+    result = scan_mtlx(tmp_path / "bad.mtlx")
+    [said] = [f for f in result.findings if f.code == "mtlx-invalid"]
+    assert "NG_missing" in said.message and "nonode" in said.message
+    samples = Path(__file__).resolve().parents[1] / "sample_assets" / "mtlx"
+    assert not [f for f in scan_mtlx(samples / "tiled.mtlx").findings if f.code == "mtlx-invalid"]

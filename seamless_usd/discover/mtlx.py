@@ -82,6 +82,14 @@ def walk_document(
         except Exception as exc:  # noqa: BLE001 - one bad material must not stop the scan
             errors.append(Finding(Severity.ERROR, Codes.DISCOVERY_ERROR, f"{name} {asset_ref(document)}",
                                   f"cannot follow the material network: {type(exc).__name__}: {exc}"))
+    valid, said = doc.validate()
+    if not valid:  # a connection to a node or graph that is not there reads as no texture at all: say why
+        lines = [" ".join(line.split()) for line in said.strip().splitlines() if line.strip()]
+        errors.append(Finding(Severity.WARNING, Codes.MTLX_INVALID, asset_ref(document),
+                              f"the document does not validate ({'; '.join(lines[:3])}"
+                              f"{f'; and {len(lines) - 3} more' if len(lines) > 3 else ''}): a material may read nothing "
+                              "where it connects to what is not there, and a renderer may not read it; fix the "
+                              "document"))
     return materials, uses, errors
 
 

@@ -175,6 +175,7 @@ class Codes:
     COMPOSITION_ERROR = "composition-error"
     MTLX_UNREADABLE = "mtlx-unreadable"
     DISCOVERY_ERROR = "discovery-error"
+    MTLX_INVALID = "mtlx-invalid"  # a document MaterialX does not validate (a connection to nothing)
     SOURCE_NOT_FOUND = "source-not-found"  # a tile this tool wrote whose recorded source is gone
     UNLOADED_PAYLOAD = "unloaded-payload"  # an open stage's payload that is not loaded: not scanned
     TILE_MISSING = "tile-missing"  # a tile this tool wrote, deleted since: made again from its recorded source
