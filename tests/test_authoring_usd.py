@@ -437,7 +437,7 @@ def test_usdz_new_layer_beside_it_and_in_place_skipped(scene: Path):
     skipped = author_usd(package, [plain_result(root)], mode=WriteMode.IN_PLACE)
     assert [f.code for f in skipped.findings] == ["in-package"] and not skipped.layers_written
     result = author_usd(package, [plain_result(root)])
-    assert result.output == root / "scene.seamless.usda"
+    assert result.output == root / "scene.usdz.seamless.usda"  # scene.usda beside it keeps scene.seamless.usda
     assert package.read_bytes() == before
     stage = Usd.Stage.Open(str(result.output))
     tex = stage.GetPrimAtPath(f"{PLAIN_MAT}/Tex")
