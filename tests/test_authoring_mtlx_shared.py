@@ -75,6 +75,17 @@ SHARED_FILE = """<?xml version="1.0"?>
 """
 
 
+def _document(tmp_path: Path, name: str, text: str, textures: tuple[str, ...]) -> Path:
+    """``docs/<name>`` holding ``text``, reading ``textures`` (sample textures) from ``../tex``."""
+    (tmp_path / "tex").mkdir(exist_ok=True)
+    for texture in textures:
+        shutil.copyfile(TEXTURES / texture, tmp_path / "tex" / texture)
+    (tmp_path / "docs").mkdir(exist_ok=True)
+    source = tmp_path / "docs" / name
+    source.write_text(text)
+    return source
+
+
 def test_an_interface_file_input_three_images_read_keeps_each_ones_file(tmp_path, model_cache, capsys):
     """A nodegraph's interface input read by a tiling image (with a roughness beside it), a clamped decal left alone,
     and another material's image (a stack of its own): the tile was written to the interface input, so the decal
@@ -86,12 +97,7 @@ def test_an_interface_file_input_three_images_read_keeps_each_ones_file(tmp_path
 
     from seamless_usd_cli.main import main
 
-    (tmp_path / "tex").mkdir()
-    for name in ("brick_albedo.png", "brick_roughness.png"):
-        shutil.copyfile(TEXTURES / name, tmp_path / "tex" / name)
-    (tmp_path / "docs").mkdir()
-    source = tmp_path / "docs" / "shared.mtlx"
-    source.write_text(SHARED_FILE)
+    source = _document(tmp_path, "shared.mtlx", SHARED_FILE, ("brick_albedo.png", "brick_roughness.png"))
     args = ["process", *PLUMBING, "--max-size", "112", "--json", "--cache-dir", str(model_cache), str(source)]
     main(args)
     rows = {s["material"]: s for s in json.loads(capsys.readouterr().out)["stacks"]}
@@ -150,12 +156,7 @@ def test_address_modes_from_an_interface_input_a_decal_reads_too_stay_clamped_fo
 
     from seamless_usd_cli.main import main
 
-    (tmp_path / "tex").mkdir()
-    for name in ("brick_albedo.png", "wood_color.png"):
-        shutil.copyfile(TEXTURES / name, tmp_path / "tex" / name)
-    (tmp_path / "docs").mkdir()
-    source = tmp_path / "docs" / "wrap.mtlx"
-    source.write_text(WRAP_SHARED)
+    source = _document(tmp_path, "wrap.mtlx", WRAP_SHARED, ("brick_albedo.png", "wood_color.png"))
     main(["process", *PLUMBING, "--max-size", "112", "--force-materials", "M1", "--json", "--cache-dir",
           str(model_cache), str(source)])
     rows = {s["material"]: s for s in json.loads(capsys.readouterr().out)["stacks"]}
@@ -178,13 +179,9 @@ def test_an_older_document_written_at_the_library_s_version_is_said(tmp_path, mo
 
     from seamless_usd_cli.main import main
 
-    (tmp_path / "tex").mkdir()
-    for name in ("brick_albedo.png", "wood_color.png"):
-        shutil.copyfile(TEXTURES / name, tmp_path / "tex" / name)
-    (tmp_path / "docs").mkdir()
     for version in ("1.38", "1.39"):
-        source = tmp_path / "docs" / f"v{version}.mtlx"
-        source.write_text(WRAP_SHARED.replace('version="1.39"', f'version="{version}"'))
+        source = _document(tmp_path, f"v{version}.mtlx", WRAP_SHARED.replace('version="1.39"', f'version="{version}"'),
+                           ("brick_albedo.png", "wood_color.png"))
         main(["process", *PLUMBING, "--max-size", "112", "--force", "--json", "--cache-dir", str(model_cache),
               str(source)])
         payload = json.loads(capsys.readouterr().out)
