@@ -358,3 +358,19 @@ def test_a_library_of_scene_usda_files_names_each_by_its_folder_and_keeps_each_f
     assert "nope.png" in pages["seamless-usd: missing/scene.usda"]
     files = re.findall(r"<tr><td><a [^>]+>([^<]+)</a></td>.*?<td>([a-z ]+)</td></tr>", index)
     assert dict(files) == {good: "ok", bad: "needs a look"}
+
+
+def test_a_passed_card_lists_no_figure_its_own_tolerance_holds():
+    """A passed stack whose feature scale (0.8995) sat within its own tolerance (0.899-1.1) but outside the fixed
+    targets: the library's card said "magnified or blurred (0.9)" beside "passed"."""
+    from seamless_usd.report.html import failing_figures
+    from seamless_usd.report.model import MapReport, StackReport, StackStatus
+
+    albedo = MapReport(node="</M/Albedo>", asset="wood.png", output="/t/wood.tile.png", roles=["diffuseColor"],
+                       channels="rgb", color_space="sRGB", metrics={"scale_ratio": 0.8995})
+    passed = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.PASSED, maps=[albedo],
+                         verdict={"passed": True, "tolerances": {"wood.png": {"scale_ratio": [0.899, 1.1]}}})
+    assert failing_figures(passed) == []
+    not_passed = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.NOT_PASSED,
+                             maps=[albedo], verdict={"passed": False}, failing=["diffuseColor: scale_ratio 0.62"])
+    assert failing_figures(not_passed) == ["diffuseColor: feature scale vs source — magnified or blurred (0.62)"]

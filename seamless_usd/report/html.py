@@ -71,12 +71,12 @@ def failing_figures(stack: StackReport) -> list[str]:
 def _failing(stack: StackReport) -> list[tuple[str | None, str]]:
     """``(figure key or None, "map: figure")`` for :func:`failing_figures`."""
     torus = made_on_a_torus(stack)
-    if stack.failing:
+    if stack.failing or stack.verdict:  # the verdict's own list (empty where it passed)
         return [_readable_failing(f, torus) for f in stack.failing]
     out = []
     for m in stack.maps:
-        out += [(k, f"{_map_name(m)}: {LABELS.get(k, k)} — {v.text}") for k, _, _, _, v in map_verdicts(m, torus)
-                if v.ok is False]
+        out += [(k, f"{_map_name(m)}: {LABELS.get(k, k)} — {v.text}")
+                for k, _, _, _, v in map_verdicts(m, torus, _map_tolerances(stack, m)) if v.ok is False]
     return out
 
 
