@@ -184,8 +184,13 @@ def _wh(size) -> str:
 def _summary(report: Report, console: Console) -> None:
     if report.stacks:
         _stack_table(report, console)
+    common = _common_folder(report)
     for f in report.findings:
         text = f.message if f.where in f.message else f"{f.where}: {f.message}"
+        # several inputs: a library's files share material paths (every </World/Looks/Wood>), so each line names its
+        # file, unless it names it already
+        of = os.path.relpath(f.source, common) if common is not None and f.source else ""
+        text += f" (in {of})" if of and f"@{f.source}@" not in text and f"@{of}@" not in text else ""
         console.print(f"[bold]{f.severity.value}[/]: {escape(text)}", highlight=False, soft_wrap=True)
     for layer in report.layers_written:  # paths and messages as they are: a "[v2]" in a folder name is no markup
         console.print(f"wrote {escape(str(layer))}", highlight=False, soft_wrap=True)
@@ -194,14 +199,24 @@ def _summary(report: Report, console: Console) -> None:
             console.print(f"would {escape(line)}", highlight=False, soft_wrap=True)
 
 
+def _common_folder(report: Report) -> str | None:
+    """The folder a run's several inputs share (their paths are said under it); None for one input."""
+    sources = sorted({s for s in report.sources if s})
+    if len(sources) < 2:
+        return None
+    try:
+        return os.path.commonpath([os.path.dirname(os.path.abspath(p)) for p in sources])
+    except ValueError:  # different drives
+        return None
+
+
 def _stack_table(report: Report, console: Console) -> None:
     table = Table(title="seamless-usd process", show_lines=False)
     table.add_column("material", overflow="fold", min_width=16)
     for col in ("status", "maps", "crop", "tile", "UV scale", "time"):
         table.add_column(col, no_wrap=True)
     table.add_column("why not passed", overflow="fold")
-    sources = sorted({s.source for s in report.stacks if s.source})
-    common = os.path.commonpath([os.path.dirname(p) for p in sources]) if len(sources) > 1 else None
+    common = _common_folder(report)
     for s in report.stacks:
         style = {StackStatus.PASSED: "green", StackStatus.NOT_PASSED: "yellow", StackStatus.FAILED: "red"}.get(s.status, "")
         where = f" of {os.path.relpath(s.source, common)}" if common is not None and s.source else ""  # several inputs

@@ -165,3 +165,26 @@ def test_an_unreadable_input_named_relative_is_named_once(tmp_path, monkeypatch,
     assert main(["process", "empty.mtlx"]) == 2
     [line] = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("error:")]
     assert line.count("empty.mtlx@") == 1 and "cannot read the MaterialX document" in line, line
+
+
+def test_a_library_run_s_lines_name_the_file_each_finding_comes_from(tmp_path, capsys):
+    """Two files of a library with the same material path, each missing its texture: the run printed two identical
+    ``error: </World/Looks/Wood>: ...`` lines, and the JSON finding named no file."""
+    import json
+
+    import numpy as np
+    from scenes import ground_scene
+
+    from seamless_usd_cli.main import main
+
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        ground_scene(tmp_path / name, np.full((32, 32, 3), 0.5), "wood.png", "Wood")
+        (tmp_path / name / "wood.png").unlink()
+    main(["process", str(tmp_path), "--dry-run", "--json"])
+    captured = capsys.readouterr()
+    lines = [ln for ln in captured.err.splitlines() if "</World/Looks/Wood>" in ln and "wood.png" in ln]
+    assert len(lines) >= 2 and len(set(lines)) == len(lines), lines
+    assert any("a/scene.usda" in ln for ln in lines) and any("b/scene.usda" in ln for ln in lines), lines
+    findings = json.loads(captured.out)["findings"]
+    assert all(f.get("source") for f in findings), [f for f in findings if not f.get("source")]

@@ -205,6 +205,7 @@ def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
     """Scan every input into ``sources``; an unreadable input is reported and the others go on."""
     for path in inputs:
         run.report.sources.append(str(path))
+        before = len(run.report.findings)
         try:
             src = _scan_source(path, run.options.materials, *triage_of(run.options))
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
@@ -224,6 +225,9 @@ def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
             # the finding names the file once, as its place (the error names it as given, or resolved)
             said = str(exc).removeprefix(f"{where}: ").removeprefix(f"{asset_ref(path.resolve())}: ")
             run.report.findings.append(Finding(Severity.ERROR, "unreadable-input", where, said))
+        finally:  # each finding names its file: a library's files share material paths
+            run.report.findings[before:] = [f if f.source else replace(f, source=str(path))
+                                            for f in run.report.findings[before:]]
 
 
 def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | None = None) -> Report:
