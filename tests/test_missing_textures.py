@@ -62,3 +62,27 @@ def test_check_names_a_material_with_a_texture_that_cannot_be_read(tmp_path, cap
     assert "@../textures/no.png@ (missing-file)" in items["</World/Looks/Brick>"]["error"]
     assert "gone_Normal.png" in items["</World/Looks/Missing>"]["error"]
     assert not any(i["passed"] for i in items.values())
+
+
+def test_a_texture_that_cannot_be_read_beside_maps_left_alone_fails_the_run(tmp_path, capsys):
+    """A material whose albedo file is not a picture and whose roughness is already tileable: the roughness was left
+    alone, the albedo skipped, and the run exited 0, as if all were well (the README promises 1)."""
+    import sys
+
+    sys.path.insert(0, str(SAMPLES))
+    from usdkit import bind, new_layer, plane, preview_material
+
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    (tmp_path / "textures" / "broken.png").write_text("not a picture")
+    stage = new_layer(tmp_path / "scene.usda", "World")
+    stage.DefinePrim("/World", "Xform")
+    bind(plane(stage, "/World/Floor", 2.0, 3.0).GetPrim(), "/World/Looks/M")
+    preview_material(stage, "/World/Looks/M", {"diffuseColor": ("./textures/broken.png", "rgb", "sRGB"),
+                                               "roughness": ("./textures/wood_tileable_roughness.jpg", "r", "raw")})
+    stage.Save()
+    code = main(["process", str(tmp_path / "scene.usda"), "--preset", "tiny", "--json", "--cache-dir",
+                 str(tmp_path / "cache")])
+    payload = json.loads(capsys.readouterr().out)
+    assert [s["status"] for s in payload["stacks"]] == ["left-alone"], payload["stacks"]
+    assert any(f["code"] == "unreadable-file" for f in payload["findings"])
+    assert code == payload["exit_code"] == 1

@@ -143,11 +143,16 @@ class Report:
 
     @property
     def ok(self) -> bool:
-        """True when every stack was done and passed the verdict (seamless and faithful) and nothing failed; in a dry
-        run, when no stack planned from the cache is known not to pass (so its exit code says what the run's will)."""
+        """True when every stack was done and passed the verdict (seamless and faithful), nothing failed and every
+        texture could be read; in a dry run, when no stack planned from the cache is known not to pass (so its exit
+        code says what the run's will)."""
+        from seamless_usd.discover.select import UNREAD_SKIPS
+
         bad = {StackStatus.FAILED, StackStatus.NOT_PASSED}
         known_bad = [s for s in self.stacks if s.status is StackStatus.PLANNED and s.verdict.get("passed") is False]
-        return not known_bad and not any(s.status in bad for s in self.stacks) and not any(
+        # a texture that cannot be read, even where the material's other maps are left alone (already tileable)
+        unread = [f for f in self.findings if f.code in UNREAD_SKIPS]
+        return not known_bad and not unread and not any(s.status in bad for s in self.stacks) and not any(
             f.severity is Severity.ERROR for f in self.findings
         )
 
