@@ -79,3 +79,34 @@ def test_two_shots_tiling_one_library_material_edit_it_once(tmp_path, capsys):
     again, repeat = _run(root, capsys)  # a run again writes nothing
     assert again == code and not repeat["layers_written"] and not repeat["backups"]
     assert (root / "matlib" / "materials.usda").read_text() == edited
+
+
+def test_two_materials_of_one_stage_referencing_one_asset_are_not_edited_under_the_one_left_alone(tmp_path, capsys):
+    """One stage references the library's looks twice (``/World/A/Looks`` and ``/World/B/Looks``): A's wood tiles a
+    floor, B's is unwrapped as an atlas on a prop (left alone). In place, the library's texture was edited for A,
+    and B's atlas showed the tile at A's UV scale while the run exited 0. A now fails, naming B."""
+    sys.path.insert(0, str(ROOT / "sample_assets"))
+    from usdkit import atlas_mesh, bind, new_layer, plane, preview_material
+
+    root = tmp_path / "lib"
+    shutil.copytree(ROOT / "sample_assets" / "textures", root / "textures")
+    (root / "matlib").mkdir()
+    stage = new_layer(root / "matlib" / "materials.usda", "Looks")
+    stage.DefinePrim("/Looks", "Scope")
+    preview_material(stage, "/Looks/Wood", WOOD)
+    stage.Save()
+    (root / "shot").mkdir()
+    stage = new_layer(root / "shot" / "shot.usda", "World")
+    stage.DefinePrim("/World", "Xform")
+    for name, mesh in (("A", plane(stage, "/World/Floor", 2.0, 3.0)), ("B", atlas_mesh(stage, "/World/Prop", 0.12,
+                                                                                        0.88, 6, 4))):
+        stage.DefinePrim(f"/World/{name}/Looks").GetReferences().AddReference("../matlib/materials.usda", "/Looks")
+        bind(mesh.GetPrim(), f"/World/{name}/Looks/Wood")
+    stage.Save()
+    before = (root / "matlib" / "materials.usda").read_text()
+    code, payload = _run(root, capsys)
+    rows = {s["material"]: s for s in payload["stacks"]}
+    assert rows["</World/B/Looks/Wood>"]["status"] == "left-alone"
+    failed = rows["</World/A/Looks/Wood>"]
+    assert failed["status"] == "failed" and "</World/B/Looks/Wood>" in failed["message"], failed
+    assert code == 1 and (root / "matlib" / "materials.usda").read_text() == before

@@ -1,5 +1,6 @@
 """In place, a layer that several stages of one run compose (a material library they reference) is edited once per
-texture, and never under another stage's use that is not made tileable.
+texture, and never under a use that is not made tileable (another stage's, or another material of the same stage
+that references the same asset).
 
 Each stage is edited on its own, one after another. Without this, a library's texture read by a stage that tiles it
 and by another that leaves it alone (a UV atlas's prop) was edited all the same, the prop's report saying it was left
@@ -27,23 +28,27 @@ class SharedEdits:
     """What one in-place run knows of the layers its stages share. ``kept``: site -> (the stage, and why its use
     there is not made tileable); ``made``: site -> (file value set, the content key of the stack that set it, who)."""
 
-    kept: dict[Site, tuple[str, str]] = field(default_factory=dict)
+    kept: dict[Site, tuple[str, str, str]] = field(default_factory=dict)
     made: dict[Site, tuple[str, str, str]] = field(default_factory=dict)
 
-    def keep(self, sites, stage: str, why: str) -> None:
-        """Sites a stack of ``stage`` reads that is not made tileable (left alone, set aside, failed, not selected)."""
+    def keep(self, sites, stage: str, material: str, why: str) -> None:
+        """Sites ``material`` of ``stage`` reads whose stack is not made tileable (left alone, set aside, failed, not
+        selected)."""
         for site in sites:
-            self.kept.setdefault(site, (stage, why))
+            self.kept.setdefault(site, (stage, material, why))
 
     def refusal(self, sites, stage: str) -> str | None:
         """Why a stack of ``stage`` whose file values are authored at ``sites`` must not be edited in place: one of
-        them is read by another stage's use that is not made tileable; None when none is."""
+        them is read by a use that is not made tileable (of this stage, another material that references the same
+        asset; or another stage's); None when none is."""
         for site in sorted(sites):
             kept = self.kept.get(site)
-            if kept is not None and kept[0] != stage:
-                return (f"edited in place, {asset_ref(site[0])} would change {asset_ref(kept[0])} too, whose use of "
-                        f"this texture is not made tileable ({kept[1]}): leave out --in-place (each stage gets a layer "
-                        "of its own), or give that use a texture of its own")
+            if kept is not None:
+                other, material, why = kept
+                where = "" if other == stage else f" of {asset_ref(other)}"
+                return (f"edited in place, {asset_ref(site[0])} would change {material}{where} too, which reads the "
+                        f"same texture there and is not made tileable ({why}): leave out --in-place (a new layer "
+                        "edits this material alone), or give that use a texture of its own")
         return None
 
 

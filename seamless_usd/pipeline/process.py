@@ -267,7 +267,7 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
         for src in sources:  # edits in place into a layer marked read-only cannot be made: no tiles for them either
             run.blocked.update(_locked_in_place(run, src))
     _check_patterns(run, sources)
-    if modes.IN_PLACE in (run.options.mode, run.options.plan_mode) and len(sources) > 1:
+    if modes.IN_PLACE in (run.options.mode, run.options.plan_mode):
         run.shared = _shared_edits(run, sources)
     if run.options.mode != modes.DRY_RUN:
         for src in sources:  # a source whose tiles' folder cannot be made: its stacks fail with why, before any work
@@ -293,8 +293,9 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
 
 
 def _shared_edits(run: Run, sources: list[_Source]):
-    """In place, where the stages' stacks that are not made read their files (a layer they share with another stage
-    must not change under them: :mod:`.authoring.usdshared`); the stacks that would change one fail."""
+    """In place, where the stacks that are not made read their files (an asset two materials of a stage reference,
+    a library layer two stages share): those must not change under them (:mod:`.authoring.usdshared`), so the stacks
+    that would change one fail."""
     from seamless_usd.authoring.usdshared import SharedEdits
 
     shared = SharedEdits()
@@ -305,7 +306,7 @@ def _shared_edits(run: Run, sources: list[_Source]):
             why = (stack.intent if key in run.left_alone else run.set_aside.get(key) or run.blocked.get(key)
                    or (None if stack.id in selected else "not selected (--materials)"))
             if why is not None and stack.id in src.sites:
-                shared.keep(src.sites[stack.id], label, why.split(";")[0])
+                shared.keep(src.sites[stack.id], label, stack.material, why.split(";")[0])
     for src in sources:  # a stack that would change such a use fails before its tiles are made
         label = str(src.path)
         for stack in src.stacks:
