@@ -16,11 +16,12 @@ once; if the materials' results disagree the first is kept and a finding explain
 from __future__ import annotations
 
 import contextlib
+import os
 import uuid
 from pathlib import Path
 from typing import Sequence
 
-from pxr import Sdf, Tf, Usd
+from pxr import Ar, Sdf, Tf, Usd
 
 from seamless_usd.authoring.files import check_layer, layer_lock, relative_asset_path, write_atomically
 from seamless_usd.fileio import source_sha256
@@ -139,7 +140,7 @@ def author_usd(
 def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Path, dry_run: bool,
                       retarget: dict[Path, Path]) -> AuthoringResult:
     source = _open_layer(stage_path)  # held while authoring: the sublayer below is this one
-    made_from = source_sha256(stage_path)
+    made_from = composed_sha256(stage_path)
     overrides, earlier = _earlier_layer(out, stage_path, made_from)
     data = dict(overrides.customLayerData)
     data[Names.MADE_FROM] = made_from  # a later run over the same stage adds its edits to these
@@ -161,7 +162,9 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
             Severity.WARNING, Codes.EDITS_REPLACED, asset_ref(out),
             f"was made over another version of {asset_ref(stage_path)}, so it is made again over the stage as it is "
             f"now and the earlier edits of {', '.join(lost)} are not kept: process those materials again"))
-    if not author.edits:
+    # a layer made over another version of the stage is replaced even with no edit of this run: its file values
+    # would hide what changed (a texture set anew in a sublayer, kept as it is)
+    if not author.edits and not earlier:
         if author.planned_maps and not result.refusals() and not result.not_written:
             result.findings.append(
                 Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(stage_path),
@@ -175,7 +178,7 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
         return result
     check_uv_composed(author, results, result)
     keep_whole_stacks(author, results, result, before, planned)
-    if overrides.ExportToString() == before[overrides]:  # every stack's edits refused: nothing to write
+    if overrides.ExportToString() == before[overrides] and not earlier:  # every stack's edits refused
         return result
     del author, stage, source  # the relative sublayer path below would not resolve from memory
     saved = Sdf.Layer.CreateAnonymous(".usda")
@@ -258,6 +261,27 @@ def _plan_documents(author, results: Sequence[StackResult], target: Usd.EditTarg
             getattr(result, name).extend(getattr(made, name))
         if out.is_file():
             author.plan_retarget(document, out, target)
+
+
+def composed_sha256(stage_path: Path) -> str:
+    """The SHA-256 of the stage at ``stage_path`` as its layers compose it: of every layer file it uses (sublayers,
+    references, payloads, loaded), by name and content. A new layer records it (``seamlessMadeFrom``): made over a
+    stage one of whose layers changed since (a texture set in a sublayer), it is made again, not added to (its
+    earlier file values would hide the change)."""
+    import hashlib
+
+    stage = Usd.Stage.Open(str(stage_path), Usd.Stage.LoadAll)
+    digest = hashlib.sha256()
+    files = sorted({Ar.SplitPackageRelativePathOuter(layer.realPath)[0]  # a package's layers: the package file
+                    if Ar.IsPackageRelativePath(layer.realPath) else layer.realPath
+                    for layer in stage.GetUsedLayers(includeClipLayers=False) if layer.realPath and not layer.anonymous})
+    for path in files:
+        try:
+            content = source_sha256(path)
+        except OSError:  # gone since it was composed: named, not read
+            content = ""
+        digest.update(f"{os.path.relpath(path, stage_path.parent)}\0{content}\n".encode())
+    return digest.hexdigest()
 
 
 def _earlier_layer(out: Path, stage_path: Path, made_from: str) -> tuple[Sdf.Layer, list[str]]:

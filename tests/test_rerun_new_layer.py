@@ -1,0 +1,47 @@
+"""A run again over a stage one of whose layers changed since the new layer was written: a texture set anew in a
+sublayer (the stage's own file unchanged). The new layer recorded only the stage file's digest, so it was added to
+as if nothing had changed, and its earlier file values hid the change: the asset kept showing the old tile."""
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+from pxr import Usd
+
+from seamless_usd_cli.main import main
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
+
+
+def test_a_texture_set_anew_in_a_sublayer_is_what_the_asset_shows_after_a_run_again(tmp_path, capsys):
+    import numpy as np
+    import OpenImageIO as oiio
+    from scenes import ground_scene
+
+    (tmp_path / "shot").mkdir()
+    photo = oiio.ImageBuf(str(SAMPLES / "textures" / "brick_albedo.png")).get_pixels(oiio.FLOAT)[..., :3]
+    ground_scene(tmp_path / "shot", np.asarray(photo), "brick.png", "Brick")  # a window of a photo: it tiles
+    (tmp_path / "shot" / "scene.usda").rename(tmp_path / "shot" / "look.usda")
+    shutil.copyfile(SAMPLES / "textures" / "wood_tileable.jpg", tmp_path / "shot" / "wood.jpg")  # made to repeat
+    (tmp_path / "shot" / "scene.usda").write_text('#usda 1.0\n(\n    subLayers = [@./look.usda@]\n)\n')
+    run = ["process", str(tmp_path / "shot" / "scene.usda"), "--preset", "tiny", "--seeds", "1", "--max-size", "128",
+           "--cache-dir", str(tmp_path / "cache"), "--json"]
+
+    def albedo() -> str:
+        stage = Usd.Stage.Open(str(tmp_path / "shot" / "scene.seamless.usda"))
+        shader = next(p for p in stage.Traverse() if p.GetAttribute("inputs:file"))
+        return shader.GetAttribute("inputs:file").Get().resolvedPath
+
+    main(run)
+    capsys.readouterr()
+    first = albedo()
+    assert Path(first).name.startswith("brick.") and "tileable" in first
+    main(run)  # unchanged: a no-op
+    assert not json.loads(capsys.readouterr().out)["layers_written"] and albedo() == first
+    look = tmp_path / "shot" / "look.usda"
+    look.write_text(look.read_text().replace("./brick.png", "./wood.jpg"))  # set anew in the sublayer
+    main(run)
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    assert stack["status"] == "left-alone", stack  # made to repeat: kept as it is
+    assert Path(albedo()).name == "wood.jpg", albedo()  # what the asset shows: not the brick's tile
