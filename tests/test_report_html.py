@@ -374,3 +374,19 @@ def test_a_passed_card_lists_no_figure_its_own_tolerance_holds():
     not_passed = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.NOT_PASSED,
                              maps=[albedo], verdict={"passed": False}, failing=["diffuseColor: scale_ratio 0.62"])
     assert failing_figures(not_passed) == ["diffuseColor: feature scale vs source — magnified or blurred (0.62)"]
+
+
+def test_a_seam_just_over_the_margin_is_not_said_to_be_zero_and_a_page_of_stacks_left_alone_claims_no_pass():
+    """A seam 0.002 over the margin read "+0.00 above the seam threshold"; a library's page for a file whose one
+    stack was left alone said "all stacks passed (exit code 0)" while nothing there was made."""
+    from seamless_usd.report.html import render_html
+    from seamless_usd.report.model import Report, StackReport, StackStatus
+    from seamless_usd.verdict.lines import Seam, figure_text
+
+    assert figure_text(0.002) == "+0.002" and figure_text(0.4567) == "+0.46" and figure_text(-0.3) == "-0.30"
+    assert Seam("x", 64, 0, 127, 0.002).above == "+0.002"
+    alone = StackReport(id="M-1", material="</M>", source="s.usda", status=StackStatus.LEFT_ALONE)
+    page = render_html(Report(sources=["s.usda"], stacks=[alone]))
+    assert "no stack made" in page and "all stacks" not in page
+    passed = StackReport(id="M-2", material="</N>", source="s.usda", status=StackStatus.PASSED)
+    assert "all stacks made passed" in render_html(Report(sources=["s.usda"], stacks=[alone, passed]))

@@ -231,7 +231,7 @@ def classify(stack: TextureStack, bound: int, stats: Sequence, memo: TriageMemo,
     where = "the maps together" if s.map == "stack" else f"@{s.map}@"
     more = f" and {len(v.seams) - 1} more" if len(v.seams) > 1 else ""
     return IntentDecision(Intent.TILING, f"{decision.reason}; not seamless: a seam in {where}, {s.where(v.size)} "
-                                         f"({s.figure:+.2f}){more}")
+                                         f"({s.above}){more}")
 
 
 def classify_stacks(stacks: list[TextureStack], geometry, explored=lambda stack: 0,

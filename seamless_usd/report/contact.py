@@ -16,6 +16,7 @@ from seamless_usd.fileio import atomic_write_text
 from seamless_usd.metrics import preview_uint8
 from seamless_usd.report.htmlparts import esc, page, seams_svg
 from seamless_usd.report.webimage import image_data_uri
+from seamless_usd.verdict.lines import figure_text
 
 __all__ = ["THUMB", "FAINT", "SheetCard", "thumbnail", "displayed", "render_contact_sheet", "write_contact_sheet"]
 
@@ -99,7 +100,7 @@ def _segments(card: SheetCard) -> list[tuple[float, float, float, float, str, bo
 
     out = []
     for s in sorted(card.seams, key=lambda s: -s["figure"]):
-        label = f"{s['figure']:+.2f}: {s.get('map', 'stack')}"
+        label = f"{figure_text(s['figure'])}: {s.get('map', 'stack')}"
         run, at, first, last = (s["start"] + s["end"]) / 2, s["position"], s["start"], s["end"] + 1
         for ry in (0, h):
             for rx in (0, w):

@@ -21,7 +21,7 @@ from seamless_usd.report.target import clear_stale_pages
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
 from seamless_usd.synthesis.advice import structure_advice
-from seamless_usd.verdict.lines import Seam
+from seamless_usd.verdict.lines import Seam, figure_text
 from seamless_usd.report.verdicts import LABELS, SEAM_KEYS, TORUS_NOTE, target_text, targets, verdict
 
 __all__ = ["render_html", "write_html", "write_json",
@@ -139,7 +139,7 @@ def seam_segments(g: ViewGeometry, seams: list[dict], tile_size: tuple[int, int]
     px, py = W / nx, H / ny  # one repeat, in picture px
     out = []
     for s in seams:
-        label = f"{s['figure']:+.2f}: {s['map']}, {'x' if s['axis'] == 'x' else 'y'}={s['position']}"
+        label = f"{figure_text(s['figure'])}: {s['map']}, {'x' if s['axis'] == 'x' else 'y'}={s['position']}"
         for kx in range(int(np.ceil(nx))):
             for ky in range(int(np.ceil(ny))):
                 ox, oy = kx * px, ky * py
@@ -183,7 +183,7 @@ def _why(stack: StackReport) -> str:
         size = tuple(v.get("size") or stack.tile_size or (0, 0))
         seams = v.get("seams", [])
         items = [f"seam in {'the maps together' if s['map'] == 'stack' else s['map']}: "
-                 f"{Seam(**s).where(size)} ({s['figure']:+.2f} above the seam threshold; marked in red on the "
+                 f"{Seam(**s).where(size)} ({figure_text(s['figure'])} above the seam threshold; marked in red on the "
                  f"repeats below)" for s in seams[:SEAMS_SHOWN]]
         if len(seams) > SEAMS_SHOWN:
             items.append(f"and {len(seams) - SEAMS_SHOWN} more seams (all in the JSON report)")
@@ -273,8 +273,11 @@ def render_html(report: Report, title: str = "seamless-usd report") -> str:
     counts = report.counts()
     summary = "".join(f"<span><b>{v}</b> {esc(k.replace('_', ' '))}</span>" for k, v in counts.items() if v)
     layers = "".join(f"<li>{esc(p)}</li>" for p in report.layers_written)
+    made = counts.get(StackStatus.PASSED.value, 0) + counts.get(StackStatus.REUSED.value, 0)
     status = ("interrupted (Ctrl-C): no stage edited" if report.interrupted else
-              "all stacks passed" if report.ok else "some stacks failed or did not pass")
+              "some stacks failed or did not pass" if not report.ok else
+              "all stacks made passed" if made else
+              "no stack made: each is left alone or planned" if report.stacks else "no texture stack found")
     body = (
         f'<h1>{esc(title)}</h1><p class="muted">{esc(", ".join(report.sources))} · seamless-usd '
         f"{esc(report.tool_version)} · {esc(status)} (exit code {report.exit_code})</p>"

@@ -88,7 +88,7 @@ class Verdict:
     def reasons(self, most: int = 3) -> list[str]:
         """Why the tile did not pass: its ``most`` strongest seams, then each figure outside its tolerance."""
         out = [f"seam in {'the maps together' if s.map == 'stack' else s.map}: {s.where(self.size)} "
-               f"({s.figure:+.2f})" for s in self.seams[:most]]
+               f"({s.above})" for s in self.seams[:most]]
         if len(self.seams) > most:
             out.append(f"and {len(self.seams) - most} more seam{'s' if len(self.seams) - most > 1 else ''}")
         return out + [f"not faithful: {f}" for f in self.failing]

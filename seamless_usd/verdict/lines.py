@@ -13,10 +13,19 @@ import numpy as np
 
 from .features import moving_mean
 
-__all__ = ["RUN", "Seam", "runs", "seams_from_scores"]
+__all__ = ["RUN", "Seam", "figure_text", "runs", "seams_from_scores"]
 
 #: Stretches averaged into a run (each stretch starts ``step`` px after the last).
 RUN = 16
+
+
+def figure_text(figure: float) -> str:
+    """A seam's figure, signed, to two decimals unless that would read zero (then to its first digit).
+
+    >>> figure_text(0.4567), figure_text(0.002), figure_text(0.0)
+    ('+0.46', '+0.002', '+0.00')
+    """
+    return f"{figure:+.2f}" if abs(figure) >= 0.005 or figure == 0 else f"{figure:+.1g}"
 
 
 @dataclass(frozen=True)
@@ -51,6 +60,11 @@ class Seam:
         place = " (the wrap)" if self.position in (0, n) else " (the centre)" if abs(self.position - n / 2) <= 2 else ""
         span = "rows" if self.axis == "x" else "columns"
         return f"{line}={self.position}{place}, {span} {self.start}-{self.end}"
+
+    @property
+    def above(self) -> str:
+        """The figure in words: how far above the margin, never "+0.00" (a seam just over it reads "+0.002")."""
+        return figure_text(self.figure)
 
     def as_dict(self) -> dict:
         out = {"map": self.map, "axis": self.axis, "position": self.position, "start": self.start,
