@@ -210,26 +210,36 @@ def _common_folder(report: Report) -> str | None:
         return None
 
 
+#: Below this many columns the table keeps the material, its status and why (a terminal of 80 columns cut the
+#: reasons off the edge and split material paths mid-word).
+WIDE_TABLE = 110
+
+
 def _stack_table(report: Report, console: Console) -> None:
+    wide = console.width >= WIDE_TABLE
     table = Table(title="seamless-usd process", show_lines=False)
-    table.add_column("material", overflow="fold", min_width=16)
-    for col in ("status", "maps", "crop", "tile", "UV scale", "time"):
+    table.add_column("material", overflow="fold", min_width=16 if wide else 12, ratio=None if wide else 2)
+    for col in ("status", "maps", "crop", "tile", "UV scale", "time") if wide else ("status",):
         table.add_column(col, no_wrap=True)
-    table.add_column("why not passed", overflow="fold")
+    table.add_column("why not passed", overflow="fold", min_width=20, ratio=None if wide else 3)
     common = _common_folder(report)
     for s in report.stacks:
         style = {StackStatus.PASSED: "green", StackStatus.NOT_PASSED: "yellow", StackStatus.FAILED: "red"}.get(s.status, "")
         where = f" of {os.path.relpath(s.source, common)}" if common is not None and s.source else ""  # several inputs
-        table.add_row(
-            escape(s.material + (f" in {s.variant}" if s.variant else "") + where),
-            f"[{style}]{s.status.value}[/]" if style else s.status.value,
+        cells = [
             str(len(s.maps)),
             _wh(s.crop_size) if s.crop_size and s.model_hash else "-",  # no GAN, no crop
             _wh(s.tile_size) if s.tile_size else "-",
             ", ".join(f"{v:.3g}" for v in s.uv_scale) if s.uv_scale else "-",
             "cached" if s.origin == "cache" else "-" if s.origin == "duplicate"  # a duplicate's work was its twin's
             else f"{sum(s.timings.values()):.0f}s" if s.timings else "-",
-            escape(s.message) if s.status in (StackStatus.NOT_PASSED, StackStatus.FAILED) else "",
+        ]
+        table.add_row(
+            escape(s.material + (f" in {s.variant}" if s.variant else "") + where),
+            f"[{style}]{s.status.value}[/]" if style else s.status.value,
+            *(cells if wide else []),
+            escape(s.message) if s.status in (StackStatus.NOT_PASSED, StackStatus.FAILED)
+            or (s.status is StackStatus.PLANNED and s.verdict.get("passed") is False) else "",  # known from the cache
         )
     console.print(table)
 

@@ -188,3 +188,22 @@ def test_a_library_run_s_lines_name_the_file_each_finding_comes_from(tmp_path, c
     assert any("a/scene.usda" in ln for ln in lines) and any("b/scene.usda" in ln for ln in lines), lines
     findings = json.loads(captured.out)["findings"]
     assert all(f.get("source") for f in findings), [f for f in findings if not f.get("source")]
+
+
+def test_the_summary_table_keeps_the_reasons_in_a_terminal_of_80_columns():
+    """At 80 columns the reason column was pushed off the edge (rows of blanks) and material paths split mid-word:
+    a narrow terminal keeps the material, its status and why."""
+    from rich.console import Console
+
+    from seamless_usd.report.model import Report, StackReport, StackStatus
+    from seamless_usd_cli.process import _stack_table
+
+    why = "seam in the maps together: vertical line at x=64, rows 96-133 (+0.05)"
+    report = Report(sources=["s.usda"], stacks=[
+        StackReport(id="1", material="</World/Looks/RotWood>", source="s.usda", status=StackStatus.NOT_PASSED,
+                    message=why)])
+    for width in (80, 140):
+        console = Console(width=width, record=True)
+        _stack_table(report, console)
+        text = " ".join(console.export_text().replace("│", " ").split())
+        assert "</World/Looks/RotWood>" in text and "rows 96-133 (+0.05)" in text, (width, text)
