@@ -170,6 +170,13 @@ def test_folders_with_nothing_to_judge_and_pictures_no_stage_uses_are_named(tmp_
     not_judged = {Path(p).name for p in payload["not_judged"]}
     assert "loose.png" in not_judged and "brick_albedo.png" not in not_judged  # used by the stage: judged there
     assert main(["scan", str(lib)]) == 0 and "</World/Looks/Brick>" in capsys.readouterr().out
+    # once processed, the stage as this tool left it reads the tiles: their sources are still used, not loose
+    main(["process", str(lib / "brick" / "scene.usda"), "--preset", "tiny", "--seeds", "1", "--max-size", "128",
+          "--cache-dir", str(tmp_path / "cache")])
+    capsys.readouterr()
+    main(["check", str(lib), "--json"])
+    not_judged = {Path(p).name for p in json.loads(capsys.readouterr().out)["not_judged"]}
+    assert "loose.png" in not_judged and not not_judged & {"brick_albedo.png", "brick_normal.png"}, not_judged
     assert main(["scan", str(tmp_path / "empty")]) == 2
     assert "no USD stage or MaterialX document found" in capsys.readouterr().err
 

@@ -376,6 +376,8 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
             report.unreadable.append(str(exc))
             continue
         used.update(_real(m.resolved) for st in result.stacks for m in st.maps if m.resolved)
+        used.update(_real(m.recorded_source.resolved) for st in result.stacks for m in st.maps  # a tile's source
+                    if m.recorded_source and m.recorded_source.resolved)
         judged, seen = [], set()
         for s in result.stacks:  # a stack the same as one judged is judged once (its twin may be one not judged)
             # a material with a UDIM set or a picture too small is left alone by process: not judged here either
