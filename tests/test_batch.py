@@ -262,7 +262,9 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
     linked = set(re.findall(r'href="library\.files/([^"#]+\.html)', index))
     pages = sorted((report.parent / "library.files").glob("*.html"))
     assert len(pages) == 4 and {page.name for page in pages} == linked  # one page per file, each linked
-    assert all(page.stat().st_size > 0 for page in pages)
+    assert all('href="../library.html"' in page.read_text(encoding="utf-8") for page in pages)  # and back
+    assert "Layers and documents written (4)" in index and all(Path(p).name in index for p in first["layers_written"])
+    assert index.index("<h2>Files</h2>") < index.index('class="cards"')  # the files first, then every stack
     code, second = _run(str(lib), "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
     _assert_all_written(code, second)
     assert second["counts"]["trained"] == 0

@@ -268,8 +268,8 @@ def _variants(report: Report) -> str:
     return f"<h2>Variant selections explored</h2>{''.join(parts)}" if parts else ""
 
 
-def render_html(report: Report, title: str = "seamless-usd report") -> str:
-    """The whole page of one run (or one source of a library run)."""
+def render_html(report: Report, title: str = "seamless-usd report", back: str | None = None) -> str:
+    """The whole page of one run (or one source of a library run, ``back`` the link to the library's page)."""
     counts = report.counts()
     summary = "".join(f"<span><b>{v}</b> {esc(k.replace('_', ' '))}</span>" for k, v in counts.items() if v)
     layers = "".join(f"<li>{esc(p)}</li>" for p in report.layers_written)
@@ -279,7 +279,8 @@ def render_html(report: Report, title: str = "seamless-usd report") -> str:
               "all stacks made passed" if made else
               "no stack made: each is left alone or planned" if report.stacks else "no texture stack found")
     body = (
-        f'<h1>{esc(title)}</h1><p class="muted">{esc(", ".join(report.sources))} · seamless-usd '
+        (f'<p><a href="{esc(back)}">&larr; the library\'s report</a></p>' if back else "")
+        + f'<h1>{esc(title)}</h1><p class="muted">{esc(", ".join(report.sources))} · seamless-usd '
         f"{esc(report.tool_version)} · {esc(status)} (exit code {report.exit_code})</p>"
         f'<p class="summary">{summary}</p>'
         + (f"<h2>Layers and documents written</h2><ul>{layers}</ul>" if layers else "")

@@ -141,10 +141,12 @@ def render_index(report: Report, pages: dict[str, str], title: str = "seamless-u
     inputs, labels, rules = _filters(report)
     names = shown_names(report.sources)
     cards = "".join(_card(s, pages.get(s.source), names.get(s.source, Path(s.source).name)) for s in report.stacks)
-    problems = "".join(
-        f"<li><code>{esc(f.severity.value)}</code> {esc(f.where)}: {esc(f.message)}</li>"
+    problems = "".join(  # a library's files share material paths: each failure names its file
+        f"<li><code>{esc(f.severity.value)}</code> {esc(f.where)}: {esc(f.message)}"
+        f"{f' <span class=muted>({esc(names.get(f.source, f.source))})</span>' if f.source else ''}</li>"
         for f in report.findings if f.severity.value == "error"
     )
+    layers = "".join(f"<li>{esc(str(p))}</li>" for p in report.layers_written)
     counts = report.counts()
     summary = "".join(f"<span><b>{v}</b> {esc(k.replace('_', ' '))}</span>" for k, v in counts.items() if v)
     total = report.timings.get("total")
@@ -152,9 +154,11 @@ def render_index(report: Report, pages: dict[str, str], title: str = "seamless-u
         f'<h1>{esc(title)}</h1><p class="muted">{len(report.sources)} files · {len(report.stacks)} stacks · '
         f'seamless-usd {esc(report.tool_version)} · exit code {report.exit_code}{f" · {total:.0f} s" if total else ""}</p>'
         f'<p class="summary">{summary}</p>'
-        f'{inputs}<div class="filters">{labels}</div><div class="cards">{cards}</div>'
-        + _files_table(report, pages)
         + (f"<h2>Failures</h2><ul class=findings>{problems}</ul>" if problems else "")
+        + _files_table(report, pages)  # above the cards: a library of hundreds of stacks is read file by file
+        + (f"<details><summary>Layers and documents written ({len(report.layers_written)})</summary>"
+           f"<ul>{layers}</ul></details>" if layers else "")
+        + f'<h2>Stacks</h2>{inputs}<div class="filters">{labels}</div><div class="cards">{cards}</div>'
     )
     return page(title, body, extra_css=_INDEX_CSS + rules, toggle=False)
 
@@ -168,7 +172,8 @@ def write_library_html(report: Report, path: Path) -> Path:
     names = shown_names(report.sources)
     for n, source in enumerate(report.sources, 1):
         target = folder / f"{n:04d}-{slug(Path(source).stem, 40)}.html"
-        atomic_write_text(target, render_html(source_report(report, source), title=f"seamless-usd: {names[source]}"))
+        atomic_write_text(target, render_html(source_report(report, source), title=f"seamless-usd: {names[source]}",
+                                              back=f"../{path.name}"))
         pages[source] = f"{folder.name}/{target.name}"
     clear_stale_pages(path, frozenset(Path(p).name for p in pages.values()))  # an earlier run's other pages
     atomic_write_text(path, render_index(report, pages))
