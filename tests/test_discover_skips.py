@@ -197,3 +197,26 @@ def test_a_material_whose_only_texture_is_a_udim_set_has_a_left_alone_row(tmp_pa
     [row] = report["stacks"]
     assert code == 0 and row["status"] == "left-alone" and report["counts"]["left-alone"] == 1
     assert "body.<UDIM>.png" in row["message"] and "1001, 1002" in row["message"]
+
+
+def test_a_texture_node_whose_id_is_misspelt_is_named_and_its_material_left_alone(tmp_path, capsys):
+    """``info:id = "UsdUVTextur"``: the albedo was dropped without a word and the material's roughness tiled on its
+    own (its albedo then misaligned with it). The node is a ``file-node-not-read`` finding and the material is
+    left alone."""
+    import json
+
+    from seamless_usd_cli.main import main
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    shutil.copytree(samples / "textures", tmp_path / "textures")
+    (tmp_path / "brick").mkdir()
+    scene = (samples / "brick" / "scene.usda").read_text()
+    start = scene.index('def Shader "Albedo"')
+    scene = scene[:start] + scene[start:].replace('"UsdUVTexture"', '"UsdUVTextur"', 1)
+    (tmp_path / "brick" / "scene.usda").write_text(scene)
+    result = scan_paths([tmp_path / "brick" / "scene.usda"])
+    [finding] = [f for f in result.findings if f.code == "file-node-not-read"]
+    assert "UsdUVTextur" in finding.message and "brick_albedo.png" in finding.where and "is the id" in finding.message
+    main(["process", str(tmp_path / "brick" / "scene.usda"), "--dry-run", "--json"])
+    [stack] = json.loads(capsys.readouterr().out)["stacks"]
+    assert stack["status"] == "left-alone", stack

@@ -179,7 +179,7 @@ class Codes:
     SOURCE_NOT_FOUND = "source-not-found"  # a tile this tool wrote whose recorded source is gone
     UNLOADED_PAYLOAD = "unloaded-payload"  # an open stage's payload that is not loaded: not scanned
     TILE_MISSING = "tile-missing"  # a tile this tool wrote, deleted since: made again from its recorded source
-    FILE_NODE_NOT_READ = "file-node-not-read"  # a MaterialX node that takes a file but is no image node read
+    FILE_NODE_NOT_READ = "file-node-not-read"  # a node that takes a file but is no texture node read (USD, MaterialX)
 
 
 MIN_CROP = 100  # px: the smallest crop SeamlessGAN samples (DESIGN: c_min); a smaller stack gets a cut tile only

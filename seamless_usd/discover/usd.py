@@ -31,7 +31,7 @@ from seamless_usd.discover.tokens import (
 )
 from seamless_usd.textures import NORMAL_ROLES, ColorSpace, Origin, RecordedSource, RoleUse
 from seamless_usd.discover.uv import usd_uv_chain
-from seamless_usd.findings import Finding, Severity, prim_ref
+from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
 
 __all__ = ["MtlxReference", "walk_stage", "is_texture_id"]
 
@@ -78,7 +78,9 @@ def walk_stage(stage: Usd.Stage) -> tuple[list[str], list[TextureUse], list[Mtlx
         if prim.IsA(UsdShade.Material):
             materials.append(prim_ref(prim.GetPath()))
             try:
-                uses.extend(_material_uses(UsdShade.Material(prim)))
+                found, custom = _material_uses(UsdShade.Material(prim))
+                uses.extend(found)
+                errors.extend(_file_node_finding(node, consumer, prim_ref(prim.GetPath())) for node, consumer in custom)
             except Exception as exc:  # noqa: BLE001 - one bad material must not stop the scan
                 errors.append(Finding(Severity.ERROR, Codes.DISCOVERY_ERROR, prim_ref(prim.GetPath()),
                                       f"cannot follow the material network: {type(exc).__name__}: {exc}"))
@@ -105,7 +107,27 @@ def _mtlx_references(prim: Usd.Prim) -> list[MtlxReference]:
     return found
 
 
-def _material_uses(material: UsdShade.Material) -> list[TextureUse]:
+def _file_node_finding(node: Usd.Prim, consumer: str, material: str) -> Finding:
+    """A skipped finding for a shader that takes a file but is no texture node this tool reads (an ``info:id`` it does
+    not know, a misspelt ``UsdUVTextur`` among them): its material is left alone, saying so (it was dropped without
+    a word, and the material's other maps were tiled on their own)."""
+    sid = usdgraph.shader_id(node)
+    files = [v.path for i in UsdShade.Shader(node).GetInputs()
+             if isinstance(v := i.Get(), Sdf.AssetPath) and v.path]
+    shown = f" {asset_ref(files[0])}" if files else ""
+    import difflib
+
+    what = f"a shader of id {sid!r}" if sid else "a shader with no info:id"
+    hint = (f" (is the id {ShaderIds.UV_TEXTURE!r}?)" if not sid or difflib.get_close_matches(
+        sid, [ShaderIds.UV_TEXTURE], cutoff=0.8) else "")
+    return Finding(Severity.SKIPPED, Codes.FILE_NODE_NOT_READ, f"{prim_ref(node.GetPath())}{shown}",
+                   f"{consumer} reads a file through {what}, which this tool does not make tileable{hint} "
+                   f"(material {material})", material=material)
+
+
+def _material_uses(material: UsdShade.Material) -> tuple[list[TextureUse], list[tuple[Usd.Prim, str]]]:
+    """The material's texture uses, and the shaders with a file input its surface reads that are no texture node
+    this tool knows, each with the input reading it."""
     mat_name = prim_ref(material.GetPath())
     shaders: dict[str, Usd.Prim] = {}
     for output in material.GetOutputs():
@@ -114,13 +136,17 @@ def _material_uses(material: UsdShade.Material) -> list[TextureUse]:
         for prim, _, _ in usdgraph.producing_outputs(output):
             shaders.setdefault(str(prim.GetPath()), prim)
     uses: list[TextureUse] = []
+    custom: dict[str, tuple[Usd.Prim, str]] = {}
     for shader in shaders.values():
         for inp in UsdShade.Shader(shader).GetInputs():
             role = inp.GetBaseName()
             consumer = f"<{shader.GetPath()}.{inp.GetAttr().GetName()}>"
             for tex, channels, flip in _trace(inp, None, 0, False):
-                uses.append(_texture_use(mat_name, tex, RoleUse(role, channels, consumer), flip))
-    return uses
+                if channels is None:
+                    custom.setdefault(str(tex.GetPath()), (tex, consumer))
+                else:
+                    uses.append(_texture_use(mat_name, tex, RoleUse(role, channels, consumer), flip))
+    return uses, list(custom.values())
 
 
 def _pick(channels: str, pick: tuple[int, ...] | None) -> str:
@@ -156,6 +182,9 @@ def _trace(inp, pick, depth, flip, seen=None):
         if _is_uv_id(sid):
             continue
         shader = UsdShade.Shader(prim)
+        if any(isinstance(i.Get(), Sdf.AssetPath) and i.Get().path for i in shader.GetInputs()):
+            yield prim, None, flip  # a shader reading a file this tool does not know: named, not followed
+            continue
         if sid.startswith(ShaderIds.ND_SEPARATE) and out_name in SEPARATE_OUTPUTS:
             yield from _trace(shader.GetInput(MtlxInputs.IN), _compose((SEPARATE_OUTPUTS[out_name],), pick), depth + 1, flip, seen)
             continue
