@@ -17,7 +17,7 @@ from pxr import Sdf, Usd
 from seamless_usd.findings import Finding, Severity, asset_ref
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, node_key
 
-__all__ = ["SharedEdits", "file_sites"]
+__all__ = ["SharedEdits", "file_sites", "node_sites"]
 
 #: Where a texture's file value is authored: (layer identifier, spec path of the attribute in that layer).
 Site = tuple[str, str]
@@ -65,6 +65,23 @@ def file_sites(stage: Usd.Stage, maps) -> set[Site]:
     return out
 
 
+def node_sites(stage: Usd.Stage, maps) -> set[Site]:
+    """Where in-place edits of the texture nodes of ``maps`` land: each node's spec in the layer holding its file
+    value (two materials that reference one asset, or inherit one class, share it; a decal reading the same
+    material input as a tiled node does not, since the tile is set on the tiled node's own input)."""
+    out = set()
+    for m in maps:
+        path = m.node.strip("<>")
+        prim = stage.GetPrimAtPath(path) if path.startswith("/") else None  # a MaterialX node: not a prim
+        specs = list(prim.GetPrimStack()) if prim else []
+        if not specs:
+            continue
+        layer = m.file_at.layer if m.file_at else ""
+        spec = next((p for p in specs if p.layer.identifier == layer or p.layer.realPath == layer), specs[0])
+        out.add((spec.layer.identifier, str(spec.path)))
+    return out
+
+
 def respect_other_stages(author, results: Sequence[StackResult], result: AuthoringResult, shared: SharedEdits,
                          stage: str) -> None:
     """Drop the planned edits of ``stage``'s stacks that another stage of the run forbids or already made: a file
@@ -79,9 +96,6 @@ def respect_other_stages(author, results: Sequence[StackResult], result: Authori
             continue
         layer = edit.target.GetLayer()
         site = (layer.identifier, str(edit.target.MapToSpecPath(edit.path)))
-        why = shared.refusal([site], stage)  # the run fails such stacks before their tiles are made: as a guard
-        if why is not None:
-            refused.setdefault(owner, why)
         made = shared.made.get(site)
         if made is not None and made[0] != edit.value.path:
             if made[1] == by_id[owner].stack.content_key:

@@ -102,7 +102,7 @@ class _Source:
     scan: ScanResult
     stacks: list[TextureStack]
     instanced: dict[tuple[str, str], str] = field(default_factory=dict)  # stacks inside instances, with why
-    sites: dict[str, set] = field(default_factory=dict)  # USD: stack id -> where its file values are authored
+    sites: dict[str, set] = field(default_factory=dict)  # USD: stack id -> where in-place edits of its nodes land
 
 
 def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = None, keep_triage: bool = True
@@ -123,9 +123,9 @@ def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = 
     stacks = select_stacks(scan, patterns)
     if kind != "usd":
         return _Source(path, kind, scan, stacks)
-    from seamless_usd.authoring.usdshared import file_sites
+    from seamless_usd.authoring.usdshared import node_sites
 
-    sites = {s.id: file_sites(stage, s.maps) for s in scan.stacks if not s.selection}
+    sites = {s.id: node_sites(stage, s.maps) for s in scan.stacks if not s.selection}
     return _Source(path, kind, scan, stacks, instanced_stacks(stage, stacks, str(path)), sites)
 
 
