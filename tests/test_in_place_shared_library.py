@@ -16,15 +16,14 @@ from pxr import Usd
 from seamless_usd_cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "sample_assets"))
 WOOD = {"diffuseColor": ("../textures/wood_color.png", "rgb", "sRGB"),
         "roughness": ("../textures/wood_roughness.png", "r", "raw")}
 
 
-def _library(root: Path, prop: bool) -> Path:
-    """``matlib/materials.usda`` (the wood material), referenced by ``shotA`` and ``shotB`` (ground planes tiling it
-    3 and 5 times) and, with ``prop``, by ``prop`` (a mesh unwrapped as a UV atlas)."""
-    sys.path.insert(0, str(ROOT / "sample_assets"))
-    from usdkit import atlas_mesh, bind, new_layer, plane, preview_material
+def _material_library(root: Path) -> None:
+    """The sample textures and ``matlib/materials.usda``: the wood material under ``/Looks``."""
+    from usdkit import new_layer, preview_material
 
     shutil.copytree(ROOT / "sample_assets" / "textures", root / "textures")
     (root / "matlib").mkdir()
@@ -32,6 +31,14 @@ def _library(root: Path, prop: bool) -> Path:
     stage.DefinePrim("/Looks", "Scope")
     preview_material(stage, "/Looks/Wood", WOOD)
     stage.Save()
+
+
+def _library(root: Path, prop: bool) -> Path:
+    """``matlib/materials.usda`` (the wood material), referenced by ``shotA`` and ``shotB`` (ground planes tiling it
+    3 and 5 times) and, with ``prop``, by ``prop`` (a mesh unwrapped as a UV atlas)."""
+    from usdkit import atlas_mesh, bind, new_layer, plane
+
+    _material_library(root)
     for name, periods in (("shotA", 3.0), ("shotB", 5.0), *((("prop", 0.0),) if prop else ())):
         (root / name).mkdir()
         stage = new_layer(root / name / f"{name}.usda", "World")
@@ -85,16 +92,10 @@ def test_two_materials_of_one_stage_referencing_one_asset_are_not_edited_under_t
     """One stage references the library's looks twice (``/World/A/Looks`` and ``/World/B/Looks``): A's wood tiles a
     floor, B's is unwrapped as an atlas on a prop (left alone). In place, the library's texture was edited for A,
     and B's atlas showed the tile at A's UV scale while the run exited 0. A now fails, naming B."""
-    sys.path.insert(0, str(ROOT / "sample_assets"))
-    from usdkit import atlas_mesh, bind, new_layer, plane, preview_material
+    from usdkit import atlas_mesh, bind, new_layer, plane
 
     root = tmp_path / "lib"
-    shutil.copytree(ROOT / "sample_assets" / "textures", root / "textures")
-    (root / "matlib").mkdir()
-    stage = new_layer(root / "matlib" / "materials.usda", "Looks")
-    stage.DefinePrim("/Looks", "Scope")
-    preview_material(stage, "/Looks/Wood", WOOD)
-    stage.Save()
+    _material_library(root)
     (root / "shot").mkdir()
     stage = new_layer(root / "shot" / "shot.usda", "World")
     stage.DefinePrim("/World", "Xform")
