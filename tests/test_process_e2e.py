@@ -141,7 +141,7 @@ def test_sources_are_untouched_and_report_is_valid(processed):
     assert len(pictures) >= 6  # 3 maps x (source, tile)
     assert "Brick" in html
     # the brick's lattice cut passes before any training: the run details say no GAN was trained
-    assert "SeamlessGAN not trained: the tile cut from the source passes" in html
+    assert "SeamlessGAN not trained: the tile cut from the source passed as it was cut" in html
     [stack] = on_disk["stacks"]
     assert stack["resampled"]["gan"]["layout"] == "lattice" and stack["q"] == {} and stack["model_hash"] == ""
     for stack in on_disk["stacks"]:

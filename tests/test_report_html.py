@@ -151,7 +151,7 @@ def test_run_details_say_what_seeded_the_refinement():
     page = render_html(Report(sources=["s.usda"], stacks=[stack]))
     # width x height: the period across x first, the tile's width first
     assert "a cut of whole lattice periods from the source; repeats every 106.51 x 107.49 px (across x, down y)" in page
-    assert ("lattice cut 213x215 px scored 0.98 (Q passed, lattice ratio 0.97, passes) against 1.94 from gan "
+    assert ("lattice cut 213x215 px scored 0.98 (Q passed, lattice ratio 0.97, passed as cut) against 1.94 from gan "
             "(Q not passed, lattice ratio 0.45)") in page
     plain = StackReport(id="M-2", material="</M2>", source="s.usda", status=StackStatus.PASSED,
                         resampled={"gan": {"layout": "gan", "lattice": {"period_px": [None, None]}}})
@@ -166,7 +166,7 @@ def test_run_details_say_what_seeded_the_refinement():
     page = render_html(Report(sources=["s.usda"], stacks=[cut]))
     assert "one window of the source, joined across its wraps along minimum-error cuts" in page
     assert "repeats every" not in page
-    assert ("window cut 386x364 px scored 0.91 (Q not passed, passes) against 2.07 from random (Q not passed)"
+    assert ("window cut 386x364 px scored 0.91 (Q not passed, passed as cut) against 2.07 from random (Q not passed)"
             in page)
     refused = {"period_px": [None, None], "strength": [None, None], "score_random": 2.07, "passes_random": False,
                "window_refused": {"lag_difference": {"y": 0.64, "x": 0.68}, "most": 0.05}}

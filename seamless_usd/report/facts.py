@@ -70,14 +70,14 @@ def _layout_text(gan: dict) -> str | None:
     tried = lattice.get("candidates")
     if tried:
         text += "; cut from the source, tried in turn: " + ", ".join(
-            f"{c['kind']} {c['score']:.2f}" + (" (passes)" if c["passes"] else "") for c in tried)
+            f"{c['kind']} {c['score']:.2f}" + (" (passed as cut)" if c["passes"] else "") for c in tried)
     if "score" in lattice:
         def verdict(suffix: str) -> str:
             q = lattice.get("q_passed" + suffix)
             ratio = lattice.get("lattice_ratio" + suffix)
             parts = ["" if "gan" in lattice else "Q passed" if q else "Q not passed",  # "gan": no GAN, no Q
                      "" if ratio is None else f"lattice ratio {ratio:.2f}",
-                     "passes" if lattice.get("passes" + suffix) else ""]
+                     "passed as cut" if lattice.get("passes" + suffix) else ""]
             return ", ".join(p for p in parts if p) or "does not pass"
         rival = next((k[len("score_"):] for k in lattice if k.startswith("score_")), None)
         name = {"window": "window cut", "quilt": "quilt", "mend": "mend"}.get(lattice.get("cut"), "lattice cut")
@@ -94,8 +94,9 @@ def _layout_text(gan: dict) -> str | None:
         text += (f"; {name} {lattice['tile'][1]}x{lattice['tile'][0]} px{blocks} scored {lattice['score']:.2f}"
                  f" ({verdict('')})")
         if rival is not None:
-            text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)});"
-                     " worst figure / its target")
+            text += (f" against {lattice['score_' + rival]:.2f} from {rival} ({verdict('_' + rival)})")
+        text += ("; each score is the candidate's worst figure over its target, under 1 passing as cut (the tile "
+                 "written is judged again, read back at full resolution: the status above)")
     if lattice.get("gan"):
         text += f"; SeamlessGAN {lattice['gan']}"
     return text
@@ -158,6 +159,13 @@ def _remade_text(facts: dict | None, what: str, done: str, moved) -> str | None:
     return f"the source's {what} was {done} before the cut ({how}); the tile is judged against the {done} source"
 
 
+#: Where a stack's result came from, in words ("trained": the GAN trained this run, whatever the tile was made from).
+_ORIGINS = {"trained": "this run, SeamlessGAN trained (the tile: see 'tile made from')",
+            "cut": "this run, cut from the source (nothing trained)",
+            "cache": "the cache (an earlier run's result for the same files and settings)",
+            "duplicate": "an identical stack earlier in this run"}
+
+
 def stack_facts(stack: StackReport) -> tuple[str, str]:
     """The stack's facts as table rows: the main ones, and the ones shown on request."""
     uv = stack.uv_scale
@@ -177,7 +185,7 @@ def stack_facts(stack: StackReport) -> tuple[str, str]:
                                lambda most, mean: f"texels moved by up to {most:.1f} texels, {mean:.2f} on average, "
                                                   "every map alike"),
         "same as": stack.duplicate_of,
-        "result from": stack.origin or None,
+        "result from": _ORIGINS.get(stack.origin, stack.origin) or None,
     }
     more = {
         "working size (w x h)": fmt(stack.working_size) if stack.working_size else None,
@@ -186,7 +194,7 @@ def stack_facts(stack: StackReport) -> tuple[str, str]:
         "GAN seeds": _seeds_text(stack.resampled.get("gan", {}).get("seeds")),
         "tile made from": _layout_text(stack.resampled.get("gan", {})),
         "timings (s)": ", ".join(f"{k} {v:.1f}" for k, v in stack.timings.items()) or None,
-        "device / precision": f"{stack.device} / {stack.precision}" if stack.device else None,
+        "device / precision": " / ".join(p for p in (stack.device, stack.precision) if p) or None,
         "model hash": stack.model_hash or None,
         "peak memory (MB)": f"{stack.peak_rss_mb:.0f}" if stack.peak_rss_mb else None,
     }

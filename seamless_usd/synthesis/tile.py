@@ -140,7 +140,7 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
         if made_so:  # the cut of the maps with their light levelled, or their lattice evened, passes
             how = "its light levelled" if "levelled" in made_so else "its lattice evened"
             made = _made_from_cut(cut, (H, W), structure, f, work_hw, timings,
-                                  f"not trained: the tile cut from the source, {how}, passes")
+                                  f"not trained: the tile cut from the source, {how}, passed as it was cut")
             made.levelled, made.evened = made_so.get("levelled", {}), made_so.get("evened", {})
             return made
         if small and cut.kind is None:
@@ -204,7 +204,7 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
 
 def _made_from_cut(cut: CutCheck, grid_hw: tuple[int, int], structure: float, factor: float,
                    work_hw: tuple[int, int], timings: dict[str, float],
-                   why: str = "not trained: the tile cut from the source passes") -> MadeTile:
+                   why: str = "not trained: the tile cut from the source passed as it was cut") -> MadeTile:
     """The written tile made before any training (the cut passes, or the stack is too small to train on): every
     texel a source copy, no GAN."""
     H, W = grid_hw
