@@ -1,6 +1,7 @@
-"""A run again over a stage one of whose layers changed since the new layer was written: a texture set anew in a
-sublayer (the stage's own file unchanged). The new layer recorded only the stage file's digest, so it was added to
-as if nothing had changed, and its earlier file values hid the change: the asset kept showing the old tile."""
+"""Stages whose layers hold a material's opinions apart. A run again over a stage one of whose sublayers changed
+since the new layer was written (a texture set anew there, the stage's own file unchanged): the new layer recorded
+only the stage file's digest, so it was added to as if nothing had changed, and its earlier file values hid the
+change. And in place, an st connection in a stronger layer than the file value."""
 from __future__ import annotations
 
 import json
@@ -45,3 +46,35 @@ def test_a_texture_set_anew_in_a_sublayer_is_what_the_asset_shows_after_a_run_ag
     [stack] = json.loads(capsys.readouterr().out)["stacks"]
     assert stack["status"] == "left-alone", stack  # made to repeat: kept as it is
     assert Path(albedo()).name == "wood.jpg", albedo()  # what the asset shows: not the brick's tile
+
+
+def test_an_st_connection_in_a_stronger_layer_than_the_file_is_said_so_without_variants(tmp_path, capsys):
+    """In place, the file value in a sublayer and the st connection in the stage's own layer: the edits cannot
+    compose, and the failure spoke of "an st connection outside the variant that sets the file" in a stage with no
+    variants. It now names the layers and what to do."""
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    (tmp_path / "shot").mkdir()
+    (tmp_path / "shot" / "look.usda").write_text((SAMPLES / "brick" / "scene.usda").read_text())
+    (tmp_path / "shot" / "scene.usda").write_text("""#usda 1.0
+(
+    subLayers = [@./look.usda@]
+)
+over "World"
+{
+    over "Looks"
+    {
+        over "Brick"
+        {
+            over "Albedo"
+            {
+                float2 inputs:st.connect = </World/Looks/Brick/StReader.outputs:result>
+            }
+        }
+    }
+}
+""")
+    main(["process", str(tmp_path / "shot" / "scene.usda"), "--in-place", "--preset", "tiny", "--seeds", "1",
+          "--max-size", "128", "--cache-dir", str(tmp_path / "cache"), "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    said = [f["message"] for f in payload["findings"] if f["code"] == "edit-not-composed"]
+    assert said and "variant" not in said[0] and "stronger layer than the file value" in said[0], said

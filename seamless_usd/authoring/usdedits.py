@@ -204,11 +204,15 @@ def check_uv_composed(author, results: Sequence[StackResult], result: AuthoringR
                 continue
             layer = edit.target.GetLayer()
             written = author.layer_names.get(layer) or layer.realPath or layer.identifier
+            fix = ("(an st connection outside the variant that sets the file): connect st inside each variant, or "
+                   "write the edits into that layer" if selection or edit.target.MapToSpecPath(
+                       edit.path).ContainsPrimVariantSelection() else
+                   "(it is authored in a stronger layer than the file value): author the file value there too, or "
+                   "leave out --in-place (a new layer is stronger than both)")
             not_composed(result, node, (
                 f"its new UV scale is authored in {asset_ref(written)}, but the texture-coordinate connection "
                 f"{asset_ref(strongest_layer(attr, author.layer_names))} holds is stronger and the stage keeps it, so the "
-                "tile would show at the wrong scale (an st connection outside the variant that sets the file): connect "
-                "st inside each variant, or write the edits into that layer"))
+                f"tile would show at the wrong scale {fix}"))
     finally:
         if composed:
             apply_selection(session, ())
