@@ -101,7 +101,7 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
     author = _Author(stage, result, anchor_dir=None)
     author.plan_all(results, _in_place_target, selections=True, one_layer=True)
     if shared is not None:
-        respect_other_stages(author, results, result, shared, str(stage_path))
+        respect_other_stages(author, results, result, shared)
     if not author.edits:
         if shared is not None:
             record_made(author, results, shared, str(stage_path))

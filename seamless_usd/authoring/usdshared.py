@@ -82,12 +82,12 @@ def node_sites(stage: Usd.Stage, maps) -> set[Site]:
     return out
 
 
-def respect_other_stages(author, results: Sequence[StackResult], result: AuthoringResult, shared: SharedEdits,
-                         stage: str) -> None:
-    """Drop the planned edits of ``stage``'s stacks that another stage of the run forbids or already made: a file
-    value another stage's use reads that is not made tileable fails the stack; one another stage's stack set to
-    other tiles keeps that value, when the two stacks are made from the same maps (the same tiles, in that stage's
-    folder; a finding says so), and fails the stack when they are not (one value cannot show both)."""
+def respect_other_stages(author, results: Sequence[StackResult], result: AuthoringResult, shared: SharedEdits
+                         ) -> None:
+    """Drop the planned edits of a stage's stacks whose file values a stage before it in the run set to other tiles:
+    that value is kept when the two stacks are made from the same maps (the same tiles, in that stage's folder; a
+    finding says so), and the stack fails when they are not (one value cannot show both). (A stack that would change
+    a use that is not made tileable failed before its tiles were made: :meth:`SharedEdits.refusal`.)"""
     by_id = {r.stack.id: r for r in results}
     refused: dict[str, str] = {}
     followed: dict[str, str] = {}
