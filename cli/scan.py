@@ -68,7 +68,9 @@ def _size_text(m: TextureMap) -> str:
     return f"{m.image.width}x{m.image.height} {m.image.channels}ch {m.image.dtype} {m.image.file_format}"
 
 
-def _stack_table(stack: TextureStack, common: str | None = None) -> Table:
+def _stack_table(stack: TextureStack, common: str | None = None, kept: str = "") -> Table:
+    """One stack's table; ``kept``: why ``process`` leaves a stack meant to tile alone or fails it (a map inside a
+    package, a UDIM set, a texture that cannot be read), so the scan says what the run will."""
     title = escape(f"{stack.material}  stack {stack.id}")
     if common is not None and stack.source:  # several stages scanned: which one it is in
         title += escape(f"  of {os.path.relpath(stack.source, common)}")
@@ -79,6 +81,7 @@ def _stack_table(stack: TextureStack, common: str | None = None) -> Table:
     if stack.intent:
         title += escape(f"  intent: {stack.intent}")
     caption = f"UV: {_uv_text(stack.uv)}" + (f"\nintent {stack.intent}: {stack.intent_reason}" if stack.intent else "")
+    caption += f"\nprocess: {kept}" if kept else ""
     table = Table(title=title, title_justify="left", caption=escape(caption), caption_justify="left")
     table.add_column("map", no_wrap=True)
     table.add_column("roles (channels)")
@@ -114,8 +117,14 @@ def render(result: ScanResult, console: Console) -> None:
     with_stacks = {s.material for s in result.stacks}
     scanned = sorted({s.source for s in result.stacks if s.source})
     common = os.path.commonpath([os.path.dirname(s) for s in scanned]) if len(scanned) > 1 else None
+    from seamless_usd.discover.select import blocked_stacks, set_aside_stacks
+
+    # one stage or document: its findings are its own (across several, material paths may be shared)
+    kept = ({**set_aside_stacks(result, result.stacks, ""), **blocked_stacks(result, result.stacks, "")}
+            if len(result.sources) == 1 else {})
     for stack in result.stacks:
-        console.print(_stack_table(stack, common))
+        why = kept.get(("", stack.id), "") if stack.intent == "tiling" else ""
+        console.print(_stack_table(stack, common, why))
     bare = [m for m in result.materials if m not in with_stacks]
     if bare:
         console.print(escape(f"materials without texture stacks: {', '.join(bare)}"))

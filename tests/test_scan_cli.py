@@ -194,3 +194,18 @@ def test_a_texture_whose_pixels_do_not_decode_is_named_by_scan_and_fails_its_sta
     assert code == 1
     assert rows["</Root/Looks/Cut>"]["status"] == "failed" and "cut.png" in rows["</Root/Looks/Cut>"]["message"]
     assert rows["</Root/Looks/Cloth>"]["status"] in ("passed", "not-passed")
+
+
+def test_scan_says_what_process_will_do_with_a_stack_inside_a_package(tmp_path, capsys):
+    """A stack meant to tile whose maps are inside a .usdz: the scan said ``intent: tiling`` and nothing more, while
+    process leaves it alone (its maps are not read from inside a package). The scan now says so."""
+    from pxr import Sdf, Usd, UsdUtils
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    flat = tmp_path / "flat.usda"
+    Usd.Stage.Open(str(samples / "brick" / "scene.usda")).Export(str(flat))
+    package = tmp_path / "brick.usdz"
+    assert UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(flat)), str(package))
+    assert main(["scan", str(package)]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "process: left alone:" in out and "inside a .usdz package" in out, out[-600:]
