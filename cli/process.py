@@ -17,8 +17,9 @@ from pathlib import Path
 
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.progress import BarColumn, Progress, ProgressColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
+from rich.text import Text
 
 from seamless_usd.api import Options, process_paths
 from seamless_usd.authoring import WriteMode
@@ -133,17 +134,24 @@ def _options(args: argparse.Namespace, progress) -> Options:
     )
 
 
+class _Count(ProgressColumn):
+    """``done/total`` where a step has a total, nothing where it has none (a refinement: "0/None")."""
+
+    def render(self, task) -> Text:
+        return Text(f"{task.completed:.0f}/{task.total:.0f}" if task.total is not None else "")
+
+
 class _ProgressView:
-    """Rich progress bars: one for the stacks, one for the current training or sampling."""
+    """Rich progress bars: one for the stacks, one for each stack being made (two at once with ``--jobs 2``)."""
 
     def __init__(self, console: Console):
         self.progress = Progress(
-            TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+            TextColumn("{task.description}"), BarColumn(), _Count(),
             TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn(),
             console=console, transient=False,
         )
         self.stacks = None
-        self.step = None
+        self.steps: dict[str, object] = {}  # stack id -> its bar
 
     def __enter__(self):
         self.progress.__enter__()
@@ -156,24 +164,24 @@ class _ProgressView:
         p = self.progress
         if self.stacks is None:
             self.stacks = p.add_task("stacks", total=event.total, rate="")
+        step = self.steps.get(event.stack_id)
         if event.kind == "stack-start":
-            if self.step is not None:
-                p.remove_task(self.step)
-            self.step = p.add_task(f"  {event.stack_id[:40]}", total=None, rate="")
-        elif event.kind == "train" and self.step is not None and event.detail is not None:
+            if step is not None:
+                p.remove_task(step)
+            self.steps[event.stack_id] = p.add_task(f"  {event.stack_id[:40]}", total=None, rate="")
+        elif event.kind == "train" and step is not None and event.detail is not None:
             d = event.detail
-            p.update(self.step, total=d.total, completed=d.iteration, rate=f"{d.it_per_s:.1f} it/s")
-        elif event.kind == "sample" and self.step is not None and event.detail is not None:
+            p.update(step, total=d.total, completed=d.iteration, rate=f"{d.it_per_s:.1f} it/s")
+        elif event.kind == "sample" and step is not None and event.detail is not None:
             d = event.detail
-            p.update(self.step, total=d.planned, completed=d.index, rate=f"Q search, crop {_wh(d.candidate.crop_size)}")
-        elif event.kind == "refine" and self.step is not None and event.detail is not None:
+            p.update(step, total=d.planned, completed=d.index, rate=f"Q search, crop {_wh(d.candidate.crop_size)}")
+        elif event.kind == "refine" and step is not None and event.detail is not None:
             d = event.detail
-            p.update(self.step, total=None, rate=f"refining at {d['tile'][1]}x{d['tile'][0]} ({d['seconds']:.1f}s)")
+            p.update(step, total=None, rate=f"refining at {d['tile'][1]}x{d['tile'][0]} ({d['seconds']:.1f}s)")
         elif event.kind == "stack-done":
             p.advance(self.stacks)
-            if self.step is not None:  # the stack's own bar goes with it (a stack cut from its source has no steps)
-                p.remove_task(self.step)
-                self.step = None
+            if step is not None:  # the stack's own bar goes with it (a stack cut from its source has no steps)
+                p.remove_task(self.steps.pop(event.stack_id))
 
 
 def _wh(size) -> str:

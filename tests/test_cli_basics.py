@@ -207,3 +207,26 @@ def test_the_summary_table_keeps_the_reasons_in_a_terminal_of_80_columns():
         _stack_table(report, console)
         text = " ".join(console.export_text().replace("│", " ").split())
         assert "</World/Looks/RotWood>" in text and "rows 96-133 (+0.05)" in text, (width, text)
+
+
+def test_the_progress_view_keeps_a_bar_for_each_stack_made_at_once_and_no_none_count():
+    """With --jobs 2 the second stack's start replaced the first's bar (the first's training then showed on none),
+    and a step with no total read "0/None"."""
+    from types import SimpleNamespace
+
+    from rich.console import Console
+
+    from seamless_usd.pipeline.options import ProgressEvent
+    from seamless_usd_cli.process import _ProgressView
+
+    console = Console(width=140, record=True, force_terminal=False)
+    with _ProgressView(console) as view:
+        view(ProgressEvent("stack-start", "A", 0, 2))
+        view(ProgressEvent("stack-start", "B", 1, 2))
+        view(ProgressEvent("train", "A", 0, 2, SimpleNamespace(total=100, iteration=40, it_per_s=9.0)))
+        assert set(view.steps) == {"A", "B"}
+        tasks = {t.description.strip(): t for t in view.progress.tasks}
+        assert tasks["A"].completed == 40 and tasks["A"].total == 100 and tasks["B"].total is None
+        view(ProgressEvent("stack-done", "A", 0, 2))
+        assert set(view.steps) == {"B"}
+    assert "None" not in console.export_text()
