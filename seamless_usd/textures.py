@@ -201,6 +201,7 @@ class ImageInfo:
     color_space: str | None = None  # "oiio:ColorSpace" or equivalent header metadata, if any
     texture: bool = False  # a tiled, MIP-mapped texture file (maketx's .tx: "textureformat" in its header)
     associated_alpha: bool = False  # colour stored multiplied by alpha (a TIFF's ExtraSamples = 1): written so again
+    parts: int = 1  # subimages (OpenEXR parts, TIFF pages): a tile holds the first only
 
 
 @dataclass(frozen=True)

@@ -131,3 +131,29 @@ def test_signed_32_bit_and_premultiplied_sources_keep_what_they_store(tmp_path, 
     assert (values[..., :3] <= values[..., 3:] + 2 / 255).all()
     source, _ = _stored(tmp_path / "albedo.tif")
     assert abs(values[..., 0].mean() - source[..., 0].mean()) < 0.05
+
+
+def test_a_multi_part_openexr_says_its_other_parts_are_not_in_the_tile(tmp_path, capsys):
+    """An OpenEXR of two parts (the colour, and a mask part): the tile held the first only, and nothing said so."""
+    y, x = np.mgrid[0:SIZE, 0:SIZE] / SIZE
+    colour = np.stack([0.3 + 0.2 * np.sin(9 * x), 0.4 + 0.1 * np.cos(7 * y), 0.2 + 0.1 * x * y], -1)
+    specs = [oiio.ImageSpec(SIZE, SIZE, 3, oiio.HALF), oiio.ImageSpec(SIZE, SIZE, 1, oiio.HALF)]
+    specs[1].attribute("oiio:subimagename", "mask")
+    path = tmp_path / "albedo.exr"
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), specs)
+    assert out.write_image(colour.astype(np.float32))
+    assert out.open(str(path), specs[1], "AppendSubimage") and out.write_image(np.ones((SIZE, SIZE, 1), np.float32))
+    out.close()
+    assert read_info(path).parts == 2
+    scene = SCENE.replace("@./albedo.tif@", "@./albedo.exr@").replace('"sRGB"', '"raw"')
+    scene = scene[:scene.index('        def Shader "Roughness"')] + "    }\n}\n"
+    scene = scene.replace("            float inputs:opacity.connect = </Looks/M/Albedo.outputs:a>\n", "")
+    scene = scene.replace("            float inputs:roughness.connect = </Looks/M/Roughness.outputs:r>\n", "")
+    scene = scene.replace("            float inputs:displacement.connect = </Looks/M/Height.outputs:r>\n", "")
+    (tmp_path / "scene.usda").write_text(scene)
+    main(["process", str(tmp_path / "scene.usda"), "--preset", "tiny", "--seeds", "1", "--json", "--cache-dir",
+          str(tmp_path / "cache")])
+    payload = json.loads(capsys.readouterr().out)
+    [said] = [f for f in payload["findings"] if f["code"] == "parts-not-kept"]
+    assert "2 parts" in said["message"] and "albedo.exr" in said["where"]

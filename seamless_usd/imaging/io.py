@@ -128,7 +128,21 @@ def _info_from(inp: oiio.ImageInput, path: Path) -> ImageInfo:
         texture=bool(spec.get_string_attribute("textureformat")) and spec.tile_width > 0,
         color_space=color_space,
         associated_alpha=associated_alpha(spec, fmt),
+        parts=_parts(inp, spec),
     )
+
+
+def _parts(inp: oiio.ImageInput, spec: oiio.ImageSpec) -> int:
+    """How many subimages the open file holds (OpenEXR parts, TIFF pages); it is left on the first."""
+    stated = spec.get_int_attribute("oiio:subimages", 0)
+    if stated > 0:
+        return stated
+    count = 1
+    while count < 64 and inp.seek_subimage(count, 0):
+        count += 1
+    inp.geterror()  # the failed seek past the last one leaves an error the next read would report: cleared
+    inp.seek_subimage(0, 0)
+    return count
 
 
 def _check_size(info: ImageInfo, path: Path, max_pixels: int | None) -> None:

@@ -165,7 +165,7 @@ def outcome_from_record(stack: TextureStack, meta: dict, pixels, record: dict, p
         previews=previews,
         findings=[] if pixels is None else list(pixels.findings) + _turn_refused(straightened)
         + _coarser(stack, record["tile_size"], source_uv_scale(meta["uv_scale"], straightened), pixels.original_sizes)
-        + _unread_channels(stack, pixels),
+        + _unread_channels(stack, pixels) + _dropped_parts(pixels),
     )
 
 
@@ -185,6 +185,17 @@ def _unread_channels(stack: TextureStack, pixels) -> list[Finding]:
                                f"holds {'each' if len(names) > 1 else 'it'} as the source's mean, not its values "
                                "(connect it, or keep the source for whatever else reads it)", stack.material))
     return out
+
+
+def _dropped_parts(pixels) -> list[Finding]:
+    """A warning for each map whose file holds several parts (an OpenEXR's subimages, a TIFF's pages): the tile
+    holds the first only, which is the one the material reads."""
+    from seamless_usd.findings import Severity, asset_ref, prim_ref
+
+    return [Finding(Severity.WARNING, "parts-not-kept", f"{prim_ref(m.node.strip('<>'))} {asset_ref(m.asset)}",
+                    f"the file holds {info.parts} parts (subimages); the tile holds the first only, the one the "
+                    "material reads: keep the source for whatever reads the others", m.material)
+            for m, info in zip(pixels.maps, pixels.infos) if info.parts > 1]
 
 
 #: A tile holding less than this share of its source's texels per UV unit is named coarser than the source.
