@@ -10,7 +10,6 @@ or did not pass (the rest were written); 2 usage error or unreadable input.
 from __future__ import annotations
 
 import argparse
-import os
 import json
 import sys
 from pathlib import Path
@@ -192,12 +191,12 @@ def _wh(size) -> str:
 def _summary(report: Report, console: Console) -> None:
     if report.stacks:
         _stack_table(report, console)
-    common = _common_folder(report)
+    names = _file_names(report)
     for f in report.findings:
         text = f.message if f.where in f.message else f"{f.where}: {f.message}"
         # several inputs: a library's files share material paths (every </World/Looks/Wood>), so each line names its
         # file, unless it names it already
-        of = os.path.relpath(f.source, common) if common is not None and f.source else ""
+        of = names.get(f.source, "") if f.source else ""
         text += f" (in {of})" if of and f"@{f.source}@" not in text and f"@{of}@" not in text else ""
         console.print(f"[bold]{f.severity.value}[/]: {escape(text)}", highlight=False, soft_wrap=True)
     for layer in report.layers_written:  # paths and messages as they are: a "[v2]" in a folder name is no markup
@@ -207,15 +206,13 @@ def _summary(report: Report, console: Console) -> None:
             console.print(f"would {escape(line)}", highlight=False, soft_wrap=True)
 
 
-def _common_folder(report: Report) -> str | None:
-    """The folder a run's several inputs share (their paths are said under it); None for one input."""
-    sources = sorted({s for s in report.sources if s})
-    if len(sources) < 2:
-        return None
-    try:
-        return os.path.commonpath([os.path.dirname(os.path.abspath(p)) for p in sources])
-    except ValueError:  # different drives
-        return None
+def _file_names(report: Report) -> dict[str, str]:
+    """Each input of a run of several, as the library report names it (its path under their shared folder); none
+    for a run of one."""
+    from seamless_usd.report.index import shown_names
+
+    sources = [s for s in report.sources if s]
+    return shown_names(sources) if len(sources) > 1 else {}
 
 
 #: Below this many columns the table keeps the material, its status and why (a terminal of 80 columns cut the
@@ -230,10 +227,10 @@ def _stack_table(report: Report, console: Console) -> None:
     for col in ("status", "maps", "crop", "tile", "UV scale", "time") if wide else ("status",):
         table.add_column(col, no_wrap=True)
     table.add_column("why not passed", overflow="fold", min_width=20, ratio=None if wide else 3)
-    common = _common_folder(report)
+    names = _file_names(report)
     for s in report.stacks:
         style = {StackStatus.PASSED: "green", StackStatus.NOT_PASSED: "yellow", StackStatus.FAILED: "red"}.get(s.status, "")
-        where = f" of {os.path.relpath(s.source, common)}" if common is not None and s.source else ""  # several inputs
+        where = f" of {names[s.source]}" if s.source in names else ""  # several inputs
         cells = [
             str(len(s.maps)),
             _wh(s.crop_size) if s.crop_size and s.model_hash else "-",  # no GAN, no crop

@@ -51,36 +51,31 @@ def _walk(folder: Path, outputs: bool = False) -> list[Path]:
 
 
 def _composed_by(files: Sequence[Path]) -> set[Path]:
-    """The files (resolved) that the USD layers among ``files`` compose directly: sublayers, references, payloads."""
+    """The files (resolved) that the USD layers among ``files`` compose directly: sublayers, references, payloads.
+    A layer among ``files`` that does not open is composed by none: it is a scene of its own, reported as unreadable
+    (the stage that composes it only warns that its composition failed), as it is when it is alone in the folder."""
     layers = [f for f in files if f.suffix.lower() != ".mtlx"]
     if not layers:
         return set()
     from pxr import Sdf  # only for a folder that holds stages
 
-    used: set[Path] = set()
-    for f in layers:
+    opened, broken = [], set()
+    for f in layers:  # each layer parsed once, here: whether it opens, and what it composes
         try:
             layer = Sdf.Layer.FindOrOpen(str(f))
-        except Exception:  # noqa: BLE001 - a layer that cannot be opened is reported when it is processed
-            continue
+        except Exception:  # noqa: BLE001 - Tf.ErrorException: reported when it is processed
+            layer = None
         if layer is None:
-            continue
+            broken.add(f.resolve())
+        else:
+            opened.append((f, layer))
+    used: set[Path] = set()
+    for f, layer in opened:
         for dep in layer.GetCompositionAssetDependencies():
             target = Path(dep) if Path(dep).is_absolute() else f.parent / dep
-            if target.exists() and (target.suffix.lower() == ".mtlx" or _opens(target)):
+            if target.exists() and target.resolve() not in broken:
                 used.add(target.resolve())
     return used
-
-
-def _opens(path: Path) -> bool:
-    """Whether ``path`` opens as a USD layer: one that does not is a scene of its own, reported as unreadable (the
-    stage that composes it only warns that its composition failed), as it is when it is alone in the folder."""
-    from pxr import Sdf
-
-    try:
-        return Sdf.Layer.FindOrOpen(str(path)) is not None
-    except Exception:  # noqa: BLE001 - Tf.ErrorException: not a layer
-        return False
 
 
 def expand_inputs(items: Sequence[str | Path], outputs: bool = False, require_scenes: bool = False) -> list[Path]:

@@ -105,10 +105,11 @@ class _Source:
     sites: dict[str, set] = field(default_factory=dict)  # USD: stack id -> where in-place edits of its nodes land
 
 
-def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = None, keep_triage: bool = True
-                 ) -> _Source:
+def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = None, keep_triage: bool = True,
+                 in_place: bool = False) -> _Source:
     """Open and scan one input; InputError when it cannot be read. ``triage_dir`` keeps the triage's pixel
-    figures between runs (``keep_triage`` False: only reads them)."""
+    figures between runs (``keep_triage`` False: only reads them); ``in_place``: where each stack's edits would land
+    is noted (``_Source.sites``), while the stage is open."""
     if not path.exists():
         raise InputError(f"{asset_ref(path)} does not exist")
     suffix = path.suffix.lower()
@@ -125,7 +126,7 @@ def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = 
         return _Source(path, kind, scan, stacks)
     from seamless_usd.authoring.usdshared import node_sites
 
-    sites = {s.id: node_sites(stage, s.maps) for s in scan.stacks if not s.selection}
+    sites = {s.id: node_sites(stage, s.maps) for s in scan.stacks if not s.selection} if in_place else {}
     return _Source(path, kind, scan, stacks, instanced_stacks(stage, stacks, str(path)), sites)
 
 
@@ -207,11 +208,12 @@ def _scan_sources(run: Run, inputs: list[Path], sources: list[_Source]) -> None:
         run.report.sources.append(str(path))
         before = len(run.report.findings)
         try:
-            src = _scan_source(path, run.options.materials, *triage_of(run.options))
+            in_place = authoring_module().WriteMode.IN_PLACE in (run.options.mode, run.options.plan_mode)
+            src = _scan_source(path, run.options.materials, *triage_of(run.options), in_place=in_place)
             run.blocked.update(blocked_stacks(src.scan, src.stacks, str(src.path)))
             run.blocked.update(hand_set_stacks(src.stacks, str(src.path)))
-            if authoring_module().WriteMode.IN_PLACE not in (run.options.mode, run.options.plan_mode):  # in place:
-                run.blocked.update(src.instanced)  # ... edited in the prototype's own layer
+            if not in_place:  # in place, a stack inside an instance is edited in its prototype's own layer
+                run.blocked.update(src.instanced)
             run.set_aside.update(set_aside_stacks(src.scan, src.stacks, str(src.path)))
             unread_rows(run, src.scan, str(src.path))
             set_aside_rows(run, src.scan, str(src.path))
