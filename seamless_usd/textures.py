@@ -202,6 +202,8 @@ class ImageInfo:
     texture: bool = False  # a tiled, MIP-mapped texture file (maketx's .tx: "textureformat" in its header)
     associated_alpha: bool = False  # colour stored multiplied by alpha (a TIFF's ExtraSamples = 1): written so again
     parts: int = 1  # subimages (OpenEXR parts, TIFF pages): a tile holds the first only
+    channel_types: tuple[str, ...] = ()  # each channel's sample type where they differ (half RGB, float A), else ()
+    compression: str | None = None  # an OpenEXR's or TIFF's compression ("zip", "piz", "dwaa", "lzw"): kept
 
 
 @dataclass(frozen=True)

@@ -60,32 +60,14 @@ def _read_through_ar(resolved: str) -> bytes:
 
 
 def _read_header(path: str, raw) -> ImageInfo:
-    from seamless_usd.imaging.io import GUESSED_COLORSPACE_FORMATS, associated_alpha, reader_config, sample_type
+    from seamless_usd.imaging.io import header_info, reader_config
 
     inp = oiio.ImageInput.open(path, reader_config())
     if inp is None:
         lines = oiio.geterror().strip().splitlines()  # geterror() clears the message: read it once
         raise ImageReadError(lines[0] if lines else "unknown image format")
     try:
-        spec = inp.spec()
-        fmt = inp.format_name()
-        if fmt == "png":
-            stated = png_stated_color_space(raw)
-        elif fmt in GUESSED_COLORSPACE_FORMATS:
-            stated = None
-        else:
-            stated = spec.get_string_attribute("oiio:ColorSpace") or None
-        return ImageInfo(
-            width=spec.width,
-            height=spec.height,
-            channels=spec.nchannels,
-            dtype=sample_type(spec),
-            file_format=fmt,
-            channel_names=tuple(spec.channelnames),
-            texture=bool(spec.get_string_attribute("textureformat")) and spec.tile_width > 0,
-            color_space=stated,
-            associated_alpha=associated_alpha(spec, fmt),
-        )
+        return header_info(inp, png_stated_color_space(raw) if inp.format_name() == "png" else None)
     finally:
         inp.close()
 

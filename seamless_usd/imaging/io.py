@@ -109,15 +109,28 @@ def _open(path: Path) -> oiio.ImageInput:
 
 
 def _info_from(inp: oiio.ImageInput, path: Path) -> ImageInfo:
-    spec = inp.spec()
-    fmt = inp.format_name()
-    color_space = None if fmt in GUESSED_COLORSPACE_FORMATS else spec.get_string_attribute("oiio:ColorSpace") or None
-    if fmt == "png":  # OpenImageIO reports sRGB for every PNG; only a chunk says so
+    color_space = None
+    if inp.format_name() == "png":  # OpenImageIO reports sRGB for every PNG; only a chunk says so
         try:
             with open(path, "rb") as fh:
                 color_space = png_stated_color_space(fh)
         except OSError:
             color_space = None
+    return header_info(inp, color_space, parts=_parts(inp, inp.spec()))
+
+
+def header_info(inp: oiio.ImageInput, png_color_space: str | None, parts: int = 1) -> ImageInfo:
+    """What the header of the open file ``inp`` says; ``png_color_space``: what a PNG's chunks state (OpenImageIO
+    reports sRGB for every PNG), ignored for other formats."""
+    spec = inp.spec()
+    fmt = inp.format_name()
+    if fmt == "png":
+        color_space = png_color_space
+    elif fmt in GUESSED_COLORSPACE_FORMATS:
+        color_space = None
+    else:
+        color_space = spec.get_string_attribute("oiio:ColorSpace") or None
+    types = tuple(_SAMPLE_TYPES.get(str(t), str(t)) for t in spec.channelformats)
     return ImageInfo(
         width=spec.width,
         height=spec.height,
@@ -128,7 +141,9 @@ def _info_from(inp: oiio.ImageInput, path: Path) -> ImageInfo:
         texture=bool(spec.get_string_attribute("textureformat")) and spec.tile_width > 0,
         color_space=color_space,
         associated_alpha=associated_alpha(spec, fmt),
-        parts=_parts(inp, spec),
+        parts=parts,
+        channel_types=types if len(set(types)) > 1 else (),
+        compression=(spec.get_string_attribute("compression") or None) if fmt in ("openexr", "tiff") else None,
     )
 
 

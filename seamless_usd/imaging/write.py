@@ -186,9 +186,12 @@ def write_pixels(
     if pixels.ndim != 3 or pixels.shape[2] != like.channels:
         raise ValueError(f"expected (H, W, {like.channels}) pixels for {asset_ref(target)}, got {pixels.shape}")
     dtype = output_dtype(like)
-    data = _quantise(pixels, dtype)
+    types = like.channel_types if ext == ".exr" and len(like.channel_types) == like.channels else ()
+    data = _quantise(pixels, dtype, types)
     h, w, c = data.shape
     spec = oiio.ImageSpec(w, h, c, _OIIO_TYPES[dtype])
+    if types:  # each channel in its own sample type, as the source stores it (half colour, float alpha)
+        spec.channelformats = tuple(_OIIO_TYPES[t] for t in types)
     if len(like.channel_names) == c:
         spec.channelnames = tuple(like.channel_names)
     named = any(n.lower() in ("a", "alpha") for n in like.channel_names)
@@ -203,13 +206,11 @@ def write_pixels(
         spec.attribute("oiio:ColorSpace", _COLORSPACE_NAMES[ColorSpace(color_space)])
     elif ext == ".png":
         spec.attribute("oiio:ColorSpace", "raw")
-    if ext == ".exr":
-        spec.attribute("compression", "zip")
-    else:
-        if not like.associated_alpha:  # values are stored as the source stores them: straight, or multiplied
-            spec.attribute("oiio:UnassociatedAlpha", 1)
-        if ext in (".tif", ".tx"):
-            spec.attribute("compression", "zip")
+    if ext != ".exr" and not like.associated_alpha:  # values are stored as the source stores them: straight, or multiplied
+        spec.attribute("oiio:UnassociatedAlpha", 1)
+    if ext in (".exr", ".tif", ".tx"):  # the source's compression where it is of the same family, else lossless zip
+        same_family = like.file_format == ("openexr" if ext == ".exr" else "tiff")
+        spec.attribute("compression", like.compression if same_family and like.compression else "zip")
     if keep_from is not None:
         kept = kept_attributes(keep_from)
         named = {name: value for name, _, value in kept if name in ("colorInteropID", "oiio:ColorSpace")}
@@ -226,7 +227,7 @@ def write_pixels(
             spec.attribute(name, text)
 
     def writer(tmp: Path) -> None:
-        if ext == ".tx":
+        if ext == ".tx" or (ext == ".exr" and like.texture):  # a tiled, MIP-mapped texture stays one
             _write_texture(tmp, target, data, spec)
             return
         out = oiio.ImageOutput.create(str(tmp))
@@ -254,6 +255,7 @@ def _write_texture(tmp: Path, target: Path, data: np.ndarray, spec: oiio.ImageSp
     config = oiio.ImageSpec()
     config.attribute("maketx:filtername", "lanczos3")
     config.attribute("wrapmodes", "periodic,periodic")  # a tile repeats: its header says so, its MIP levels wrap
+    config.attribute("compression", spec.get_string_attribute("compression", "zip"))
     if not oiio.ImageBufAlgo.make_texture(oiio.MakeTxTexture, buf, str(tmp), config):
         raise InputError(f"{asset_ref(target)}: writing the texture failed ({' '.join(oiio.geterror().split())}); "
                          "check free disk space and permissions")
@@ -284,7 +286,11 @@ def _check_written(tmp: Path, target: Path, shape: tuple[int, ...]) -> None:
         )
 
 
-def _quantise(pixels: np.ndarray, dtype: str) -> np.ndarray:
+def _quantise(pixels: np.ndarray, dtype: str, types: tuple[str, ...] = ()) -> np.ndarray:
+    """``pixels`` as ``dtype`` samples; ``types``: each channel's own sample type (a float output whose half
+    channels are held to the half range)."""
+    if types:
+        return np.stack([_quantise(pixels[..., i], t).astype(np.float32) for i, t in enumerate(types)], axis=-1)
     values = pixels.astype(np.float64, copy=False)
     if dtype in _NUMPY_TYPES and np.issubdtype(_NUMPY_TYPES[dtype], np.integer):
         top = float(np.iinfo(_NUMPY_TYPES[dtype]).max)  # signed: [-1, 1] as the reader gives it
