@@ -367,6 +367,25 @@ def test_process_layer_anchors_an_anonymous_layer_at_its_save_path(tmp_path):
     assert [p.name for p in save.parent.iterdir()] == ["scene.usda"]  # the scratch layer is never saved
 
 
+def test_a_layer_on_disk_saved_elsewhere_is_processed_where_it_is_and_says_so(tmp_path):
+    """Its relative paths, the tiles' among them, are meant from its own folder: saved elsewhere without the DCC
+    rewriting them, they point at nothing there. It said nothing and reported the export fine."""
+    _real_options()
+    from pxr import Sdf
+
+    stage, _ = _texture_layer("./textures/a.png")
+    stage.GetRootLayer().Export(str(tmp_path / "scene.usda"))
+    layer = Sdf.Layer.FindOrOpen(str(tmp_path / "scene.usda"))
+    rec, lines = _Recorder(), []
+    run = common.process_layer(layer, tmp_path / "out" / "scene.usda", HookSettings(), emit=lines.append, process=rec)
+    [(processed, _)] = rec.calls
+    assert processed.GetRootLayer() is layer  # processed where it is: its sources resolve from its own folder
+    [moved] = [line for line in run.lines if "saved to" in line.text]
+    assert moved.level.value == "warning" and moved in lines and str(tmp_path / "out" / "scene.usda") in moved.text
+    run = common.process_layer(layer, tmp_path / "scene.usda", HookSettings(), emit=lines.append, process=rec)
+    assert not [line for line in run.lines if "saved to" in line.text]  # saved where it is: nothing to say
+
+
 def test_process_layer_skips_layers_without_textures(tmp_path):
     from pxr import Sdf
 

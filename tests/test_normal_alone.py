@@ -61,3 +61,20 @@ def test_one_normal_map_stored_three_ways_gets_one_answer_and_a_photo_is_named(t
         assert not checked[name].note and "does not read as" not in scanned[name].intent_reason
     assert "does not read as a tangent-space normal map" in checked["Photo"].note
     assert "does not read as a tangent-space normal map" in scanned["Photo"].intent_reason
+
+
+def test_a_one_channel_picture_wired_as_a_normal_map_is_judged_as_values_and_named(tmp_path):
+    """One channel cannot hold vectors: it was made unit length, every texel +1 or -1, so a grey picture read a seam
+    a billion times over the margin on the stage and passed on its own, and nothing said why."""
+    grey = oiio.ImageBuf(str(TEXTURES / "brick_roughness.png")).get_pixels(oiio.FLOAT)[..., :1]
+    out = oiio.ImageOutput.create(str(tmp_path / "grey.png"))
+    assert out.open(str(tmp_path / "grey.png"), oiio.ImageSpec(grey.shape[1], grey.shape[0], 1, oiio.UINT8))
+    assert out.write_image(np.ascontiguousarray(grey, np.float32))
+    out.close()
+    scene = _scene(tmp_path, {"Grey": ("grey.png", None)})
+    [on_stage] = check_paths([scene]).items
+    [alone] = check_paths([tmp_path / "grey.png"]).items
+    [scanned] = scan_paths([scene]).stacks
+    assert on_stage.verdict["strongest"] < 100 and on_stage.passed == alone.passed
+    assert "does not read as a normal map: it has 1 channel(s)" in on_stage.note
+    assert "does not read as a normal map: it has 1 channel(s)" in scanned.intent_reason

@@ -56,7 +56,7 @@ def test_joints_that_recur_where_the_stones_do_not_are_the_textures_own():
     path = PHOTOS / "stones_wall_1.jpg"
     verdict, _ = judge_alone([FileMap(str(path))])
     assert verdict.seamless, verdict.reasons()
-    picture, _ = read_alone(FileMap(str(path)))
+    picture = read_alone(FileMap(str(path)))[0]
     rows = _rows(picture)
     n = rows.shape[0]
     assert period(n, rows.reshape(n, -1)) is None

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from seamless_usd.errors import SeamlessUsdError, UsageError
+from seamless_usd.findings import asset_ref
 from seamless_usd.hooks.loglines import PREFIX, Level, LogLine, _failed, _log_emit, progress_logger, report_lines
 from seamless_usd.hooks.settings import (
     SETTING_NAMES,
@@ -246,7 +247,13 @@ def process_layer(
     if not settings.enabled or not _has_texture_shader(layer):
         return run
     if not layer.anonymous:  # type: ignore[attr-defined]
-        return run_hook(Usd.Stage.Open(layer), settings, emit=emit, process=process)
+        moved = _saved_elsewhere(layer, save_path)
+        if moved:  # said first, so that the DCC's log shows it before the run's lines
+            (emit or _log_emit)(moved)
+        run = run_hook(Usd.Stage.Open(layer), settings, emit=emit, process=process)
+        if moved:
+            run.lines.insert(0, moved)
+        return run
     if save_path is None:
         return run_hook(Usd.Stage.Open(layer), settings, emit=emit, process=process)
     save_path = Path(save_path).resolve()
@@ -264,6 +271,19 @@ def process_layer(
     if run.report is not None:
         layer.TransferContent(scratch)  # type: ignore[attr-defined]
     return run
+
+
+def _saved_elsewhere(layer: object, save_path: str | Path | None) -> LogLine | None:
+    """A warning when a layer already on disk is about to be saved somewhere else: it is processed where it is (its
+    relative asset paths, the tiles' among them, are meant from its own folder), so they do not resolve from the
+    save path unless the DCC rewrites them."""
+    real = getattr(layer, "realPath", "") or ""
+    if save_path is None or not real or Path(save_path).resolve() == Path(real).resolve():
+        return None
+    return LogLine(Level.WARNING, f"{PREFIX}: {asset_ref(real)} is a layer on disk saved to {asset_ref(save_path)}: "
+                   f"it was processed where it is, so its tiles are beside it and its relative asset paths, the tiles' "
+                   f"among them, resolve from {asset_ref(Path(real).parent)}, not from the save path's folder; save "
+                   f"the layer where it is, or export it as a new layer")
 
 
 def _has_texture_shader(layer: object) -> bool:

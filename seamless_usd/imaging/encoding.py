@@ -83,6 +83,15 @@ class MapEncoding:
     def is_integer(self) -> bool:
         return self.dtype in _INTEGER_TYPES
 
+    @property
+    def network_code(self) -> float:
+        """One code value of the file in network units: how finely it stores its values (2 / 255 for 8 bits,
+        2 / 65535 for 16); 0 for half and float files, whose steps are finer than any seam."""
+        if not self.is_integer:
+            return 0.0
+        file_step = 1.0 / float(np.iinfo(np.dtype(self.dtype)).max)  # the reader's values: a code over the largest
+        return 2.0 * file_step / (self.value_range.hi - self.value_range.lo)
+
     @classmethod
     def for_map(
         cls, texture_map: TextureMap, info: ImageInfo, pixels: np.ndarray | None = None

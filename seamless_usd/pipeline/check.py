@@ -289,7 +289,8 @@ def _against_source(item: CheckItem, tile_maps: list, src_maps: list, prov) -> N
                           turn_vectors=not prov.uv_turn, rectified=keystone_of(prov))
     uv = (uv[0] * sources[0].shape[1] / w, uv[1] * sources[0].shape[0] / h)
     sources = on_tile_grid(sources, normals, tiles[0].shape[:2], uv)
-    item.verdict = judge(tiles, sources, normals, [m.asset for m in tile_maps]).as_dict()
+    item.verdict = judge(tiles, sources, normals, [m.asset for m in tile_maps],
+                         codes=[e.network_code for e in made.encodings]).as_dict()
     item.thumbnail = thumbnail(tiles[0])
 
 

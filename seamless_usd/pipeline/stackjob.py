@@ -100,8 +100,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
 
     names = [f"m{i}" for i in range(len(stack.maps))]
     inputs = [
-        synthesis.MapInput(name=n, pixels=p, is_normal=m.is_normal)
-        for n, p, m in zip(names, pixels.values, stack.maps)
+        synthesis.MapInput(name=n, pixels=p, is_normal=m.is_normal, code=e.network_code)
+        for n, p, m, e in zip(names, pixels.values, stack.maps, pixels.encodings)
     ]
     config = synthesis.get_preset(settings.preset)
     if settings.iterations is not None:
@@ -221,7 +221,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     t4 = time.perf_counter()
     # the written maps read against the sources once, for the verdict and the join figures alike
     assets = [m.asset for m in stack.maps]
-    reading = Reading(written_values, normals, assets, Reference(sources, normals, assets, keep_index=False))
+    reading = Reading(written_values, normals, assets, Reference(sources, normals, assets, keep_index=False),
+                      [e.network_code for e in pixels.encodings])
     verdict = judge_reading(reading)
     ratio = synthesis.written_lattice_ratio(scale.get("lattice") or {}, scale.get("layout"))
     if ratio is not None and ratio < synthesis.LATTICE_TARGET:  # the source repeats and the tile breaks it

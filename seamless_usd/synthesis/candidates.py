@@ -62,7 +62,8 @@ def judged(tiles: dict[str, np.ndarray], maps: list[MapInput], lattice: Lattice,
     ratio = lattice_ratio([tiles[m.name] for m in maps], [m.pixels for m in maps], lattice)
     if ratio is not None:
         score = max(score, (1 - ratio) / (1 - LATTICE_TARGET))
-    verdict = judge_reading(Reading([tiles[m.name] for m in maps], reference.normals, reference.names, reference))
+    verdict = judge_reading(Reading([tiles[m.name] for m in maps], reference.normals, reference.names, reference,
+                                    [m.code for m in maps]))
     score = max(score, verdict.strongest / verdict.margin)
     return score, bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET)), ratio
 
@@ -71,7 +72,7 @@ def passes_at_full_resolution(tiles: dict[str, np.ndarray], maps: list[MapInput]
     """Whether a candidate tile passes as :func:`judged` decides, with the verdict read at full resolution (a
     tile of copies at odd offsets is no longer copies on a halved grid, see :func:`check_cut`)."""
     verdict = judge([tiles[m.name] for m in maps], [m.pixels for m in maps], [m.is_normal for m in maps],
-                    [m.name for m in maps])
+                    [m.name for m in maps], codes=[m.code for m in maps])
     return bool(verdict.passed and (ratio is None or ratio >= LATTICE_TARGET))
 
 
@@ -180,7 +181,7 @@ def check_cut(maps: list[MapInput], cut: bool, seed: int = 0) -> CutCheck:
     halve = score_halving(H, W)
     # the sources are halved with the tiles' filter (area), so the two autocorrelations compare
     half = (max(8, round(H / halve)), max(8, round(W / halve)))
-    grid = [MapInput(m.name, resized(m.pixels, half, m.is_normal, periodic=True), m.is_normal)
+    grid = [dataclasses.replace(m, pixels=resized(m.pixels, half, m.is_normal, periodic=True))
             for m in maps] if halve > 1 else maps
     grid_lattice = dataclasses.replace(lattice, period=tuple(None if p is None else p / halve for p in lattice.period))
     reference = Reference([m.pixels for m in grid], [m.is_normal for m in grid], [m.name for m in grid])

@@ -1,6 +1,8 @@
 """Maps moved between pixel grids: a stack brought to a working size, a periodic tile read on another grid."""
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import torch
 import torch.nn.functional as F
@@ -14,7 +16,7 @@ __all__ = ["downsample_maps", "resized", "on_grid"]
 def downsample_maps(maps: list[MapInput], size: tuple[int, int]) -> list[MapInput]:
     """Maps resized to ``size = (h, w)`` (bilinear, antialiased when shrinking; normals renormalised)."""
     return [m if m.pixels.shape[:2] == tuple(size) else
-            MapInput(m.name, resized(m.pixels, size, m.is_normal), m.is_normal) for m in maps]
+            dataclasses.replace(m, pixels=resized(m.pixels, size, m.is_normal)) for m in maps]
 
 
 def resized(pixels: np.ndarray, size: tuple[int, int], is_normal: bool, periodic: bool = False) -> np.ndarray:

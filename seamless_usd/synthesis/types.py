@@ -25,6 +25,9 @@ class MapInput:
     name: str
     pixels: np.ndarray
     is_normal: bool = False
+    #: one code value of the map's file in network units (2 / 255 for 8 bits, 0 for half and float:
+    #: :attr:`.imaging.MapEncoding.network_code`), which decides how small a step the verdict can see in it
+    code: float = 2 / 255
 
     def __post_init__(self) -> None:
         assert isinstance(self.pixels, np.ndarray) and self.pixels.ndim == 3, (

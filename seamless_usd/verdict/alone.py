@@ -88,9 +88,10 @@ def _reading_shape(h: int, w: int, side: int = READ_SIDE) -> tuple[int, int]:
     return max(1, round(h * f)), max(1, round(w * f))
 
 
-def read_alone(m: FileMap) -> tuple[np.ndarray, tuple[int, int]]:
-    """The file's channels in use, reduced to at most :data:`READ_SIDE` px, in the verdict's domain, and its
-    full size ``(h, w)``. Raises :class:`InputError` naming the file when it cannot be read or holds NaN / inf
+def read_alone(m: FileMap) -> tuple[np.ndarray, tuple[int, int], float]:
+    """The file's channels in use, reduced to at most :data:`READ_SIDE` px, in the verdict's domain, its full size
+    ``(h, w)`` and one code value of the file in that domain (0 for half and float files: see
+    :func:`.visibility.floor`). Raises :class:`InputError` naming the file when it cannot be read or holds NaN / inf
     texels."""
     from seamless_usd.imaging import read_image
     from seamless_usd.imaging.io import alpha_channel
@@ -112,12 +113,17 @@ def read_alone(m: FileMap) -> tuple[np.ndarray, tuple[int, int]]:
     top = float(np.iinfo(a.dtype).max) if a.dtype.kind == "u" else 1.0  # file values: an integer code over its largest
     reduced = reduced / top
     vectors = _normal_decoding(m, info, a, top) if m.is_normal and a.shape[-1] >= 3 else None
+    if m.is_normal and a.shape[-1] < 3:  # read as plain values (:func:`_judge_alone`), as ``process`` reads it
+        _DOUBTS[_doubt_key(m)] = (f"does not read as a normal map: it has {a.shape[-1]} channel(s) in use, not the "
+                                  "three (x, y, z) of one; it is judged as plain values (check the file wired to the "
+                                  "normal input)")
+    code = 2.0 / top if a.dtype.kind == "u" else 0.0
     if vectors is None:
-        return 2.0 * reduced - 1.0, (info.height, info.width)
+        return 2.0 * reduced - 1.0, (info.height, info.width), code
     scale, bias = vectors  # a normal map's xyz as the vectors it holds (the same as 2 v - 1 for the usual encoding)
     reduced[..., :3] = reduced[..., :3] * np.asarray(scale) + np.asarray(bias)
     reduced[..., 3:] = 2.0 * reduced[..., 3:] - 1.0
-    return reduced, (info.height, info.width)
+    return reduced, (info.height, info.width), code
 
 
 #: Why each normal map read does not read as one (None: it does), by its file and decoding: said by ``check`` and the
@@ -254,7 +260,7 @@ def judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
 
 def _judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
     read = [read_alone(m) for m in maps]
-    for m, (pixels, full) in zip(maps, read):
+    for m, (pixels, full, _) in zip(maps, read):
         if min(pixels.shape[:2]) < MIN_SIDE:
             thin = min(full) >= MIN_SIDE  # both sides large enough, but read at READ_SIDE across it is too thin
             why = (f"a strip thinner than 1:{READ_SIDE // MIN_SIDE} is too thin to be judged on its own: read at "
@@ -265,16 +271,17 @@ def _judge_alone(maps: Sequence[FileMap]) -> tuple[Verdict, np.ndarray]:
                    f"px on each side)")
             raise ValueError(f"{asset_ref(m.path)}: {full[1]} x {full[0]} px: {why}")
     names = [m.name or m.path for m in maps]
-    shapes = [p.shape[:2] for p, _ in read]
+    normals = [m.is_normal and p.shape[-1] >= 3 for m, (p, _, _) in zip(maps, read)]  # xyz vectors, as process reads
+    shapes = [p.shape[:2] for p, _, _ in read]
     same_aspect = all(abs(h * shapes[0][1] - w * shapes[0][0]) <= max(h, w, *shapes[0]) for h, w in shapes)
     if same_aspect:
         common = min(shapes, key=lambda s: s[0] * s[1])
-        pixels = [p if p.shape[:2] == common else reduce_bins(p, common) for p, _ in read]
-        v = judge(pixels, None, [m.is_normal for m in maps], names, fidelity=False)
+        pixels = [p if p.shape[:2] == common else reduce_bins(p, common) for p, _, _ in read]
+        v = judge(pixels, None, normals, names, fidelity=False, codes=[c for _, _, c in read])
         return _scaled(v, common, read[0][1]), read[0][0]
     # each map alone, its seams at the same place in the texture (UV) given in texels of the first map
-    verdicts = [_scaled(judge([p], None, [m.is_normal], [n], fidelity=False), p.shape[:2], read[0][1])
-                for (p, _), m, n in zip(read, maps, names)]
+    verdicts = [_scaled(judge([p], None, [normal], [n], fidelity=False, codes=[c]), p.shape[:2], read[0][1])
+                for (p, _, c), normal, n in zip(read, normals, names)]
     seams = sorted((s for v in verdicts for s in v.seams), key=lambda s: -s.figure)
     first = verdicts[0]
     return Verdict(not seams, True, seams, max(v.strongest for v in verdicts), first.margin, "itself",

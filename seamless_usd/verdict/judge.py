@@ -220,10 +220,11 @@ def _near(seam: Seam, others: list[Seam]) -> bool:
 
 
 def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: list[bool], names: list[str],
-          *, fidelity: bool = True, seed: int = 0) -> Verdict:
+          *, fidelity: bool = True, seed: int = 0, codes: list[float] | None = None) -> Verdict:
     """The verdict on a periodic tile (one or more maps, network domain ``[-1, 1]``) against ``sources``
     (the same maps at the tile's texel scale; None: judged against itself). To judge several tiles against
     one source, or to read the same tile's join figures too, prepare them once and use :func:`judge_reading`.
+    ``codes``: each map's code value in network units (:attr:`.reference.Reading.codes`; 8-bit where not given).
 
     >>> rng = np.random.default_rng(0)
     >>> noise = rng.normal(size=(96, 96, 1))
@@ -231,7 +232,7 @@ def judge(tiles: list[np.ndarray], sources: list[np.ndarray] | None, normals: li
     True
     """
     reference = None if sources is None else Reference(sources, normals, names, keep_index=False)
-    return judge_reading(Reading(tiles, normals, names, reference), fidelity=fidelity, seed=seed)
+    return judge_reading(Reading(tiles, normals, names, reference, codes), fidelity=fidelity, seed=seed)
 
 
 def _seen(seams: list[Seam], strongest: float, margin: float, reading: Reading, work: list[np.ndarray] | None
@@ -243,7 +244,7 @@ def _seen(seams: list[Seam], strongest: float, margin: float, reading: Reading, 
         return seams, strongest
     factor = min(1.0, WORK_SIDE / max(reading.size))
     maps = work if work is not None else to_working(reading.maps, factor, periodic=True)
-    kept = sorted(visible(seams, maps, reading.names, factor), key=lambda x: -x.figure)
+    kept = sorted(visible(seams, maps, reading.names, factor, reading.codes), key=lambda x: -x.figure)
     if not kept:
         strongest = min(strongest, margin)
     return kept, strongest

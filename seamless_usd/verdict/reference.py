@@ -16,6 +16,7 @@ import numpy as np
 from .copies import INFER, SourceIndex, copy_origins, step_unit
 from .prepare import joint, joined, map_weights, prepare_maps, to_working
 from .tone import tone_reference
+from .visibility import CODE_8BIT
 
 __all__ = ["Reference", "Reading"]
 
@@ -69,9 +70,12 @@ class Reading:
     judged on its own)."""
 
     def __init__(self, tiles: list[np.ndarray], normals: list[bool], names: list[str],
-                 reference: Reference | None = None):
+                 reference: Reference | None = None, codes: list[float] | None = None):
         if reference is not None and (reference.normals != list(normals) or len(reference.names) != len(tiles)):
             raise ValueError("the tile's maps must be the reference's maps, in its order")
+        #: each map's code value in network units (one step of its file: 2 / 255 for 8 bits, 0 for half and float),
+        #: which decides how small a step can be seen in it (:func:`.visibility.floor`); 8-bit where not given
+        self.codes = list(codes) if codes is not None else [CODE_8BIT] * len(tiles)
         self.tiles = list(tiles)
         self.normals = list(normals)
         self.names = list(names)
