@@ -254,3 +254,31 @@ def test_ctrl_c_to_a_run_on_its_own_local_cluster_stops_it_quietly(tmp_path):
     listed = subprocess.run(["ps", "-e", "-o", "sid=,stat=,args="], capture_output=True, text=True).stdout.splitlines()
     alive = [line for line in listed if line.split()[0] == str(proc.pid) and not line.split()[1].startswith("Z")]
     assert not alive, f"processes of the run still running: {alive}"  # exited ones (zombies) wait for init to reap
+
+
+def test_ctrl_c_to_a_run_on_a_remote_scheduler_leaves_no_tiles_from_jobs_still_running(deployment, tmp_path):
+    """A job running on a remote worker cannot be ended from the client: it trained on after Ctrl-C and wrote its
+    tiles a second after the report said none were made. The client now tells it the run stopped, and it writes
+    nothing."""
+    from fswatch import wait_until
+
+    scene = _library(tmp_path / "lib")
+    cache = tmp_path / "cache"
+    proc = subprocess.Popen([sys.executable, "-m", "seamless_usd_cli.main", "process", str(scene), "--cache-dir",
+                             str(cache), "--scheduler", deployment.address, *ARGS],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp_path)
+    training = wait_until(lambda: bool(list(cache.glob("*/*/checkpoints/*"))), [tmp_path], timeout=240,
+                          stop=lambda: proc.poll() is not None)
+    assert training and proc.poll() is None, "the run ended before its workers trained"
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err.decode(errors="replace")[-3000:]
+    payload = json.loads(out)
+    assert payload["interrupted"] and not [m for s in payload["stacks"] for m in s["maps"] if m.get("output")]
+    with deployment.client() as client:  # the jobs the stopped run left on the workers have ended
+        deadline = time.monotonic() + 120
+        while any(client.processing().values()) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not any(client.processing().values()), deployment.logs()
+    written = list((scene.parent / "tileable").glob("*")) if (scene.parent / "tileable").exists() else []
+    assert not written, written

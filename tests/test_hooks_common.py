@@ -447,3 +447,24 @@ def test_a_failed_run_fails_the_export_only_when_strict(tmp_path):
     assert not run.ok
     assert common.export_ok(run, HookSettings()) and not common.export_ok(run, HookSettings(strict=True))
     assert common.export_ok(common.HookRun(), HookSettings(strict=True))
+
+
+def test_a_hook_step_that_fails_never_takes_the_export_down_unless_strict(tmp_path):
+    """Blender's per-material step (writing the textures an export left unwritten) ran unguarded: a read-only export
+    folder raised into Blender and failed the export, whatever ``strict`` said."""
+    from seamless_usd.fileio import atomic_write_bytes
+
+    blocked = tmp_path / "file"
+    blocked.write_text("x")
+    write = lambda: atomic_write_bytes(blocked / "albedo.png", b"png")  # a folder that is a file: cannot be written
+    lines = []
+    assert common.run_guarded(write, HookSettings(), "writing textures", emit=lines.append) is False
+    [line] = lines
+    assert line.level.value == "error" and "writing textures" in line.text and "albedo.png" in line.text
+    assert "Traceback" not in line.text  # an expected error: one line
+    crash = lambda: {}["missing"]
+    assert common.run_guarded(crash, HookSettings(), "writing textures", emit=lines.append) is False
+    assert "Traceback" in lines[-1].text  # an unexpected one: its traceback
+    with pytest.raises(HookError, match="writing textures"):
+        common.run_guarded(write, HookSettings(strict=True), "writing textures", emit=lines.append)
+    assert common.run_guarded(lambda: None, HookSettings(), "writing textures", emit=lines.append) is True

@@ -42,6 +42,7 @@ __all__ = [
     "Level",
     "LogLine",
     "HookError",
+    "run_guarded",
     "SETTING_NAMES",
     "parse_bool",
     "parse_patterns",
@@ -170,6 +171,27 @@ def export_ok(run: HookRun, settings: HookSettings) -> bool:
     """What a hook tells its DCC (False: the export failed): a stack that failed or did not pass fails the export only
     with ``strict``; otherwise it is logged and the export goes on (Blender's ``on_export``, Maya's chaser)."""
     return run.ok or not settings.strict
+
+
+def run_guarded(action: Callable[[], object], settings: HookSettings, what: str, *,
+                emit: Callable[[LogLine], None] | None = None) -> bool:
+    """Run a hook's step that is not a run of the tool (writing the textures an export left unwritten) under
+    :func:`run_hook`'s rule, so that it never takes the DCC's export down by default: an expected error is one
+    line, an unexpected one its traceback; with ``settings.strict`` a :class:`HookError` follows. Returns whether
+    the step succeeded."""
+    emit = emit or _log_emit
+    try:
+        action()
+        return True
+    except SeamlessUsdError as exc:
+        emit(LogLine(Level.ERROR, f"{PREFIX}: {what}: {exc}"))
+        if settings.strict:
+            raise HookError(f"{what}: {exc}") from exc
+    except Exception as exc:  # noqa: BLE001 - a hook must not take the DCC's export down by default
+        emit(LogLine(Level.ERROR, f"{PREFIX}: {what}: unexpected error:\n{traceback.format_exc()}"))
+        if settings.strict:
+            raise HookError(f"{what}: unexpected error: {exc!r}") from exc
+    return False
 
 
 def run_hook(

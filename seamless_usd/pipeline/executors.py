@@ -16,6 +16,7 @@ import contextlib
 import logging
 import os
 import sys
+import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Protocol
 
@@ -65,13 +66,20 @@ class InProcessExecutor:
             yield job, result
 
 
-def _run_on_worker(job: StackJob, threads: int) -> Result:
-    """Entry point on a worker process: limit torch threads, run, return errors as values."""
+def _run_on_worker(job: StackJob, threads: int, stop_event: str | None = None) -> Result:
+    """Entry point on a worker process: limit torch threads, run, return errors as values. ``stop_event``: the name
+    of the Dask event the client sets when the run is stopped (:class:`DaskExecutor`), asked before tiles are
+    written."""
     import torch
 
     torch.set_num_threads(max(1, threads))
+    stopped = None
+    if stop_event is not None:
+        from distributed import Event
+
+        stopped = Event(stop_event).is_set
     try:
-        return run_stack(job, None)
+        return run_stack(job, None, stopped)
     except Exception as exc:  # noqa: BLE001 - the client reports it per stack
         return exc
 
@@ -185,11 +193,12 @@ class DaskExecutor:
             client = Client(cluster)
         else:
             client = self._remote(Client)
+        stop_event = f"seamless-usd-stop-{uuid.uuid4().hex}"
         try:
             futures = {}
             for job in jobs:
                 progress(job, "stack-start", None)
-                fut = client.submit(_run_on_worker, job, self.threads_per_worker, pure=False)
+                fut = client.submit(_run_on_worker, job, self.threads_per_worker, stop_event, pure=False)
                 futures[fut] = job
             for fut in as_completed(futures):
                 job = futures[fut]
@@ -203,6 +212,8 @@ class DaskExecutor:
             try:
                 if cluster is not None:
                     _end_workers(cluster)
+                else:  # a remote worker's job runs on: it is told not to write its tiles (the report says none)
+                    _tell_stopped(client, stop_event)
                 client.close()
                 if cluster is not None:
                     cluster.close()
@@ -212,6 +223,17 @@ class DaskExecutor:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _tell_stopped(client, stop_event: str) -> None:
+    """Set the run's stop event, which jobs still running on remote workers read before they write any tile (jobs
+    not started are dropped when the client closes); a scheduler that no longer answers is left as it is."""
+    from distributed import Event
+
+    try:
+        Event(stop_event, client=client).set()
+    except Exception:  # noqa: BLE001 - stopping anyway: nothing more can be told
+        pass
 
 
 @contextlib.contextmanager

@@ -77,6 +77,10 @@ class JobSettings:
         )
 
 
+class RunStopped(Exception):
+    """The run a job belongs to was stopped before the job wrote its tiles (:func:`run_stack`'s ``stopped``)."""
+
+
 @dataclass(frozen=True)
 class StackJob:
     stack: TextureStack
@@ -84,8 +88,11 @@ class StackJob:
     output_dir: Path
 
 
-def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None) -> StackOutcome:
-    """Run one stack job end to end (see module docstring)."""
+def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None,
+              stopped: Callable[[], bool] | None = None) -> StackOutcome:
+    """Run one stack job end to end (see module docstring). ``stopped``: whether the run was stopped meanwhile (a
+    job on a remote worker, which nothing can end from outside): asked before any tile is written, and a
+    :class:`RunStopped` raised instead, so that the disk keeps agreeing with the stopped run's report."""
     from seamless_usd import imaging, metrics, synthesis
 
     emit = progress or (lambda kind, detail: None)
@@ -192,6 +199,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None)
     levels = [(c, tiles.pop(f"__level{i}__")) for i, c in enumerate(captions) if f"__level{i}__" in tiles]
 
     t3 = time.perf_counter()
+    if stopped is not None and stopped():
+        raise RunStopped(f"{stack.material}: the run was stopped before its tiles were written")
     out_dir.mkdir(parents=True, exist_ok=True)
     tile_hw = tuple(int(v) for v in next(iter(tiles.values())).shape[:2])
     uv_scale = tuple(float(v) for v in meta["uv_scale"])

@@ -102,14 +102,20 @@ def _image_for(bl_material, prim_name: str, asset_name: str):
 
 
 def _write_image(image, target: Path) -> None:
+    from seamless_usd.fileio import atomic_write, atomic_write_bytes
+
     target.parent.mkdir(parents=True, exist_ok=True)
     if image.packed_file is not None:
-        target.write_bytes(bytes(image.packed_file.data))  # the original file's bytes, lossless
+        atomic_write_bytes(target, bytes(image.packed_file.data))  # the original file's bytes, lossless
         return
-    try:
-        image.save(filepath=str(target), save_copy=True)  # keeps the datablock's own path
-    except TypeError:  # Blender without save_copy
-        image.save_render(str(target))
+
+    def save(tmp: Path) -> None:  # the temporary name keeps the target's suffix
+        try:
+            image.save(filepath=str(tmp), save_copy=True)  # keeps the datablock's own path
+        except TypeError:  # Blender without save_copy
+            image.save_render(str(tmp))
+
+    atomic_write(target, save)
 
 
 def write_missing_textures(export_context, bl_material, usd_material) -> list[Path]:
@@ -147,7 +153,8 @@ def write_missing_textures(export_context, bl_material, usd_material) -> list[Pa
 def on_material_export(export_context, bl_material, usd_material, settings: HookSettings) -> bool:
     if settings.enabled:
         ensure_pxr()
-        write_missing_textures(export_context, bl_material, usd_material)
+        common.run_guarded(lambda: write_missing_textures(export_context, bl_material, usd_material), settings,
+                           f"writing the textures of {bl_material.name!r} the export left unwritten", emit=console_emit)
     return True
 
 
