@@ -235,6 +235,16 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
     rewritten = [line for line in touched["plan"] if "from the cache" in line]
     assert len(rewritten) == 1 and "judged again once written" in rewritten[0], touched["plan"]
     assert len([line for line in touched["plan"] if line.startswith("keep the tiles")]) == len(fresh) - 1
+    # a copy of the library (another folder, the same cache): its tiles are written anew and judged again, and the
+    # verdict they got when written before is known, so the dry run's exit code and words are the run's
+    shutil.copytree(lib, tmp_path / "copy", ignore=shutil.ignore_patterns("tileable", "*.seamless.usda"))
+    copy_code, copied = _run(str(tmp_path / "copy"), "--dry-run", "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    assert copy_code == code, (copy_code, code)
+    for s in copied["stacks"]:
+        if not s["duplicate_of"]:
+            assert s["verdict"]["passed"] == made[(s["source"].replace("/copy/", "/library/"), s["id"])]["verdict"]["passed"]
+    anew = [line for line in copied["plan"] if "from the cache" in line]
+    assert len(anew) == len(fresh) and all("written into another folder before, they were" in x for x in anew), anew
     # an entry of another shape is planned as new, as the run makes it again
     shutil.copytree(tmp_path / "cold", tmp_path / "broken")
     for manifest in (tmp_path / "broken").glob("??/*/manifest.json"):

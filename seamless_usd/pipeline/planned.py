@@ -36,6 +36,9 @@ class CachedPlan:
     uv_scale: tuple[float, float]
     crop: tuple[int, int]
     outcome: object | None = None  # a StackOutcome
+    #: where ``outcome`` is None: the verdict the same tiles got when an earlier run wrote them into another folder
+    #: (a copy of the library), which the run will give them again once written; None when none is kept
+    verdict_elsewhere: dict | None = None
 
 
 def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> CachedPlan | None:
@@ -46,7 +49,7 @@ def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> Cach
     from seamless_usd.pipeline.cache import MANIFEST, JobIndex, job_fingerprint
     from seamless_usd.pipeline.madefrom import source_uv_scale
     from seamless_usd.pipeline.outcome import outcome_from_record
-    from seamless_usd.pipeline.rerun import judged_key, record_paths
+    from seamless_usd.pipeline.rerun import judged_key, record_paths, verdict_elsewhere
     from seamless_usd.fileio import file_sha256
     from seamless_usd.report.model import Previews
     from seamless_usd.version import __version__ as version
@@ -63,13 +66,14 @@ def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> Cach
                           (int(meta["crop_size"][0]), int(meta["crop_size"][1])))
     except Exception:  # noqa: BLE001 - an entry of any other shape: the run makes the tiles again, so planned as new
         return None
+    plan = dataclasses.replace(plan, verdict_elsewhere=verdict_elsewhere(folder))
     try:
         record = json.loads(record_paths(folder, out_dir, judged_key(stack))[0].read_text(encoding="utf-8"))
         if record.get("version") != version or not all(file_sha256(Path(o["path"])) == o["sha256"]
                                                        for o in record["outputs"].values()):
             return plan  # a tile gone or changed: written again and judged again, as the run will
         outcome = outcome_from_record(stack, meta, None, record, Previews(), True, out_dir, folder.name)
-        return dataclasses.replace(plan, outcome=outcome)
+        return dataclasses.replace(plan, outcome=outcome, verdict_elsewhere=None)
     except Exception:  # noqa: BLE001 - a record of another shape: the run judges the tiles again
         return plan
 
@@ -103,6 +107,16 @@ def planned_result(stack: TextureStack, out_dir: Path, options: Options, made_wi
     return StackResult(stack=stack, maps=maps, uv_scale=uv, provenance=prov, scale_known=cached is not None)
 
 
+def elsewhere_words(verdict: dict | None) -> str:
+    """What a dry run says of the verdict the same tiles got when written into another folder ("" when unknown)."""
+    if verdict is None:
+        return ""
+    from seamless_usd.verdict import Verdict
+
+    said = "passed" if verdict.get("passed") else f"not passed: {'; '.join(Verdict.from_dict(verdict).reasons())}"
+    return f"; written into another folder before, they were {said}"
+
+
 def plan_line(where: str, stack: TextureStack, out_dir: Path, uv: tuple[float, float], cached: CachedPlan | None) -> str:
     """The dry run's words for one stack: made from the cache, or made anew, and where its tiles go."""
     count = len(stack.maps)
@@ -114,8 +128,9 @@ def plan_line(where: str, stack: TextureStack, out_dir: Path, uv: tuple[float, f
                 "such as a cut of whole lattice periods, gives another scale)")
     outcome = cached.outcome
     if outcome is None:
+        known = elsewhere_words(cached.verdict_elsewhere)
         return (f"write the tiles an earlier run made of {where} ({maps}), from the cache with nothing trained or "
-                f"cut again, to {out_dir} ({scale}; judged again once written)")
+                f"cut again, to {out_dir} ({scale}; judged again once written{known})")
     status = "passed" if outcome.passed else f"not passed: {'; '.join(outcome.reasons())}"
     return (f"keep the tiles an earlier run wrote of {where} ({maps}) in {out_dir}: they are there unchanged, so "
             f"nothing is trained, cut or written ({scale}; {status})")

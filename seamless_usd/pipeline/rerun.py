@@ -90,6 +90,20 @@ def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str
         return
 
 
+def verdict_elsewhere(entry_root: Path) -> dict[str, Any] | None:
+    """The verdict this version gave the tiles of this cache entry when they were written into any folder (a copy of
+    the library, another output folder): an entry holds one stack's tiles, made of the same source files with the
+    same settings, so the verdict they will get again wherever they are written; None when no record is kept."""
+    for path in sorted((Path(entry_root) / JUDGED).glob("*.json")):
+        try:
+            record = json.loads(path.read_text(encoding="utf-8"))
+            if record.get("version") == __version__:
+                return dict(record["verdict"])
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            continue
+    return None
+
+
 def load_judged(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[dict[str, Any], Previews] | None:
     """The record and previews of a previous run, when every output it names is still on disk unchanged (and
     the record is this version's and whole); else None."""

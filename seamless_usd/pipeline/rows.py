@@ -16,7 +16,7 @@ from seamless_usd.findings import Finding, Severity, prim_ref
 from seamless_usd.pipeline.executors import Executor
 from seamless_usd.pipeline.options import Options, ProgressEvent
 from seamless_usd.pipeline.outcome import StackOutcome, reused_message
-from seamless_usd.pipeline.planned import cached_plan, plan_line, planned_result, wrap_only_result
+from seamless_usd.pipeline.planned import cached_plan, elsewhere_words, plan_line, planned_result, wrap_only_result
 from seamless_usd.pipeline.stackjob import JobSettings, StackJob, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
@@ -114,6 +114,9 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
             report.uv_scale = planned.uv_scale
             if cached is not None and cached.outcome is None:
                 report.origin, report.message = "cache", "from the cache; judged again once written"
+                if cached.verdict_elsewhere is not None:  # the verdict the run will give, known from another folder
+                    report.verdict = cached.verdict_elsewhere
+                    report.message += elsewhere_words(cached.verdict_elsewhere)
             elif cached is not None:
                 outcome = cached.outcome
                 said = (report.message if duplicate_of is not None else "passed" if outcome.passed
