@@ -202,3 +202,12 @@ def test_options_of_the_wrong_type_an_empty_setting_and_no_paths_are_said_plainl
         seamless_usd.check([])
     with pytest.raises(UsageError):
         seamless_usd.process_paths([], seamless_usd.Options(preset="tiny"))
+
+
+def test_a_stage_that_is_not_there_is_reported_not_raised_and_named_once(tmp_path):
+    """``process_paths`` on a library goes on past a file it cannot read (one failing input never stops a batch): the
+    report says so with exit code 2, naming the file once (it read '@x@: @x@ does not exist')."""
+    report = seamless_usd.process_paths([tmp_path / "nope.usda"], seamless_usd.Options(preset="tiny"))
+    [finding] = report.findings
+    assert report.exit_code == 2 and finding.code == "unreadable-input"
+    assert finding.where.endswith("nope.usda@") and "nope.usda" not in finding.message

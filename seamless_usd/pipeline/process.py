@@ -111,7 +111,7 @@ def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = 
     figures between runs (``keep_triage`` False: only reads them); ``in_place``: where each stack's edits would land
     is noted (``_Source.sites``), while the stage is open."""
     if not path.exists():
-        raise InputError(f"{asset_ref(path)} does not exist")
+        raise InputError(f"{asset_ref(path)}: the file does not exist; check the path")
     suffix = path.suffix.lower()
     if suffix in MTLX_SUFFIXES:
         scan, kind = scan_mtlx(path, triage_dir, keep_triage), "mtlx"
