@@ -96,6 +96,8 @@ def run(args: argparse.Namespace) -> int:
         except InputError as exc:
             raise UsageError(f"--report: {exc}") from None
     report = _checked(args, err)
+    if report.interrupted:  # Ctrl-C or SIGTERM: what was judged by then is reported, exit 130
+        err.print(f"seamless-usd: interrupted; {len(report.items)} judged by then", highlight=False)
     if sheet is not None:
         from seamless_usd.report.contact import write_contact_sheet
 

@@ -88,6 +88,23 @@ def test_progress_counts_every_input_and_ends_at_the_total(tmp_path):
     assert all(t == 6 for _, _, t in seen)
 
 
+def test_a_check_stopped_part_way_reports_what_was_judged_by_then(tmp_path):
+    """Ctrl-C or SIGTERM (which the command line raises as Ctrl-C) on a folder of pictures: the verdicts given by then
+    are reported, with exit code 130 (the run printed nothing, as if nothing had been judged)."""
+    lib = _folder(tmp_path)
+
+    def stop_at_the_fourth(name, done, total):
+        if done == 3:
+            raise KeyboardInterrupt
+
+    report = check_paths([lib], progress=stop_at_the_fourth)
+    assert report.interrupted and report.exit_code == 130 and len(report.items) == 3
+    payload = report.to_dict()
+    jsonschema.validate(payload, json_schema("check"))
+    assert payload["interrupted"] and payload["exit_code"] == 130
+    assert not check_paths([lib]).to_dict()["interrupted"]
+
+
 def test_pictures_judged_in_worker_processes_give_the_same_answers_in_order(tmp_path):
     lib = _folder(tmp_path)
     seen = []

@@ -13,9 +13,7 @@ Each texture stack of a stage or MaterialX document that is meant to tile (inten
 """
 from __future__ import annotations
 
-import errno
 import functools
-import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -24,7 +22,8 @@ from pathlib import Path
 from seamless_usd.errors import InputError, SeamlessUsdError
 from seamless_usd.discover.images import IMAGE_SUFFIXES
 from seamless_usd.findings import asset_ref
-from seamless_usd.pipeline.inputs import SCENE_SUFFIXES, expand_inputs, is_own_output
+from seamless_usd.pipeline.checkinputs import check_inputs, missing_reason, real_path
+from seamless_usd.pipeline.inputs import SCENE_SUFFIXES
 from seamless_usd.pipeline.recorded import keystone_of, recorded_source, stack_sources
 from seamless_usd.report.contact import SheetCard, thumbnail
 
@@ -88,10 +87,14 @@ class CheckReport:
     items: list[CheckItem] = field(default_factory=list)
     unreadable: list[str] = field(default_factory=list)  # inputs that could not be opened, with why
     not_judged: list[str] = field(default_factory=list)  # pictures in folders of scenes that no scene uses
+    interrupted: bool = False  # stopped by Ctrl-C or SIGTERM: ``items`` are those judged by then
 
     @property
     def exit_code(self) -> int:
-        """0 everything tiles; 1 something does not (or a texture could not be read); 2 unreadable input."""
+        """0 everything tiles; 1 something does not (or a texture could not be read); 2 unreadable input; 130
+        stopped by Ctrl-C or SIGTERM (what was judged by then is reported)."""
+        if self.interrupted:
+            return 130
         if self.unreadable:
             return 2
         return 0 if all(i.passed for i in self.items) else 1
@@ -100,61 +103,7 @@ class CheckReport:
         return {"items": [i.to_dict() for i in self.items], "unreadable": list(self.unreadable),
                 "not_judged": list(self.not_judged),
                 "passed": sum(i.passed for i in self.items), "not_passed": sum(not i.passed for i in self.items),
-                "exit_code": self.exit_code}
-
-
-def _folder_pictures(folder: Path) -> list[Path]:
-    """The pictures in ``folder`` and below (this tool's outputs left out); a link to a picture that is gone is
-    kept, and reported as missing when judged."""
-    return sorted(q for q in folder.rglob("*") if (q.is_file() or q.is_symlink()) and q.suffix.lower() in IMAGE_SUFFIXES
-                  and not is_own_output(q.relative_to(folder)))
-
-
-def _real(path) -> Path:
-    """The file ``path`` names, links followed; a link that loops is its own (it is reported, not followed)."""
-    return Path(os.path.realpath(path))
-
-
-def _missing(picture: Path) -> str:
-    """Why a picture named or found is not a file to judge."""
-    if not picture.is_symlink():
-        return "no such file"
-    try:
-        os.stat(picture)
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            return "a link that leads back to itself (a loop of links); fix or remove it"
-    return "no such file (a link to a file that is gone)"
-
-
-def _expand(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path], list[Path], list[str]]:
-    """(scenes, pictures, loose, problems): the scenes and the pictures named or found in folders that hold no
-    scene; ``loose``: the pictures of folders that hold scenes (a texture there is judged with its stack, the
-    others are listed as not judged: a library's textures are judged by how its materials use them); and why an
-    input gives nothing to judge (no such path, a folder with nothing in it to judge)."""
-    scenes, pictures, loose, problems = [], [], [], []
-    for item in paths:
-        p = Path(item)
-        if p.is_dir():
-            found = expand_inputs([p], outputs=True)  # each scene as processed: what it now uses
-            in_folder = _folder_pictures(p)
-            if found:
-                scenes += found
-                loose += in_folder
-            elif in_folder:
-                pictures += in_folder
-            else:
-                problems.append(f"{asset_ref(p)}: no USD stage, MaterialX document or picture found in this folder")
-        elif p.suffix.lower() in IMAGE_SUFFIXES:
-            if p.is_file():
-                pictures.append(p)
-            else:  # named and not there (a link to nothing, a loop of links): a path that does not exist, exit 2
-                problems.append(f"{asset_ref(p)}: {_missing(p)}")
-        elif not p.exists() and not set(str(p)) & set("*?["):
-            problems.append(f"{asset_ref(p)}: no such file or folder")
-        else:
-            scenes += expand_inputs([p])
-    return scenes, pictures, loose, problems
+                "interrupted": self.interrupted, "exit_code": self.exit_code}
 
 
 def _alone(item: CheckItem, files: list) -> None:
@@ -205,7 +154,7 @@ def _picture_groups(pictures: list[Path]) -> list[tuple[list[Path], list[dict | 
     for p in pictures:
         stack = [p.parent / str(n) for n in (tag(p) or {}).get("stack", [])]
         files = [p] + [q for q in stack if q.name != p.name and q.is_file()]
-        key = frozenset(_real(q) for q in files)
+        key = frozenset(real_path(q) for q in files)
         if key not in seen:
             seen.add(key)
             groups.append((files, [tag(q) for q in files]))
@@ -217,10 +166,10 @@ def _judge_picture(group: tuple[list[Path], list[dict | None]], named: frozenset
     files record their sources (a tile, then the other tiles of its stack beside it) together against those
     sources, as ``process`` judged them; a picture that records nothing, or a tile whose source is gone or has
     changed since, against itself, saying why. Of a stack's tiles, those named or found (``named``, as
-    :func:`_real` paths) have items, the first file always."""
+    paths as :func:`.checkinputs.real_path` gives them) have items, the first file always."""
     files, records = group
     made, notes = zip(*(recorded_source(f, r) if r else (None, "") for f, r in zip(files, records)))
-    wanted = [k == 0 or _real(f) in named for k, f in enumerate(files)]
+    wanted = [k == 0 or real_path(f) in named for k, f in enumerate(files)]
     together = [k for k, m in enumerate(made) if m]
     items = []
     if together and any(wanted[k] for k in together):
@@ -331,7 +280,7 @@ def _unread_item(scene: Path, material: str, skipped: list, maps: list[str]) -> 
 
 def _judged_pictures(pictures: list[tuple], jobs: int, named: frozenset) -> Iterator[list[CheckItem]]:
     """The items of each group of pictures (:func:`_picture_groups`; ``named``: the pictures named or found, as
-    :func:`_real` paths), in order; ``jobs`` > 1 judges them in that many worker processes (a picture is judged in
+    paths as :func:`.checkinputs.real_path` gives them), in order; ``jobs`` > 1 judges them in that many worker processes (a picture is judged in
     numpy alone, one core each)."""
     judge = functools.partial(_judge_picture, named=named)
     if jobs <= 1 or len(pictures) < 2 * jobs:
@@ -350,9 +299,19 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
                 jobs: int = 1) -> CheckReport:
     """The verdict on every stack meant to tile in ``paths`` (stages, documents, folders) and every picture.
     ``progress(name, done, total)`` is called before each stage or document is judged and as each picture's
-    verdict comes in. ``jobs``: worker processes judging the pictures (1: in this process)."""
+    verdict comes in. ``jobs``: worker processes judging the pictures (1: in this process). Stopped by Ctrl-C
+    (or SIGTERM, which the command line raises as one), it returns what was judged by then, ``interrupted``."""
     report = CheckReport()
-    scenes, pictures, loose, report.unreadable = _expand(paths)
+    try:
+        _check_into(report, paths, progress, jobs)
+    except KeyboardInterrupt:
+        report.interrupted = True
+    return report
+
+
+def _check_into(report: CheckReport, paths: Sequence[str | Path], progress: Callable[[str, int, int], None] | None,
+                jobs: int) -> None:
+    scenes, pictures, loose, report.unreadable = check_inputs(paths)
     used: set[Path] = set()  # the files the scenes use: judged with their stacks, not listed as not judged
     if scenes:  # USD and MaterialX are imported only for scenes: a picture is judged without them
         from seamless_usd.discover import scan_paths
@@ -376,8 +335,8 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
         except InputError as exc:
             report.unreadable.append(str(exc))
             continue
-        used.update(_real(m.resolved) for st in result.stacks for m in st.maps if m.resolved)
-        used.update(_real(m.recorded_source.resolved) for st in result.stacks for m in st.maps  # a tile's source
+        used.update(real_path(m.resolved) for st in result.stacks for m in st.maps if m.resolved)
+        used.update(real_path(m.recorded_source.resolved) for st in result.stacks for m in st.maps  # a tile's source
                     if m.recorded_source and m.recorded_source.resolved)
         judged, seen = [], set()
         for s in result.stacks:  # a stack the same as one judged is judged once (its twin may be one not judged)
@@ -395,8 +354,8 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
                 report.items.append(_judge_stack(scene, stage, stack))
         for material, skipped in unread.items():  # no map of it could be read: it has no stack
             report.items.append(_unread_item(scene, material, skipped, []))
-    known = {_real(p) for p in pictures}
-    report.not_judged = [str(p) for p in loose if _real(p) not in used and _real(p) not in known]
+    known = {real_path(p) for p in pictures}
+    report.not_judged = [str(p) for p in loose if real_path(p) not in used and real_path(p) not in known]
     found = []
     for picture in pictures:
         if picture.is_file():
@@ -404,12 +363,11 @@ def check_paths(paths: Sequence[str | Path], progress: Callable[[str, int, int],
         else:  # found in a folder (one named and not there is said before): a picture that cannot be read, exit 1
             done += 1
             report.items.append(CheckItem(str(picture), str(picture), [str(picture)],
-                                          error=f"{asset_ref(picture)}: {_missing(picture)}"))
+                                          error=f"{asset_ref(picture)}: {missing_reason(picture)}"))
     groups = _picture_groups(found)  # a stack's tiles are judged together
-    for (files, _), items in zip(groups, _judged_pictures(groups, jobs, frozenset(map(_real, found)))):
+    for (files, _), items in zip(groups, _judged_pictures(groups, jobs, frozenset(map(real_path, found)))):
         emit(items[0].name)
         done += len(files)
         report.items += items
     if progress is not None:
         progress("", done, total)
-    return report
