@@ -385,3 +385,23 @@ def test_a_material_with_a_udim_set_is_left_alone_by_check_as_by_process(tmp_pat
     assert row["status"] == "left-alone" and "udim" in row["message"]
     assert main(["check", "--json", str(doc)]) == 0
     assert json.loads(capsys.readouterr().out)["items"] == []
+
+
+def test_an_empty_file_and_a_named_pipe_are_named_for_what_they_are(tmp_path):
+    """A picture of 0 bytes read 'Not a PNG file' (to check and to the scan), and a named pipe 'no such file'."""
+    import os
+
+    from test_reliability_inputs import write_scene
+
+    from seamless_usd.discover import scan_paths
+
+    (tmp_path / "empty.png").write_bytes(b"")
+    os.mkfifo(tmp_path / "pipe.png")
+    report = check_paths([tmp_path / "empty.png", tmp_path / "pipe.png"])
+    [empty] = report.items
+    assert "the file is empty (0 bytes)" in empty.error
+    assert report.unreadable == [f"@{tmp_path / 'pipe.png'}@: not a regular file (a named pipe, a device or a "
+                                 "socket): only files are judged"]
+    scene = write_scene(tmp_path / "scene.usda", {"Empty": "./empty.png"})
+    [skip] = [f for f in scan_paths([scene]).findings if f.code == "unreadable-file"]
+    assert "the file is empty (0 bytes)" in skip.message

@@ -8,6 +8,7 @@ trusted from OpenImageIO for formats that store it.
 from __future__ import annotations
 
 import io
+import os
 import re
 import tempfile
 from pathlib import Path
@@ -48,6 +49,8 @@ def read_image_info(resolved: str) -> ImageInfo:
             path = Path(tmp) / Path(inner).name
             path.write_bytes(data)
             return _read_header(str(path), io.BytesIO(data))
+    if os.path.getsize(resolved) == 0:
+        raise ImageReadError("the file is empty (0 bytes): an export or copy that did not finish; re-export it")
     with open(resolved, "rb") as fh:
         return _read_header(resolved, fh)
 

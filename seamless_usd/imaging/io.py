@@ -98,6 +98,9 @@ def _open(path: Path) -> oiio.ImageInput:
         raise InputError(
             f"{asset_ref(path)}: image file not found; check the asset path or restore the file"
         )
+    if path.stat().st_size == 0:
+        raise InputError(f"{asset_ref(path)}: the file is empty (0 bytes): an export or copy that did not finish; "
+                         "re-export it")
     inp = oiio.ImageInput.open(oiio_name(path), reader_config())
     if inp is None:
         reason = " ".join((oiio.geterror() or "unknown format").split())

@@ -27,6 +27,8 @@ def real_path(path) -> Path:
 
 def missing_reason(picture: Path) -> str:
     """Why a picture named or found is not a file to judge."""
+    if picture.exists() and not picture.is_dir():
+        return "not a regular file (a named pipe, a device or a socket): only files are judged"
     if not picture.is_symlink():
         return "no such file"
     try:
