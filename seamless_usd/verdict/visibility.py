@@ -56,7 +56,7 @@ def floor(m: np.ndarray, code: float) -> float:
     displacement map spanning a centimetre in scene units, 0.01 of a float): its floor is the same share of its own
     span (largest less smallest value), never under one and a half of its codes and never over :data:`VISIBLE`.
     Read against 8-bit codes such a map is flat, and a plain seam across it read as nothing."""
-    if code >= CODE_8BIT:
+    if code >= CODE_8BIT * (1 - 1e-6):  # 8 bits (or coarser), however the code value was computed
         return VISIBLE
     span = float(m.max() - m.min()) if m.size else 0.0
     return min(VISIBLE, max(VISIBLE * span / 2, 1.5 * code))
