@@ -468,3 +468,14 @@ def test_a_hook_step_that_fails_never_takes_the_export_down_unless_strict(tmp_pa
     with pytest.raises(HookError, match="writing textures"):
         common.run_guarded(write, HookSettings(strict=True), "writing textures", emit=lines.append)
     assert common.run_guarded(lambda: None, HookSettings(), "writing textures", emit=lines.append) is True
+
+
+def test_a_setting_no_run_can_use_is_named_as_the_hooks_setting(tmp_path):
+    """A DCC user sets ``max_size`` in the exporter; the log said '--max-size 50 ...', a flag they never saw."""
+    stage, _ = _texture_layer("./textures/a.png")
+    lines = []
+    run = common.run_hook(stage, HookSettings(preset="tiny", max_size=50, output_dir=str(tmp_path)), emit=lines.append)
+    [line] = lines
+    assert not run.ok and "the max_size setting 50" in line.text and "--max-size" not in line.text
+    assert common.setting_words("--max-size 50; --no-such-flag; see --device") == (
+        "the max_size setting 50; --no-such-flag; see the device setting")

@@ -17,6 +17,7 @@ from __future__ import annotations
 import fnmatch
 import logging
 import os
+import re
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -173,6 +174,16 @@ def export_ok(run: HookRun, settings: HookSettings) -> bool:
     return run.ok or not settings.strict
 
 
+def setting_words(message: str) -> str:
+    """``message`` with the command line's option names (``--max-size``) given as the hook's setting names (``the
+    max_size setting``), which are what a DCC user sees."""
+    def named(match: re.Match) -> str:
+        name = match.group(1).replace("-", "_")
+        return f"the {name} setting" if name in SETTING_NAMES else match.group(0)
+
+    return re.sub(r"(?<![\w-])--([a-z][a-z-]*)", named, message)
+
+
 def run_guarded(action: Callable[[], object], settings: HookSettings, what: str, *,
                 emit: Callable[[LogLine], None] | None = None) -> bool:
     """Run a hook's step that is not a run of the tool (writing the textures an export left unwritten) under
@@ -227,7 +238,7 @@ def run_hook(
         run.report = (process or _default_process)(stage, options)
     except SeamlessUsdError as exc:
         run.ok = False
-        say(LogLine(Level.ERROR, f"{PREFIX}: {exc}"))
+        say(LogLine(Level.ERROR, f"{PREFIX}: {setting_words(str(exc))}"))
         if settings.strict:
             raise HookError(str(exc)) from exc
         return run
