@@ -360,6 +360,12 @@ def test_each_seams_figure_is_written_once_beside_its_own_line_on_the_sheet():
     assert abs(x1 - x2) > 40 or abs(y1 - y2) > 14  # apart, each beside its line through the middle
     by_figure = {t[2]: (float(t[0]), float(t[1])) for t in texts}
     assert abs(by_figure["+5.98"][0] - 104) < 1 and abs(by_figure["+1.01"][1] - 94) < 1
+    # two horizontal seams 16 texels apart: the weaker's figure would overlap the stronger's (a bold 12 px figure
+    # with its halo is taller than 14): only the stronger is written
+    close = SheetCard("q.png", "not-passed", "", size=(100, 80), seams=[
+        {"axis": "y", "position": 46, "start": 0, "end": 99, "figure": 2.90, "map": "stack"},
+        {"axis": "y", "position": 62, "start": 0, "end": 99, "figure": 1.76, "map": "stack"}])
+    assert re.findall(r"<text[^>]*>([^<]+)</text>", seams_svg((200, 160), _segments(close))) == ["+2.90"]
 
 
 def test_a_material_with_a_udim_set_is_left_alone_by_check_as_by_process(tmp_path, capsys):

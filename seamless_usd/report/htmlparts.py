@@ -115,7 +115,7 @@ def seams_svg(size: tuple[int, int], segments: list[tuple]) -> str:
         tx = x1 + 4 if vertical else (x1 + x2) / 2
         ty = (y1 + y2) / 2 if vertical else y1 + 14
         tx, ty = min(max(tx, 2.0), w - 40.0), min(max(ty, 14.0), h - 4.0)
-        if all(abs(tx - px) > 40 or abs(ty - py) > 14 for px, py in placed):
+        if all(abs(tx - px) > 46 or abs(ty - py) > 18 for px, py in placed):  # a bold 12 px figure and its halo
             placed.append((tx, ty))
             texts.append(f'<text x="{tx:.1f}" y="{ty:.1f}">{esc(label.split(":")[0])}</text>')
     return (f'<svg class="seams" viewBox="0 0 {w} {h}" preserveAspectRatio="none" role="img" '
