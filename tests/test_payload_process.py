@@ -195,3 +195,44 @@ def test_a_usdz_whose_maps_are_inside_it_is_left_alone_saying_why_and_is_never_e
     assert not (tmp_path / "tileable").exists() and not (tmp_path / "brick.seamless.usda").exists()
     assert main(["process", str(package), "--in-place", "--cache-dir", str(tmp_path / "cache")]) == 2
     assert "not edited in place" in capsys.readouterr().err
+
+
+def test_a_stage_with_one_payload_loaded_scans_and_plans_that_ones_materials(tmp_path):
+    """An export hook's stage, one prop's payload loaded and the other's not, each prop with a shading variant set:
+    opened whole to explore variants, the unloaded prop's set read as a choice the stage does not make, so the
+    loaded prop's floor was found under a selection other than the stage's own, planned nothing (variant not
+    editable) and the unloaded prop's floor was listed as if scanned."""
+    import sys
+
+    import seamless_usd
+    from pxr import UsdGeom
+
+    sys.path.insert(0, str(SAMPLES))
+    from usdkit import bind, plane, preview_material
+
+    shutil.copy(SAMPLES / "textures" / "cloth.png", tmp_path / "cloth.png")
+    prop = Usd.Stage.CreateNew(str(tmp_path / "prop.usda"))
+    root = UsdGeom.Xform.Define(prop, "/Prop").GetPrim()
+    prop.SetDefaultPrim(root)
+    preview_material(prop, "/Prop/Looks/Tiles", {"diffuseColor": ("./cloth.png", "rgb", "sRGB")})
+    bind(plane(prop, "/Prop/Floor", 10, 4).GetPrim(), "/Prop/Looks/Tiles")
+    shading = root.GetVariantSets().AddVariantSet("shadingVariant")
+    for name in ("clean", "worn"):
+        shading.AddVariant(name)
+    shading.SetVariantSelection("clean")
+    prop.GetRootLayer().Save()
+    scene = Usd.Stage.CreateNew(str(tmp_path / "scene.usda"))
+    UsdGeom.Xform.Define(scene, "/World")
+    for name in ("A", "B"):
+        scene.DefinePrim(f"/World/{name}").GetPayloads().AddPayload("./prop.usda")
+    scene.GetRootLayer().Save()
+
+    stage = Usd.Stage.Open(str(tmp_path / "scene.usda"), Usd.Stage.LoadNone)
+    stage.Load("/World/A")
+    scanned = seamless_usd.scan(stage)
+    assert [(s.material, s.selection) for s in scanned.stacks] == [("</World/A/Looks/Tiles>", ())]
+    assert [f.where for f in scanned.findings if f.code == "unloaded-payload"] == ["</World/B>"]
+    report = seamless_usd.process_stage(stage, seamless_usd.Options(
+        preset="tiny", mode=seamless_usd.WriteMode.DRY_RUN, cache_dir=tmp_path / "cache", output_dir=tmp_path / "out"))
+    assert [(s.material, s.status.value) for s in report.stacks] == [("</World/A/Looks/Tiles>", "planned")]
+    assert report.exit_code == 0 and list(stage.GetLoadSet()) == ["/World/A"]  # the caller's stage as it was

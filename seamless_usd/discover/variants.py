@@ -28,13 +28,22 @@ MAX_COMBINATIONS = 256  # above this many combinations the space is walked one s
 
 
 def private_stage(stage: Usd.Stage) -> Usd.Stage:
-    """The stage's root layer opened again, loaded, with a session layer of its own that
-    sublayers the stage's session layer: selections authored there leave ``stage`` as it is."""
+    """The stage's root layer opened again, loaded as ``stage`` is, with a session layer of its own that
+    sublayers the stage's session layer: selections authored there leave ``stage`` as it is.
+
+    A stage with payloads left unloaded (an export hook's, a user's) is opened with the same ones loaded: opened
+    whole, the sets inside the unloaded payloads read as choices the stage does not make, so every material, the
+    loaded ones too, was found under a selection other than the stage's own and could not be edited."""
     session = Sdf.Layer.CreateAnonymous(".usda")
     own = stage.GetSessionLayer()
     if own is not None and not own.empty:
         session.subLayerPaths.append(own.identifier)
-    return Usd.Stage.Open(stage.GetRootLayer(), session, stage.GetPathResolverContext(), Usd.Stage.LoadAll)
+    loaded = set(stage.GetLoadSet())
+    if all(path in loaded for path in stage.FindLoadable()):
+        return Usd.Stage.Open(stage.GetRootLayer(), session, stage.GetPathResolverContext(), Usd.Stage.LoadAll)
+    private = Usd.Stage.Open(stage.GetRootLayer(), session, stage.GetPathResolverContext(), Usd.Stage.LoadNone)
+    private.LoadAndUnload(loaded, [], Usd.LoadWithoutDescendants)
+    return private
 
 
 def apply_selection(layer: Sdf.Layer, selection: Selection) -> None:
