@@ -159,3 +159,30 @@ def test_opacity_from_the_alpha_of_an_srgb_map_is_not_warned():
     assert mismatch_finding((colour, alpha), ColorSpace.SRGB, "inputs:sourceColorSpace", "</M/T>") is None
     red = RoleUse("opacity", "r", "</M/S.inputs:opacity>")
     assert mismatch_finding((red,), ColorSpace.SRGB, "inputs:sourceColorSpace", "</M/T>") is not None
+
+
+def test_materialx_image_nodes_in_usd_follow_materialx_rules_as_in_a_document(tmp_path):
+    """A float or vector image is never colour-transformed by MaterialX: authored in USD (ND_image_vector3 for a
+    normal, ND_image_float for a roughness) its 8-bit RGB file read as sRGB by the USD 'auto' rule, with a warning
+    the user could not act on (these nodes have no sourceColorSpace); the same network in a .mtlx read raw."""
+    files = {name: write_image(tmp_path / f"{name}.png") for name in ("normal", "rough", "albedo")}
+    stage = Usd.Stage.CreateNew(str(tmp_path / "mx.usda"))
+    mat = UsdShade.Material.Define(stage, "/M")
+    surface = UsdShade.Shader.Define(stage, "/M/SS")
+    surface.CreateIdAttr("ND_standard_surface_surfaceshader")
+    mat.CreateOutput("mtlx:surface", Sdf.ValueTypeNames.Token).ConnectToSource(
+        surface.CreateOutput("out", Sdf.ValueTypeNames.Token))
+    for node, sid, role, vtype in (("N", "ND_image_vector3", "normal", Sdf.ValueTypeNames.Float3),
+                                   ("R", "ND_image_float", "specular_roughness", Sdf.ValueTypeNames.Float),
+                                   ("A", "ND_image_color3", "base_color", Sdf.ValueTypeNames.Color3f)):
+        image = UsdShade.Shader.Define(stage, f"/M/{node}")
+        image.CreateIdAttr(sid)
+        image.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(files[{"N": "normal", "R": "rough", "A": "albedo"}[node]])
+        surface.CreateInput(role, vtype).ConnectToSource(image.CreateOutput("out", vtype))
+    stage.Save()
+    result = scan_paths([tmp_path / "mx.usda"])
+    maps = {Path(m.asset).stem: m for s in result.stacks for m in s.maps}
+    assert maps["normal"].color_space is ColorSpace.RAW and maps["rough"].color_space is ColorSpace.RAW
+    assert "MaterialX vector3 image, never colour-transformed" in maps["normal"].color_space_reason
+    assert maps["albedo"].color_space is ColorSpace.SRGB  # a colour image: the USD rule for an 8-bit RGB file
+    assert not [f for f in result.findings if f.code == "colorspace-mismatch"]

@@ -27,8 +27,7 @@ from seamless_usd.textures import NORMAL_ROLES, Origin, RecordedSource, RoleUse
 from seamless_usd.discover.uv import mtlx_uv_chain
 from seamless_usd.errors import InputError
 
-#: The image types a MaterialX colorspace applies to (a float, vector2/3/4 image's values are never transformed).
-COLOUR_TYPES = ("color3", "color4")
+from seamless_usd.discover.tokens import COLOUR_TYPES
 from seamless_usd.findings import Finding, Severity, asset_ref
 
 __all__ = ["read_document", "walk_document"]

@@ -209,3 +209,16 @@ class Recorded:
     USD_UV_READER = "SeamlessUVReader"  # the texcoord node (UV0) a MaterialX image with no texcoord gets in USD
     MTLX_UV_MARK = "seamless_uvtransform"  # on the place2d nodes (UV scale, turn) the authoring inserts
     MTLX_UV_READER = "seamless_uv_texcoord"  # the texcoord node (UV0) it reads where the image read its default
+
+
+#: The image types a MaterialX colorspace applies to (a float, vector2/3/4 image's values are never transformed), in
+#: a .mtlx document and in a MaterialX node authored in USD (``ND_image_vector3``) alike.
+COLOUR_TYPES = ("color3", "color4")
+
+
+def mtlx_image_type(shader_id: str) -> str | None:
+    """The output type of a MaterialX image node id (``ND_image_vector3`` -> ``vector3``); None for other ids."""
+    for prefix in (ShaderIds.ND_IMAGE, ShaderIds.ND_TILEDIMAGE):
+        if shader_id.startswith(prefix):
+            return shader_id[len(prefix):].split("_")[0] or None
+    return None

@@ -18,7 +18,9 @@ from seamless_usd.discover.colorspace import Label
 from seamless_usd.discover.maps import TextureUse
 from seamless_usd.discover.mtlxgraph import channels_of
 from seamless_usd.discover.tokens import (
+    COLOUR_TYPES,
     MTLX_SUFFIX,
+    mtlx_image_type,
     SEPARATE_OUTPUTS,
     tile_token,
     Inputs,
@@ -235,6 +237,9 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
     for attr in holders:
         if attr.HasColorSpace():
             labels.append(Label(attr.GetColorSpace(), "colorSpace metadata"))
+    image_type = None if is_preview else mtlx_image_type(sid)
+    if image_type is not None and image_type not in COLOUR_TYPES:  # as in a .mtlx document (discover.mtlx)
+        labels = [Label("raw", f"MaterialX {image_type} image, never colour-transformed")]
     if is_preview:
         scale, _ = usdgraph.input_value(tex, Inputs.SCALE, None)
         bias, _ = usdgraph.input_value(tex, Inputs.BIAS, None)
