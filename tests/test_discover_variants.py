@@ -188,3 +188,44 @@ def test_an_in_memory_stage_is_explored_without_being_changed():
     assert "in shadingVariant=White" in white.intent_reason
     assert stage.GetSessionLayer().ExportToString() == before
     assert stage.GetPrimAtPath("/King").GetVariantSet("shadingVariant").GetVariantSelection() == "Black"
+
+
+def test_a_variant_set_inside_an_instance_is_named_not_passed_over(tmp_path):
+    """A studio prop whose shading variant set sits on a child prim (/Prop/Looks), referenced as an instance: the
+    tiling material of its unselected variant was missed with no finding (an instance's prims take no selection of
+    their own, so the set cannot be explored there); referenced plainly, it is found under that selection."""
+    import shutil
+    import sys
+
+    from pxr import UsdGeom
+
+    sys.path.insert(0, str(SAMPLES))
+    from usdkit import bind, plane, preview_material
+
+    shutil.copy(SAMPLES / "textures" / "cloth.png", tmp_path / "cloth.png")
+    prop = Usd.Stage.CreateNew(str(tmp_path / "prop.usda"))
+    prop.SetDefaultPrim(UsdGeom.Xform.Define(prop, "/Prop").GetPrim())
+    plane(prop, "/Prop/Floor", 10, 4)
+    looks = prop.DefinePrim("/Prop/Looks", "Scope").GetVariantSets().AddVariantSet("shadingVariant")
+    for name in ("plain", "tiles"):
+        looks.AddVariant(name)
+    looks.SetVariantSelection("tiles")
+    with looks.GetVariantEditContext():
+        preview_material(prop, "/Prop/Looks/Tiles", {"diffuseColor": ("./cloth.png", "rgb", "sRGB")})
+        bind(prop.GetPrimAtPath("/Prop/Floor"), "/Prop/Looks/Tiles")
+    looks.SetVariantSelection("plain")
+    prop.GetRootLayer().Save()
+    for instanced in (True, False):
+        scene = Usd.Stage.CreateNew(str(tmp_path / f"scene_{instanced}.usda"))
+        for n in range(2):
+            holder = scene.DefinePrim(f"/World/Prop{n}")
+            holder.GetReferences().AddReference("./prop.usda")
+            holder.SetInstanceable(instanced)
+        scene.GetRootLayer().Save()
+    instanced = scan_paths([tmp_path / "scene_True.usda"])
+    [said] = [f for f in instanced.findings if f.code == "variant-in-instance"]
+    assert said.where == "</World/Prop0/Looks>" and "'shadingVariant' (plain, tiles)" in said.message
+    assert "inside the instance </World/Prop0> (and in 1 more instance of it)" in said.message
+    plain = scan_paths([tmp_path / "scene_False.usda"])
+    assert {s.material for s in plain.stacks} == {"</World/Prop0/Looks/Tiles>", "</World/Prop1/Looks/Tiles>"}
+    assert not [f for f in plain.findings if f.code == "variant-in-instance"]

@@ -121,6 +121,14 @@ class _Scan:
         seen_errors: set = set()
         with quiet_mtlx():  # recomposing under each selection
             self._explore(space, source, explored, seen_refs, seen_errors)
+        for prim, name, variants, instance, count in space.in_instances():
+            more = f" (and in {count - 1} more instance{'s' if count > 2 else ''} of it)" if count > 1 else ""
+            self.result.findings.append(Finding(
+                Severity.WARNING, Codes.VARIANT_IN_INSTANCE, prim_ref(prim),
+                f"variant set '{name}' ({', '.join(variants)}) inside the instance {prim_ref(instance)}{more}: only "
+                "its selected variant is scanned, as an instance's prims take no selection of their own; to reach "
+                "the materials of its other variants, scan the asset's own file, or make the instance not "
+                "instanceable"))
         if space.combinations > 1 or space.mode != "all":
             self.result.variants.append(VariantExploration(source, space.mode, space.combinations, space.limit,
                                                            tuple(explored)))

@@ -178,6 +178,7 @@ class Codes:
     MTLX_INVALID = "mtlx-invalid"  # a document MaterialX does not validate (a connection to nothing)
     SOURCE_NOT_FOUND = "source-not-found"  # a tile this tool wrote whose recorded source is gone
     UNLOADED_PAYLOAD = "unloaded-payload"  # an open stage's payload that is not loaded: not scanned
+    VARIANT_IN_INSTANCE = "variant-in-instance"  # a variant set inside an instance: its other choices not scanned
     TILE_MISSING = "tile-missing"  # a tile this tool wrote, deleted since: made again from its recorded source
     FILE_NODE_NOT_READ = "file-node-not-read"  # a node that takes a file but is no texture node read (USD, MaterialX)
 

@@ -124,6 +124,29 @@ class VariantSpace:
                                   vset.GetVariantSelection()))
         return found
 
+    def in_instances(self) -> list[tuple[str, str, tuple[str, ...], str, int]]:
+        """The variant sets with a choice on prims inside instances, which no selection can reach (an instance's
+        prims are its prototype's, and take no opinion of their own): each ``(prim, set, variants, instance,
+        count)``, once per prototype prim and set (``count``: the instances that hold it, ``prim`` and ``instance``
+        the first's)."""
+        found: dict[tuple[str, str], list] = {}
+        for prim in self.stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
+            if not prim.IsInstanceProxy() or not prim.HasVariantSets():
+                continue
+            root = prim
+            while root.IsInstanceProxy():
+                root = root.GetParent()
+            vsets = prim.GetVariantSets()
+            for name in vsets.GetNames():
+                variants = tuple(vsets.GetVariantSet(name).GetVariantNames())
+                if len(variants) > 1:
+                    key = (str(prim.GetPrimInPrototype().GetPath()), name)
+                    if key in found:
+                        found[key][4] += 1
+                    else:
+                        found[key] = [str(prim.GetPath()), name, variants, str(root.GetPath()), 1]
+        return [tuple(v) for v in found.values()]
+
     def compose(self, selection: Selection) -> Usd.Stage:
         """:attr:`current`, composed under ``selection``."""
         if not selection and self._private is None:
