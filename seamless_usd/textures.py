@@ -150,8 +150,17 @@ Selection = tuple  # of VariantChoice: the choices that differ from the stage's 
 
 
 def describe_selection(selection: Selection) -> str:
-    """``modelVariant=Fancy, shadingVariant=White``; "" for the stage's own selection."""
-    return ", ".join(f"{c.set}={c.variant}" for c in selection)
+    """``modelVariant=Fancy, shadingVariant=White``; "" for the stage's own selection. A set whose name recurs on
+    several prims (three crates, each with its ``shadingVariant``) names its prim: ``shadingVariant=damaged on
+    </World/Crate1>, shadingVariant=clean on </World/Crate2>``.
+
+    >>> from seamless_usd.textures import VariantChoice
+    >>> describe_selection((VariantChoice("/A", "look", "worn"), VariantChoice("/B", "look", "new")))
+    'look=worn on </A>, look=new on </B>'
+    """
+    names = [c.set for c in selection]
+    return ", ".join(f"{c.set}={c.variant}" + (f" on <{c.prim}>" if names.count(c.set) > 1 else "")
+                     for c in selection)
 
 
 @dataclass(frozen=True)
