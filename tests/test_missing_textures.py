@@ -86,3 +86,21 @@ def test_a_texture_that_cannot_be_read_beside_maps_left_alone_fails_the_run(tmp_
     assert [s["status"] for s in payload["stacks"]] == ["left-alone"], payload["stacks"]
     assert any(f["code"] == "unreadable-file" for f in payload["findings"])
     assert code == payload["exit_code"] == 1
+
+
+def test_a_missing_texture_says_how_to_make_it_found(tmp_path):
+    """A search-path name (@common/cloth.png@, not anchored by ./) is looked up beside the layer and on the asset
+    resolver's search path: the skip says so and how to set it; an anchored one says to restore it or fix the path.
+    A UDIM set says what to do to make one texture tileable."""
+    from test_reliability_inputs import write_scene
+
+    from seamless_usd.discover import scan_paths
+
+    scene = write_scene(tmp_path / "scene.usda", {"Searched": "common/cloth.png", "Anchored": "./gone.png",
+                                                  "Tiles": "./tex.<UDIM>.png"})
+    said = {f.material: f.message for f in scan_paths([scene]).findings if f.code in ("missing-file", "udim")}
+    searched = next(m for k, m in said.items() if "Searched" in k)
+    assert "PXR_AR_DEFAULT_SEARCH_PATH" in searched
+    anchored = next(m for k, m in said.items() if "Anchored" in k)
+    assert "restore the file or fix the asset path" in anchored and "SEARCH_PATH" not in anchored
+    assert "point the material at it" in next(m for k, m in said.items() if "Tiles" in k)

@@ -8,6 +8,7 @@ space resolved.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 from seamless_usd.discover.colorspace import Label, mismatch_finding, resolve_color_space
 from seamless_usd.discover.images import ImageReadError, is_package_path, read_image_info, udim_tiles
@@ -108,7 +109,9 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         tiles = udim_tiles(first.udim_pattern) if first.udim_pattern else []
         listed = ", ".join(tiles) if tiles else "none found"
         return None, [_skip(first, Codes.UDIM, f"texture tile sets ({tile_token(first.asset)}) are not made "
-                                                f"tileable (UDIM); tiles: {listed}")]
+                                                f"tileable (UDIM); tiles: {listed}. A tile set spreads one texture "
+                                                "over several UV squares; a texture meant to repeat is one file: "
+                                                "point the material at it to make it tileable")]
     recorded = first.recorded_source
     tile_missing = not first.resolved and bool(recorded and recorded.resolved)
     findings: list[Finding] = []
@@ -119,7 +122,12 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         first = replace(first, resolved=recorded.resolved)
     elif not first.resolved:
         looked = f" at {first.expected}" if first.expected and first.expected != first.asset else ""
-        return None, [_skip(first, Codes.MISSING_FILE, f"texture file not found{looked}")]
+        searched = (first.origin is Origin.USD and not first.asset.startswith(("./", "../"))
+                    and not Path(first.asset).is_absolute())  # USD's search-path form; MaterialX's names are paths
+        how = ("; a name that is not a path (no ./, ../ or /) is also looked for on the asset resolver's search "
+               "path: add its folder to PXR_AR_DEFAULT_SEARCH_PATH, or write the path from the layer"
+               if searched else "; restore the file or fix the asset path")
+        return None, [_skip(first, Codes.MISSING_FILE, f"texture file not found{looked}{how}")]
     info = cache.get_info(first.resolved)
     if isinstance(info, str):
         return None, [_skip(first, Codes.UNREADABLE_FILE, f"cannot read the image header: {info}")]
