@@ -243,6 +243,7 @@ class TextureMap:
     recorded_passed: bool | None = None  # a tile this tool wrote: whether it passed when written (else None)
     recorded_source: RecordedSource | None = None  # a tile this tool wrote: the source it records
     tile_missing: bool = False  # a tile this tool wrote that is gone: ``resolved`` is its recorded source
+    file_in_variant: bool = False  # the asset value comes from inside a variant under every selection it is read in
 
     @property
     def is_normal(self) -> bool:

@@ -266,3 +266,31 @@ def test_a_variant_that_swaps_one_map_lists_all_it_reads_and_a_node_both_read_is
         assert "</World/Looks/M/roughnessTex>" in row["message"] and "inside each variant" in row["message"]
     assert not (tmp_path / "tileable").exists() and not scene.with_name("scene.seamless.usda").exists()
     assert hashlib.sha256(scene.read_bytes()).hexdigest() == before
+
+
+def test_look_variants_that_each_name_the_same_roughness_inside_the_variant_are_each_made(tmp_path, model_cache,
+                                                                                          capsys):
+    """Look variants that author every file inside the variant, naming the same roughness file: the two stacks read
+    one node with one value, so both failed as if the value were authored once outside the variants ('author the
+    texture's file inside each variant', which it was). Each variant's edits go inside it."""
+    from pxr import Sdf
+
+    scene = _variant_albedo_shared_roughness(tmp_path)
+    stage = Usd.Stage.Open(str(scene))
+    UsdShade.Shader.Get(stage, "/World/Looks/M/roughnessTex").GetInput("file").GetAttr().Clear()
+    shading = stage.GetPrimAtPath("/World/Looks/M").GetVariantSet("shading")
+    for variant in ("clean", "dirty"):
+        shading.SetVariantSelection(variant)
+        with shading.GetVariantEditContext():
+            UsdShade.Shader.Get(stage, "/World/Looks/M/roughnessTex").CreateInput(
+                "file", Sdf.ValueTypeNames.Asset).Set("./tex/brick_roughness.png")
+    shading.SetVariantSelection("clean")
+    stage.Save()
+    code, payload = _process(scene, model_cache, capsys)
+    assert {s["status"] for s in payload["stacks"]} <= {"passed", "not-passed"}, payload["stacks"]
+    layer = Usd.Stage.Open(str(scene.with_name("scene.seamless.usda")))
+    tiles = {}
+    for variant in ("clean", "dirty"):
+        layer.GetPrimAtPath("/World/Looks/M").GetVariantSet("shading").SetVariantSelection(variant)
+        tiles[variant] = UsdShade.Shader.Get(layer, "/World/Looks/M/roughnessTex").GetInput("file").Get().path
+    assert all("/tileable/" in t for t in tiles.values()) and tiles["clean"] != tiles["dirty"], tiles

@@ -45,6 +45,9 @@ class TextureUse:
     recorded_passed: bool | None = None  # a tile this tool wrote: whether it passed when written (else None)
     recorded_source: RecordedSource | None = None  # a tile this tool wrote: the source it records
     animated: int = 0  # time samples of its file input (a texture swapped over time), 0 when none
+    #: its file value comes from inside a variant under every selection it was found in (each variant's edits of the
+    #: node then go inside that variant: two look variants naming the same file do not share one edit)
+    file_in_variant: bool = False
 
     def key(self) -> tuple:
         """What makes two uses found under two variant selections the same use."""
@@ -152,6 +155,7 @@ def _one_map(group: list[TextureUse], cache: HeaderCache) -> tuple[TextureMap | 
         asset=first.asset,
         resolved=first.resolved,
         file_at=first.file_at,
+        file_in_variant=first.file_in_variant,
         roles=tuple(roles),
         color_space=cs,
         color_space_reason=reason,

@@ -167,6 +167,8 @@ class _Scan:
             self._use_keys[key] = use
             self.uses.append(use)
             first = use
+        else:  # authored inside a variant only where it is so under every selection
+            first.file_in_variant = first.file_in_variant and use.file_in_variant
         self.geometry.seen(first, index)
 
     def _composition_errors(self, stage: Usd.Stage, source: str, selection: tuple, seen: set) -> None:

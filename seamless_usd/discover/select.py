@@ -235,7 +235,8 @@ def shared_node_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source:
         if (source, stack.id) in kept:
             continue
         for m in stack.maps:
-            users_here = [o for o in users.get(_use(m), []) if o.id != stack.id]
+            users_here = [o for o in users.get(_use(m), []) if o.id != stack.id
+                          and not _in_own_variants(m, stack, o)]
             others = [o for o in users_here if (source, o.id) in kept or o.id not in selected]
             # a use made tileable too, from other maps (a variant's own albedo beside a roughness authored outside the
             # variants): one edit of the node cannot line up with both stacks' tiles
@@ -257,6 +258,15 @@ def shared_node_stacks(scan: ScanResult, stacks: Sequence[TextureStack], source:
                     f"{said}; editing the node would change that use too: {fix}")
                 break
     return out
+
+
+def _in_own_variants(m, stack, other) -> bool:
+    """Whether ``other``'s use of ``m``'s node is edited apart from ``stack``'s: both are selections of one material
+    whose node's file value comes from inside a variant under each (two look variants that name the same normal map,
+    each in its own variant): each one's edits go inside its own variant."""
+    theirs = next((o for o in other.maps if o.node == m.node), None)
+    return (other.material == stack.material and other.selection != stack.selection and m.file_in_variant
+            and theirs is not None and theirs.file_in_variant)
 
 
 def _use(m) -> tuple:

@@ -215,12 +215,15 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
     file_attr = usdgraph.value_attribute(tex, Inputs.FILE)
     asset = resolved = udim = expected = ""
     file_at = None
+    in_variant = False
     labels: list[Label] = []
     animated = 0
     if file_attr is not None:
         animated = file_attr.GetNumTimeSamples()  # a texture swapped over time: its default is not what renders
         asset, resolved = usdgraph.asset_text(file_attr.Get())
         file_at = usdgraph.authored_at(file_attr)
+        valued = [spec for spec in file_attr.GetPropertyStack(Usd.TimeCode.Default()) if spec.HasDefaultValue()]
+        in_variant = bool(valued) and valued[0].path.ContainsPrimVariantSelection()  # the spec whose value is read
         expected = _anchor(file_attr, asset) if asset else ""
         if tile_token(asset):
             udim = expected
@@ -274,6 +277,7 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
         recorded_passed=_recorded_passed(tex),
         recorded_source=_recorded_source(tex),
         animated=animated,
+        file_in_variant=in_variant,
     )
 
 
