@@ -14,6 +14,7 @@ from seamless_usd.discover import mtlxgraph
 from seamless_usd.discover.colorspace import Label
 from seamless_usd.discover.maps import TextureUse
 from seamless_usd.discover.tokens import (
+    COLOUR_TYPES,
     SEPARATE_OUTPUTS,
     tile_token,
     Codes,
@@ -26,8 +27,6 @@ from seamless_usd.discover.tokens import (
 from seamless_usd.textures import NORMAL_ROLES, Origin, RecordedSource, RoleUse
 from seamless_usd.discover.uv import mtlx_uv_chain
 from seamless_usd.errors import InputError
-
-from seamless_usd.discover.tokens import COLOUR_TYPES
 from seamless_usd.findings import Finding, Severity, asset_ref
 
 __all__ = ["read_document", "walk_document"]
