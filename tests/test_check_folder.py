@@ -411,3 +411,16 @@ def test_an_empty_file_and_a_named_pipe_are_named_for_what_they_are(tmp_path):
     scene = write_scene(tmp_path / "scene.usda", {"Empty": "./empty.png"})
     [skip] = [f for f in scan_paths([scene]).findings if f.code == "unreadable-file"]
     assert "the file is empty (0 bytes)" in skip.message
+
+
+def test_a_tile_saved_again_without_its_record_says_it_is_judged_on_its_own(tmp_path):
+    """A tile this tool wrote, saved again by an image editor that drops what the file records: judged against itself
+    its verdict can flip (the bundled brick's passed tile read seamed at a mortar edge), and nothing said why."""
+    import shutil
+
+    shutil.copy(SAMPLES / "brick_albedo.png", tmp_path / "brick_albedo.World_Looks_Brick-e1bb29ea54.bc9ef6bb.tile.png")
+    shutil.copy(SAMPLES / "brick_albedo.png", tmp_path / "brick_albedo.png")
+    notes = {Path(i.name).name: i.note for i in check_paths([tmp_path]).items}
+    assert "records no source (saved again by another program?)" in notes[
+        "brick_albedo.World_Looks_Brick-e1bb29ea54.bc9ef6bb.tile.png"]
+    assert not notes["brick_albedo.png"]

@@ -194,7 +194,13 @@ def _picture_alone(path: Path, record: dict | None, note: str) -> CheckItem:
     from seamless_usd.textures import NORMAL_ROLES
     from seamless_usd.verdict.alone import FileMap
 
+    from seamless_usd.naming import is_tile_name
+
     t0 = time.perf_counter()
+    if record is None and is_tile_name(path.name):  # saved again by a program that drops what the file records
+        note = ("named as a tile seamless-usd writes, but it records no source (saved again by another program?): "
+                "judged against itself, where the verdict is least sure; check the stage or document that uses it, "
+                "whose record names the source")
     item = CheckItem(str(path), str(path), [str(path)], note=note)
     read = (record or {}).get("map", {})
     roles = read.get("roles", [])
