@@ -40,8 +40,11 @@ def test_composition_errors_are_findings_once_each_and_not_printed_again(tmp_pat
     scene.write_text(STAGE)
     assert main(["scan", str(scene), "--json"]) == 0
     out, err = capfd.readouterr()
-    messages = [f["message"] for f in json.loads(out)["findings"] if f["code"] == "composition-error"]
+    found = [f for f in json.loads(out)["findings"] if f["code"] == "composition-error"]
+    messages = [f["message"] for f in found]
     assert sum("missing_sublayer.usda" in m for m in messages) == 1, messages
-    [dressing] = [m for m in messages if "missing_dressing.usda" in m]  # found only under the other selection
-    assert dressing.endswith("(in look=dressed)"), dressing
+    [dressing] = [f for f in found if "missing_dressing.usda" in f["message"]]  # only under the other selection
+    assert "(in look=dressed)" in dressing["message"], dressing
+    # named by the prim whose reference failed, saying what to do (it named the stage, with USD's words alone)
+    assert dressing["where"] == "</Root/Dressing>" and "restore the file or fix" in dressing["message"]
     assert "_ReportErrors" not in err and "Warning: in" not in err, err

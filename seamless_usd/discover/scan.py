@@ -182,8 +182,14 @@ class _Scan:
                 continue
             seen.add(("composition", line))
             where = f" (in {describe_selection(selection)})" if selection else ""
-            self.result.findings.append(Finding(Severity.WARNING, Codes.COMPOSITION_ERROR, asset_ref(source),
-                                                line + where))
+            # the prim whose arc failed names the finding where USD says it (a reference or payload to a missing file)
+            site = re.search(r"introduced by @[^@]*@<([^>]+)>", line)
+            fix = (": what it would bring is not scanned; restore the file or fix the arc's asset path"
+                   if "Could not open asset" in line else "")
+            self.result.findings.append(Finding(Severity.WARNING, Codes.COMPOSITION_ERROR,
+                                                prim_ref(str(Sdf.Path(site.group(1)).StripAllVariantSelections()))
+                                                if site else asset_ref(source),
+                                                line.rstrip(".") + where + fix))
 
     def _add_reference(self, ref) -> tuple[list[str], list[TextureUse]]:
         """Materials and uses of a ``.mtlx`` document referenced from a prim."""
