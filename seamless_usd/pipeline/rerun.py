@@ -16,16 +16,16 @@ import json
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from safetensors import SafetensorError
-from safetensors.numpy import load_file, save
+from safetensors.numpy import save
 
 from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write_bytes, atomic_write_text, file_sha256
 from seamless_usd.report.model import Previews
+from seamless_usd.report.stored import previews_to_arrays, stored_previews
 from seamless_usd.version import __version__
 
-__all__ = ["JUDGED", "judged_key", "record_paths", "save_judged", "load_judged", "previews_to_arrays", "previews_from_arrays"]
+__all__ = ["JUDGED", "judged_key", "record_paths", "save_judged", "load_judged", "verdict_elsewhere"]
 
 #: Folder of an entry that holds the judged records.
 JUDGED = "judged"
@@ -47,32 +47,11 @@ def record_paths(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[Path, 
     return folder / f"{name}.json", folder / f"{name}.safetensors"
 
 
-def previews_to_arrays(p: Previews) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    """The pictures as named arrays, and what is not a picture as JSON."""
-    arrays = {f"source_view/{k}": v for k, v in p.source_view.items()}
-    arrays |= {f"tile_view/{k}": v for k, v in p.tile_view.items()}
-    arrays |= {name: v for name in ("lit_source", "lit_tile", "thumbnail", "discriminator", "asset_source", "asset_tile")
-               if (v := getattr(p, name)) is not None}
-    arrays |= {f"level/{i}": pic for i, (_, pic) in enumerate(p.levels)}
-    return ({k: np.ascontiguousarray(v) for k, v in arrays.items()},
-            {"lit_note": p.lit_note, "view": p.view, "levels": [caption for caption, _ in p.levels],
-             "source_view": list(p.source_view), "tile_view": list(p.tile_view)})
-
-
-def previews_from_arrays(arrays: dict[str, np.ndarray], info: dict[str, Any]) -> Previews:
-    return Previews(
-        source_view={k: arrays[f"source_view/{k}"] for k in info["source_view"]},
-        tile_view={k: arrays[f"tile_view/{k}"] for k in info["tile_view"]},
-        lit_source=arrays.get("lit_source"), lit_tile=arrays.get("lit_tile"), lit_note=info["lit_note"],
-        view=info["view"], thumbnail=arrays.get("thumbnail"), discriminator=arrays.get("discriminator"),
-        levels=[(caption, arrays[f"level/{i}"]) for i, caption in enumerate(info["levels"])],
-        asset_source=arrays.get("asset_source"), asset_tile=arrays.get("asset_tile"),
-    )
-
-
-def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str, Any], previews: Previews) -> None:
+def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str, Any], previews: Previews
+                ) -> Previews | None:
     """Keep ``record`` (JSON-able; ``record["outputs"]`` maps each map to ``{"path": ...}``, whose digests are
-    taken here) and the previews. A record that cannot be written is simply not kept."""
+    taken here) and the previews; returns the previews as kept (read from their file when the report draws them),
+    None when the record cannot be written (it is then simply not kept)."""
     paths = record_paths(entry_root, out_dir, stack_id)
     arrays, info = previews_to_arrays(previews)
     try:
@@ -87,7 +66,8 @@ def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str
                 "pictures_file": pictures.name}
         atomic_write_text(paths[0], json.dumps(body, default=str))
     except (OSError, InputError, SafetensorError):  # a read-only cache, say: the record is not kept
-        return
+        return None
+    return stored_previews(str(pictures), info)
 
 
 def verdict_elsewhere(entry_root: Path) -> dict[str, Any] | None:
@@ -116,7 +96,8 @@ def load_judged(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[dict[st
         for out in record["outputs"].values():
             if file_sha256(Path(out["path"])) != out["sha256"]:
                 return None
-        previews = previews_from_arrays(load_file(str(pictures)), record["previews"])
+        previews = stored_previews(str(pictures), record["previews"])  # read when the report draws them (its
+        #                                                                     digest, just checked, says they are whole)
     except (OSError, ValueError, KeyError, TypeError, AttributeError, SafetensorError):  # AttributeError: JSON of
         return None  # another shape (a list where the record is a mapping): judged again
     return record, previews

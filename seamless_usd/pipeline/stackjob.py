@@ -252,7 +252,8 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None,
     record = {"outputs": {json.dumps(list(k)): {"path": str(o.output), "metrics": o.metrics,
                                                 "source_metrics": o.source_metrics} for k, o in outcomes.items()},
               "verdict": verdict.as_dict(), "timings": timings, "tile_size": list(tile_hw)}
-    save_judged(entry.root, out_dir, judged_key(stack), record, previews)
+    # kept, the pictures are read again only when the report draws them: a library run holds none in memory
+    previews = save_judged(entry.root, out_dir, judged_key(stack), record, previews) or previews
     return outcome_from_record(stack, meta, pixels, record, previews, cached=cached is not None, out_dir=out_dir,
                                cache_key=key)
 

@@ -213,7 +213,7 @@ def stack_html(stack: StackReport) -> str:
     message = (f"<p>{esc(stack.message)}</p>" if stack.message and stack.status is not StackStatus.LEFT_ALONE
                and not shown_below else "")
     main, more = stack_facts(stack)
-    p = stack.previews
+    p = stack.previews.loaded()  # read from the run's cache while this stack is drawn, then let go
     stages = ""
     if p.levels:
         stages = ('<p class="muted">How the tile was built, stage by stage (the first map, one texel per sample): '

@@ -78,7 +78,7 @@ def shown_names(sources: list[str]) -> dict[str, str]:
 
 
 def _card(stack: StackReport, link: str | None, shown: str) -> str:
-    thumb = stack.previews.thumbnail
+    thumb = stack.previews.thumbnail_picture()
     name = stack.material.strip("<>")
     if thumb is not None:
         picture = f'<img src="{image_data_uri(thumb)}" width="{thumb.shape[1]}" height="{thumb.shape[0]}" alt="{esc(name)}">'
