@@ -150,6 +150,7 @@ class _ProgressView:
             console=console, transient=False,
         )
         self.stacks = None
+        self.pages = None  # the library report's pages, once they are written
         self.steps: dict[str, object] = {}  # stack id -> its bar
 
     def __enter__(self):
@@ -161,6 +162,11 @@ class _ProgressView:
 
     def __call__(self, event: ProgressEvent) -> None:
         p = self.progress
+        if event.kind == "report":  # the library report's pages, written after the stacks
+            if self.pages is None:
+                self.pages = p.add_task("report pages", total=event.total, rate="")
+            p.update(self.pages, completed=event.index, total=event.total)
+            return
         if self.stacks is None:
             self.stacks = p.add_task("stacks", total=event.total, rate="")
         step = self.steps.get(event.stack_id)

@@ -390,3 +390,14 @@ def test_a_seam_just_over_the_margin_is_not_said_to_be_zero_and_a_page_of_stacks
     assert "no stack made" in page and "all stacks" not in page
     passed = StackReport(id="M-2", material="</N>", source="s.usda", status=StackStatus.PASSED)
     assert "all stacks made passed" in render_html(Report(sources=["s.usda"], stacks=[alone, passed]))
+
+
+def test_a_library_reports_its_pages_as_they_are_written(tmp_path):
+    """A library's report took tens of seconds after the last stack (a page a source) with nothing on the screen."""
+    from seamless_usd.report.index import write_library_html
+
+    sources = [str(tmp_path / f"asset{n}" / "asset.usda") for n in range(3)]
+    seen = []
+    write_library_html(Report(sources=sources, stacks=[]), tmp_path / "lib.html",
+                       progress=lambda done, total: seen.append((done, total)))
+    assert seen == [(1, 3), (2, 3), (3, 3)] and len(list((tmp_path / "lib.files").glob("*.html"))) == 3

@@ -9,7 +9,7 @@ from seamless_usd.errors import InputError, UsageError
 from seamless_usd.fileio import folder_problem
 from seamless_usd.pipeline.cache import StackCache
 from seamless_usd.pipeline.executors import make_executor
-from seamless_usd.pipeline.options import Options, check_device
+from seamless_usd.pipeline.options import Options, ProgressEvent, check_device
 from seamless_usd.pipeline.rows import Run, authoring_module
 from seamless_usd.report.model import Report
 from seamless_usd.version import __version__
@@ -29,7 +29,9 @@ def finish_run(run: Run, started: float) -> Report:
         html_path, json_path = _report_paths(run.options.report)
         html_path.parent.mkdir(parents=True, exist_ok=True)
         if len(report.sources) > 1:
-            write_library_html(report, html_path)
+            told = run.options.progress
+            write_library_html(report, html_path, progress=None if told is None else
+                               lambda done, total: told(ProgressEvent("report", "", done, total)))
         else:
             write_html(report, html_path)
         write_json(report, json_path)

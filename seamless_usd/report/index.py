@@ -8,6 +8,7 @@ a stack left alone, the error of a failed one. A card links to the stack on its 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 from seamless_usd.fileio import atomic_write_text
@@ -163,8 +164,9 @@ def render_index(report: Report, pages: dict[str, str], title: str = "seamless-u
     return page(title, body, extra_css=_INDEX_CSS + rules, toggle=False)
 
 
-def write_library_html(report: Report, path: Path) -> Path:
-    """The index page at ``path`` and one report per source beside it (``<stem>.files/``)."""
+def write_library_html(report: Report, path: Path, progress: Callable[[int, int], None] | None = None) -> Path:
+    """The index page at ``path`` and one report per source beside it (``<stem>.files/``); ``progress(done,
+    total)`` as each page is written (a library's pages take a fraction of a second each)."""
     path = Path(path)
     folder = path.with_name(f"{path.stem}.files")
     folder.mkdir(parents=True, exist_ok=True)
@@ -175,6 +177,8 @@ def write_library_html(report: Report, path: Path) -> Path:
         atomic_write_text(target, render_html(source_report(report, source), title=f"seamless-usd: {names[source]}",
                                               back=f"../{path.name}"))
         pages[source] = f"{folder.name}/{target.name}"
+        if progress is not None:
+            progress(n, len(report.sources))
     clear_stale_pages(path, frozenset(Path(p).name for p in pages.values()))  # an earlier run's other pages
     atomic_write_text(path, render_index(report, pages))
     return path

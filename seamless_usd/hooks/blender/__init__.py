@@ -170,6 +170,8 @@ def on_export(export_context, settings: HookSettings) -> bool:
     wm.progress_begin(0, 1000)  # the export blocks the UI while stacks train: show where it is
 
     def progress(event) -> None:
+        if event.kind == "report":  # a library report's pages: a hook's run writes one stage's
+            return
         done = event.index + (1 if event.kind == "stack-done" else 0)
         wm.progress_update(int(1000 * done / max(event.total, 1)))
 
