@@ -111,12 +111,29 @@ def _stack_table(stack: TextureStack, common: str | None = None, kept: str = "")
     return table
 
 
+#: Up to this many stages and documents scanned are listed by name at the top; more (a library) by their folder.
+_LISTED_SOURCES = 5
+
+
+def _duplicate_line(stack: TextureStack, first: TextureStack, common: str | None) -> str:
+    """A stack whose maps and reads are those of ``first``, listed above in full, with the same intent: one line."""
+    where = f"  of {os.path.relpath(stack.source, common)}" if common is not None and stack.source else ""
+    chosen = f"  in {describe_selection(stack.selection)}" if stack.selection else ""
+    return escape(f"{stack.material}  stack {stack.id}{where}{chosen}: the same maps as {first.material} (stack "
+                  f"{first.id}, above), intent {stack.intent}; made once for both")
+
+
 def render(result: ScanResult, console: Console) -> None:
-    """Print a scan as tables: one per stack, then materials without stacks, then findings."""
-    console.print(f"[bold]scanned[/bold] {escape(', '.join(result.sources))}")
+    """Print a scan as tables: one per stack (a stack the same as one listed above, with the same intent, in one
+    line), then materials without stacks, then findings."""
     with_stacks = {s.material for s in result.stacks}
     scanned = sorted({s.source for s in result.stacks if s.source})
     common = os.path.commonpath([os.path.dirname(s) for s in scanned]) if len(scanned) > 1 else None
+    if len(result.sources) > _LISTED_SOURCES:  # a library: its folder, not every file before the first stack
+        where = os.path.commonpath([os.path.dirname(os.path.abspath(s)) for s in result.sources])
+        console.print(f"[bold]scanned[/bold] {len(result.sources)} files under {escape(where)}")
+    else:
+        console.print(f"[bold]scanned[/bold] {escape(', '.join(result.sources))}")
     from seamless_usd.discover.select import blocked_stacks, set_aside_stacks
 
     # one stage or document: its findings are its own (across several, material paths may be shared)
@@ -124,7 +141,11 @@ def render(result: ScanResult, console: Console) -> None:
             if len(result.sources) == 1 else {})
     for stack in result.stacks:
         why = kept.get(("", stack.id), "") if stack.intent == "tiling" else ""
-        console.print(_stack_table(stack, common, why))
+        first = next((s for s in result.stacks if s.id == stack.duplicate_of), None)
+        if first is not None and first.intent == stack.intent and not why:
+            console.print(_duplicate_line(stack, first, common))
+        else:
+            console.print(_stack_table(stack, common, why))
     bare = [m for m in result.materials if m not in with_stacks]
     if bare:
         console.print(escape(f"materials without texture stacks: {', '.join(bare)}"))

@@ -209,3 +209,23 @@ def test_scan_says_what_process_will_do_with_a_stack_inside_a_package(tmp_path, 
     assert main(["scan", str(package)]) == 0
     out = " ".join(capsys.readouterr().out.split())
     assert "process: left alone:" in out and "inside a .usdz package" in out, out[-600:]
+
+
+def test_a_library_scan_lists_its_folder_and_each_copy_of_a_stack_in_one_line(tmp_path, capsys):
+    """A library of 200 files listed every path before the first stack (65 lines) and printed each of 149 copies of a
+    stack in full (11 lines each): the folder once, and a copy in one line naming the stack it copies."""
+    import shutil
+
+    from test_reliability_inputs import write_scene
+
+    lib = tmp_path / "lib"
+    (lib / "textures").mkdir(parents=True)
+    shutil.copy(Path(__file__).resolve().parents[1] / "sample_assets" / "textures" / "cloth.png", lib / "textures")
+    for n in range(6):  # six props, each with its own material reading the library's one cloth texture
+        write_scene(lib / f"prop{n}" / "asset.usda", {f"Cloth{n}": "../textures/cloth.png"})
+    assert main(["scan", str(lib)]) == 0
+    out = capsys.readouterr().out
+    lines = out.splitlines()
+    assert lines[0] == f"scanned 6 files under {lib}"
+    copies = [line for line in lines if "the same maps as </Root/Looks/Cloth0>" in line]
+    assert len(copies) == 5 and out.count("@../textures/cloth.png@") == 1, out  # the first listed in full
