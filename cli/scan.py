@@ -116,7 +116,8 @@ _LISTED_SOURCES = 5
 
 
 def _duplicate_line(stack: TextureStack, first: TextureStack, common: str | None) -> str:
-    """A stack whose maps and reads are those of ``first``, listed above in full, with the same intent: one line."""
+    """A stack whose maps and reads are those of ``first``, listed above in full, with the same UV chain and intent:
+    one line."""
     where = f"  of {os.path.relpath(stack.source, common)}" if common is not None and stack.source else ""
     chosen = f"  in {describe_selection(stack.selection)}" if stack.selection else ""
     return escape(f"{stack.material}  stack {stack.id}{where}{chosen}: the same maps as {first.material} (stack "
@@ -124,8 +125,8 @@ def _duplicate_line(stack: TextureStack, first: TextureStack, common: str | None
 
 
 def render(result: ScanResult, console: Console) -> None:
-    """Print a scan as tables: one per stack (a stack the same as one listed above, with the same intent, in one
-    line), then materials without stacks, then findings."""
+    """Print a scan as tables: one per stack (a stack the same as one listed above, read through the same UV chain
+    with the same intent, in one line), then materials without stacks, then findings."""
     with_stacks = {s.material for s in result.stacks}
     scanned = sorted({s.source for s in result.stacks if s.source})
     common = os.path.commonpath([os.path.dirname(s) for s in scanned]) if len(scanned) > 1 else None
@@ -142,7 +143,7 @@ def render(result: ScanResult, console: Console) -> None:
     for stack in result.stacks:
         why = kept.get(("", stack.id), "") if stack.intent == "tiling" else ""
         first = next((s for s in result.stacks if s.id == stack.duplicate_of), None)
-        if first is not None and first.intent == stack.intent and not why:
+        if first is not None and first.intent == stack.intent and _uv_text(first.uv) == _uv_text(stack.uv) and not why:
             console.print(_duplicate_line(stack, first, common))
         else:
             console.print(_stack_table(stack, common, why))
