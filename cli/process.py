@@ -210,6 +210,22 @@ def _summary(report: Report, console: Console) -> None:
     if report.options.get("mode") == "dry-run":
         for line in report.plan:
             console.print(f"would {escape(line)}", highlight=False, soft_wrap=True)
+    if report.stacks:  # last, where a long table or plan ends: what the run came to, in one line
+        console.print(escape(_counts_line(report)), highlight=False, soft_wrap=True)
+
+
+def _counts_line(report: Report) -> str:
+    """``12 stacks: 7 passed, 3 not passed, 2 left alone`` (a dry run: how many are planned, and how many of those
+    reuse another stack's tiles)."""
+    counts: dict[str, int] = {}
+    for s in report.stacks:
+        counts[s.status.value] = counts.get(s.status.value, 0) + 1
+    reused = sum(1 for s in report.stacks if s.status is StackStatus.PLANNED and s.duplicate_of)
+    parts = [f"{n} {status.replace('-', ' ')}" + (f" ({reused} reusing another stack's tiles)"
+                                                  if status == StackStatus.PLANNED.value and reused else "")
+             for status, n in counts.items()]
+    total = len(report.stacks)
+    return f"{total} stack{'s' if total != 1 else ''}: {', '.join(parts)}"
 
 
 def _file_names(report: Report) -> dict[str, str]:

@@ -209,6 +209,22 @@ def test_the_summary_table_keeps_the_reasons_in_a_terminal_of_80_columns():
         assert "</World/Looks/RotWood>" in text and "rows 96-133 (+0.05)" in text, (width, text)
 
 
+def test_the_summary_ends_with_what_the_run_came_to_in_one_line():
+    """After a library's table (and a dry run's plan of thousands of lines) nothing said how many stacks passed,
+    failed or were planned, or how many planned ones reuse another's tiles."""
+    from seamless_usd.report.model import Report, StackReport, StackStatus
+    from seamless_usd_cli.process import _counts_line
+
+    def row(n, status, duplicate_of=None):
+        return StackReport(id=str(n), material=f"</M{n}>", source="s.usda", status=status, duplicate_of=duplicate_of)
+
+    run = Report(sources=["s.usda"], stacks=[row(0, StackStatus.PASSED), row(1, StackStatus.NOT_PASSED),
+                                             row(2, StackStatus.PASSED), row(3, StackStatus.LEFT_ALONE)])
+    assert _counts_line(run) == "4 stacks: 2 passed, 1 not passed, 1 left alone"
+    dry = Report(sources=["s.usda"], stacks=[row(0, StackStatus.PLANNED), row(1, StackStatus.PLANNED, "0")])
+    assert _counts_line(dry) == "2 stacks: 2 planned (1 reusing another stack's tiles)"
+
+
 def test_the_progress_view_keeps_a_bar_for_each_stack_made_at_once_and_no_none_count():
     """With --jobs 2 the second stack's start replaced the first's bar (the first's training then showed on none),
     and a step with no total read "0/None"."""
