@@ -90,6 +90,7 @@ def test_a_run_keeps_no_report_pictures_in_memory_and_its_report_still_shows_the
     import re
 
     import seamless_usd
+    from seamless_usd.report.stored import loaded, thumbnail_picture
 
     shutil.copytree(SAMPLES / "brick", tmp_path / "brick")
     shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
@@ -100,6 +101,6 @@ def test_a_run_keeps_no_report_pictures_in_memory_and_its_report_still_shows_the
         [stack] = report.stacks
         held = stack.previews
         assert held.stored and not held.tile_view and not held.source_view and held.lit_tile is None, run
-        assert held.loaded().tile_view and held.thumbnail_picture() is not None
+        assert loaded(held).tile_view and thumbnail_picture(held) is not None
         page = report_file.read_text(encoding="utf-8")
         assert len(re.findall(r'src="data:image/', page)) >= 8, run  # source and tile of 3 maps and the lit pair

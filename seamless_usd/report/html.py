@@ -20,6 +20,7 @@ from seamless_usd.report.htmlparts import esc, figure, fmt, overlay_svg, page, s
 from seamless_usd.report.target import clear_stale_pages
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.report.repeat import ViewGeometry
+from seamless_usd.report.stored import loaded
 from seamless_usd.synthesis.advice import structure_advice
 from seamless_usd.verdict.lines import Seam, figure_text
 from seamless_usd.report.verdicts import LABELS, SEAM_KEYS, TORUS_NOTE, target_text, targets, verdict
@@ -213,7 +214,7 @@ def stack_html(stack: StackReport) -> str:
     message = (f"<p>{esc(stack.message)}</p>" if stack.message and stack.status is not StackStatus.LEFT_ALONE
                and not shown_below else "")
     main, more = stack_facts(stack)
-    p = stack.previews.loaded()  # read from the run's cache while this stack is drawn, then let go
+    p = loaded(stack.previews)  # read from the run's cache while this stack is drawn, then let go
     stages = ""
     if p.levels:
         stages = ('<p class="muted">How the tile was built, stage by stage (the first map, one texel per sample): '

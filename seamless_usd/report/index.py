@@ -17,6 +17,7 @@ from seamless_usd.naming import slug
 from seamless_usd.report.html import failing_figures, render_html, source_report
 from seamless_usd.report.htmlparts import esc, page
 from seamless_usd.report.model import Report, StackReport, StackStatus
+from seamless_usd.report.stored import thumbnail_picture
 from seamless_usd.report.webimage import image_data_uri
 
 __all__ = ["FILTER_ORDER", "render_index", "write_library_html", "stack_reason"]
@@ -79,7 +80,7 @@ def shown_names(sources: list[str]) -> dict[str, str]:
 
 
 def _card(stack: StackReport, link: str | None, shown: str) -> str:
-    thumb = stack.previews.thumbnail_picture()
+    thumb = thumbnail_picture(stack.previews)
     name = stack.material.strip("<>")
     if thumb is not None:
         picture = f'<img src="{image_data_uri(thumb)}" width="{thumb.shape[1]}" height="{thumb.shape[0]}" alt="{esc(name)}">'

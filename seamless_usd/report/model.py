@@ -63,25 +63,10 @@ class Previews:
     asset_source: np.ndarray | None = None  # a tile turned back in the UVs: the first map's source as authored
     asset_tile: np.ndarray | None = None  # ... and its tile as the asset shows it, through the UV turn and scale
     #: the pictures kept in a file instead (:mod:`.stored`: a run's cache keeps every stack's): read only while the
-    #: report draws that stack, so a library run holds none of them (``view`` and ``lit_note`` are set)
+    #: report draws that stack (:func:`.stored.loaded`), so a library run holds none of them (``view`` and
+    #: ``lit_note`` are set)
     stored: str = ""
     stored_info: dict[str, Any] = field(default_factory=dict)
-
-    def loaded(self) -> "Previews":
-        """These pictures, read from their file when they are kept in one."""
-        if not self.stored:
-            return self
-        from seamless_usd.report.stored import previews_from_file
-
-        return previews_from_file(self.stored, self.stored_info)
-
-    def thumbnail_picture(self) -> np.ndarray | None:
-        """The thumbnail alone (read alone from the file when the pictures are kept in one)."""
-        if not self.stored:
-            return self.thumbnail
-        from seamless_usd.report.stored import picture_from_file
-
-        return picture_from_file(self.stored, "thumbnail")
 
 
 @dataclass

@@ -11,7 +11,8 @@ from safetensors.numpy import load_file
 
 from seamless_usd.report.model import Previews
 
-__all__ = ["previews_to_arrays", "previews_from_arrays", "previews_from_file", "picture_from_file", "stored_previews"]
+__all__ = ["previews_to_arrays", "previews_from_arrays", "previews_from_file", "picture_from_file", "stored_previews",
+           "loaded", "thumbnail_picture"]
 
 
 def previews_to_arrays(p: Previews) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -51,3 +52,13 @@ def picture_from_file(path: str, name: str) -> np.ndarray | None:
 def stored_previews(path: str, info: dict[str, Any]) -> Previews:
     """Pictures kept in ``path``, read when the report draws them (:meth:`.model.Previews.loaded`)."""
     return Previews(lit_note=info["lit_note"], view=info["view"], stored=path, stored_info=info)
+
+
+def loaded(previews: Previews) -> Previews:
+    """``previews`` with their pictures, read from their file where they are kept in one."""
+    return previews_from_file(previews.stored, previews.stored_info) if previews.stored else previews
+
+
+def thumbnail_picture(previews: Previews) -> np.ndarray | None:
+    """The thumbnail alone (read alone from the file where the pictures are kept in one)."""
+    return picture_from_file(previews.stored, "thumbnail") if previews.stored else previews.thumbnail
