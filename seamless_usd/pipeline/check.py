@@ -191,10 +191,9 @@ def _judge_picture(group: tuple[list[Path], list[dict | None]], named: frozenset
 def _picture_alone(path: Path, record: dict | None, note: str) -> CheckItem:
     """``path`` judged against itself (a tile whose record says how its source was read: its channels, and a
     normal map as one); ``note``: why a tile is not judged against its source."""
+    from seamless_usd.naming import is_tile_name
     from seamless_usd.textures import NORMAL_ROLES
     from seamless_usd.verdict.alone import FileMap
-
-    from seamless_usd.naming import is_tile_name
 
     t0 = time.perf_counter()
     if record is None and is_tile_name(path.name):  # saved again by a program that drops what the file records
