@@ -7,7 +7,10 @@ a stack left alone, the error of a failed one. A card links to the stack on its 
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import os
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -165,6 +168,40 @@ def render_index(report: Report, pages: dict[str, str], title: str = "seamless-u
     return page(title, body, extra_css=_INDEX_CSS + rules, toggle=False)
 
 
+#: The last line of a library's page: what it was drawn from (:func:`_page_key`), so that a run again that would
+#: draw the same page leaves it as it is (drawing the pictures again took 40 s for a library of 200 files).
+_KEY_MARK = "<!-- seamless-usd page {} -->\n"
+
+
+def _page_key(part: Report, title: str, back: str) -> str | None:
+    """What a source's page is drawn from, as a digest: its report (less the memory the process that ran each stack
+    used: a cached stack's differs by a megabyte from run to run), the pictures' files (named by their content) and
+    this version; None where a stack's pictures are held only in memory (made in this run and not kept in a cache),
+    which is always drawn."""
+    from seamless_usd.version import __version__
+
+    if any(not s.previews.stored and (s.previews.thumbnail is not None or s.previews.tile_view) for s in part.stacks):
+        return None
+    body = part.to_dict()
+    for stack in body["stacks"]:
+        stack.pop("peak_rss_mb", None)
+    text = json.dumps([body, [s.previews.stored for s in part.stacks], title, back, __version__], sort_keys=True,
+                      default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _kept_key(page_path: Path) -> str | None:
+    """The key a page already there was drawn from (its last line), None when it has none or is not there."""
+    try:
+        with open(page_path, "rb") as fh:
+            fh.seek(max(0, page_path.stat().st_size - 200))
+            tail = fh.read().decode("utf-8", "replace")
+    except OSError:
+        return None
+    found = re.search(r"<!-- seamless-usd page ([0-9a-f]{64}) -->\s*$", tail)
+    return found.group(1) if found else None
+
+
 def write_library_html(report: Report, path: Path, progress: Callable[[int, int], None] | None = None) -> Path:
     """The index page at ``path`` and one report per source beside it (``<stem>.files/``); ``progress(done,
     total)`` as each page is written (a library's pages take a fraction of a second each)."""
@@ -175,8 +212,10 @@ def write_library_html(report: Report, path: Path, progress: Callable[[int, int]
     names = shown_names(report.sources)
     for n, source in enumerate(report.sources, 1):
         target = folder / f"{n:04d}-{slug(Path(source).stem, 40)}.html"
-        atomic_write_text(target, render_html(source_report(report, source), title=f"seamless-usd: {names[source]}",
-                                              back=f"../{path.name}"))
+        part, title, back = source_report(report, source), f"seamless-usd: {names[source]}", f"../{path.name}"
+        key = _page_key(part, title, back)
+        if key is None or _kept_key(target) != key:  # a page the same as the one there is not drawn again
+            atomic_write_text(target, render_html(part, title=title, back=back) + _KEY_MARK.format(key or ""))
         pages[source] = f"{folder.name}/{target.name}"
         if progress is not None:
             progress(n, len(report.sources))
