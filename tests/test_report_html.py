@@ -311,6 +311,7 @@ def test_library_index_has_a_card_per_stack_filterable_by_status(brick_512, tmp_
     _self_contained(re.sub(r'href="library\.files/[^"]+"', 'href="#"', index))
     cards = re.findall(r'<div class="card s-([a-z-]+)" data-status="\1">', index)
     assert sorted(cards) == sorted([brick_512.status.value, "left-alone", "failed"])
+    assert cards[0] == "failed"  # what needs a look first, though its file comes second
     assert index.count('type="radio"') == 1 + 3  # all + the statuses present
     assert "#f-left-alone:checked ~ .cards .card:not(.s-left-alone){display:none}" in index
     assert "uv-atlas: UVs 0.11-0.89, 37 islands" in index and "unreadable" in index

@@ -145,7 +145,11 @@ def render_index(report: Report, pages: dict[str, str], title: str = "seamless-u
     """
     inputs, labels, rules = _filters(report)
     names = shown_names(report.sources)
-    cards = "".join(_card(s, pages.get(s.source), names.get(s.source, Path(s.source).name)) for s in report.stacks)
+    # what needs a look first (failed, then not passed), each kind in the files' order: in a library of hundreds of
+    # stacks the not-passed ones were scattered among the passed
+    first = {StackStatus.FAILED: 0, StackStatus.NOT_PASSED: 1}
+    shown = sorted(report.stacks, key=lambda s: first.get(s.status, 2))
+    cards = "".join(_card(s, pages.get(s.source), names.get(s.source, Path(s.source).name)) for s in shown)
     problems = "".join(  # a library's files share material paths: each failure names its file
         f"<li><code>{esc(f.severity.value)}</code> {esc(f.where)}: {esc(f.message)}"
         f"{f' <span class=muted>({esc(names.get(f.source, f.source))})</span>' if f.source else ''}</li>"
