@@ -351,7 +351,8 @@ def test_a_library_of_scene_usda_files_names_each_by_its_folder_and_keeps_each_f
                       material="</World/Looks/Brick>", source=bad)
     report = Report(sources=[good, bad], stacks=stacks, findings=[missing])
     index = write_library_html(report, tmp_path / "library.html").read_text()
-    assert re.findall(r'<div class="file">([^<]+)</div>', index) == ["brick/scene.usda", "missing/scene.usda"]
+    # each card names its file (the failed stack's card first)
+    assert re.findall(r'<div class="file">([^<]+)</div>', index) == ["missing/scene.usda", "brick/scene.usda"]
     pages = {p.read_text().split("<title>")[1].split("</title>")[0]: p.read_text()
              for p in (tmp_path / "library.files").glob("*.html")}
     assert set(pages) == {"seamless-usd: brick/scene.usda", "seamless-usd: missing/scene.usda"}
