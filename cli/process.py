@@ -217,13 +217,11 @@ def _summary(report: Report, console: Console) -> None:
 def _counts_line(report: Report) -> str:
     """``12 stacks: 7 passed, 3 not passed, 2 left alone`` (a dry run: how many are planned, and how many of those
     reuse another stack's tiles)."""
-    counts: dict[str, int] = {}
-    for s in report.stacks:
-        counts[s.status.value] = counts.get(s.status.value, 0) + 1
+    counts = report.counts()
     reused = sum(1 for s in report.stacks if s.status is StackStatus.PLANNED and s.duplicate_of)
-    parts = [f"{n} {status.replace('-', ' ')}" + (f" ({reused} reusing another stack's tiles)"
-                                                  if status == StackStatus.PLANNED.value and reused else "")
-             for status, n in counts.items()]
+    parts = [f"{counts[status.value]} {status.value.replace('-', ' ')}"
+             + (f" ({reused} reusing another stack's tiles)" if status is StackStatus.PLANNED and reused else "")
+             for status in StackStatus if counts[status.value]]
     total = len(report.stacks)
     return f"{total} stack{'s' if total != 1 else ''}: {', '.join(parts)}"
 

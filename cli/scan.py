@@ -140,9 +140,12 @@ def render(result: ScanResult, console: Console) -> None:
     # one stage or document: its findings are its own (across several, material paths may be shared)
     kept = ({**set_aside_stacks(result, result.stacks, ""), **blocked_stacks(result, result.stacks, "")}
             if len(result.sources) == 1 else {})
+    first_of: dict[str, TextureStack] = {}  # each id's first stack, which its copies name
+    for stack in result.stacks:
+        first_of.setdefault(stack.id, stack)
     for stack in result.stacks:
         why = kept.get(("", stack.id), "") if stack.intent == "tiling" else ""
-        first = next((s for s in result.stacks if s.id == stack.duplicate_of), None)
+        first = first_of.get(stack.duplicate_of) if stack.duplicate_of else None
         if first is not None and first.intent == stack.intent and _uv_text(first.uv) == _uv_text(stack.uv) and not why:
             console.print(_duplicate_line(stack, first, common))
         else:

@@ -221,9 +221,9 @@ def _texture_use(material: str, tex: Usd.Prim, role: RoleUse, flip: bool) -> Tex
     if file_attr is not None:
         animated = file_attr.GetNumTimeSamples()  # a texture swapped over time: its default is not what renders
         asset, resolved = usdgraph.asset_text(file_attr.Get())
-        file_at = usdgraph.authored_at(file_attr)
-        valued = [spec for spec in file_attr.GetPropertyStack(Usd.TimeCode.Default()) if spec.HasDefaultValue()]
-        in_variant = bool(valued) and valued[0].path.ContainsPrimVariantSelection()  # the spec whose value is read
+        spec = usdgraph.value_spec(file_attr)  # the opinion whose value is read: where, and whether in a variant
+        file_at = usdgraph.authored_at(file_attr, spec)
+        in_variant = spec is not None and spec.path.ContainsPrimVariantSelection()
         expected = _anchor(file_attr, asset) if asset else ""
         if tile_token(asset):
             udim = expected

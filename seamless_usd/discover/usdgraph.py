@@ -21,16 +21,23 @@ def shader_id(prim: Usd.Prim) -> str:
     return str(sid) if sid else ""
 
 
-def layer_of(attr: Usd.Attribute) -> str:
-    """The strongest layer holding a value opinion for ``attr`` (real path when it has one)."""
+def value_spec(attr: Usd.Attribute) -> Sdf.PropertySpec | None:
+    """The strongest spec holding a value opinion for ``attr`` (its path says whether it is inside a variant)."""
     for spec in attr.GetPropertyStack(Usd.TimeCode.Default()):
         if spec.HasDefaultValue() or spec.layer.GetNumTimeSamplesForPath(spec.path):
-            return spec.layer.realPath or spec.layer.identifier
-    return ""
+            return spec
+    return None
 
 
-def authored_at(attr: Usd.Attribute) -> AuthoredAt:
-    return AuthoredAt(prim=str(attr.GetPrim().GetPath()), attribute=attr.GetName(), layer=layer_of(attr))
+def layer_of(attr: Usd.Attribute, spec: Sdf.PropertySpec | None = None) -> str:
+    """The strongest layer holding a value opinion for ``attr`` (real path when it has one); ``spec``: its
+    :func:`value_spec`, when at hand."""
+    spec = spec if spec is not None else value_spec(attr)
+    return "" if spec is None else spec.layer.realPath or spec.layer.identifier
+
+
+def authored_at(attr: Usd.Attribute, spec: Sdf.PropertySpec | None = None) -> AuthoredAt:
+    return AuthoredAt(prim=str(attr.GetPrim().GetPath()), attribute=attr.GetName(), layer=layer_of(attr, spec))
 
 
 def _value_attribute(inp: UsdShade.Input) -> Usd.Attribute | None:

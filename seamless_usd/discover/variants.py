@@ -130,6 +130,8 @@ class VariantSpace:
         count)``, once per prototype prim and set (``count``: the instances that hold it, ``prim`` and ``instance``
         the first's)."""
         found: dict[tuple[str, str], list] = {}
+        if not self.stage.GetPrototypes():  # no instance: nothing to walk again
+            return []
         for prim in self.stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
             if not prim.IsInstanceProxy() or not prim.HasVariantSets():
                 continue

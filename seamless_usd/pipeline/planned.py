@@ -66,16 +66,21 @@ def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> Cach
                           (int(meta["crop_size"][0]), int(meta["crop_size"][1])))
     except Exception:  # noqa: BLE001 - an entry of any other shape: the run makes the tiles again, so planned as new
         return None
-    plan = dataclasses.replace(plan, verdict_elsewhere=verdict_elsewhere(folder))
+    def anew() -> CachedPlan:
+        """The tiles written again and judged again, as the run will (a tile gone or changed, no record for this
+        folder, a record of another shape), with the verdict they got where they were written before, if known
+        (the other records are read only here)."""
+        return dataclasses.replace(plan, verdict_elsewhere=verdict_elsewhere(folder))
+
     try:
         record = json.loads(record_paths(folder, out_dir, judged_key(stack))[0].read_text(encoding="utf-8"))
         if record.get("version") != version or not all(file_sha256(Path(o["path"])) == o["sha256"]
                                                        for o in record["outputs"].values()):
-            return plan  # a tile gone or changed: written again and judged again, as the run will
+            return anew()
         outcome = outcome_from_record(stack, meta, None, record, Previews(), True, out_dir, folder.name)
-        return dataclasses.replace(plan, outcome=outcome, verdict_elsewhere=None)
+        return dataclasses.replace(plan, outcome=outcome)
     except Exception:  # noqa: BLE001 - a record of another shape: the run judges the tiles again
-        return plan
+        return anew()
 
 
 def planned_result(stack: TextureStack, out_dir: Path, options: Options, made_with: str, tiles_of: str | None = None,
