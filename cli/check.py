@@ -61,8 +61,9 @@ def render(report: CheckReport, console: Console) -> None:
         console.print(f"not judged: {n} picture{'s' if n != 1 else ''} in folders of stages or documents that none of "
                       f"them uses ({escape(shown)}); name them, or a folder of pictures, to judge them", soft_wrap=True)
     if report.items or not report.unreadable:
-        unread = len(report.unreadable)
-        console.print(f"{sum(i.passed for i in report.items)} of {len(report.items)} passed"
+        unread, counts = len(report.unreadable), report.counts()
+        console.print(f"{counts['passed']} of {len(report.items)} passed"
+                      + (f", {counts['errors']} could not be judged" if counts["errors"] else "")
                       + (f"; {unread} input{'s' if unread != 1 else ''} could not be read" if unread else ""))
 
 

@@ -424,3 +424,24 @@ def test_a_tile_saved_again_without_its_record_says_it_is_judged_on_its_own(tmp_
     assert "records no source (saved again by another program?)" in notes[
         "brick_albedo.World_Looks_Brick-e1bb29ea54.bc9ef6bb.tile.png"]
     assert not notes["brick_albedo.png"]
+
+
+def test_pictures_that_cannot_be_judged_are_counted_apart_everywhere(tmp_path, capsys):
+    """A broken file and a picture too small to judge were counted as not passed in the JSON, while the contact
+    sheet said they could not be judged: the JSON, the text summary and the sheet give the same three counts."""
+    import shutil
+
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    shutil.copy(SAMPLES / "wood_tileable.jpg", lib / "wood.jpg")
+    (lib / "broken.png").write_bytes(b"not a png")
+    small = oiio.ImageBuf(oiio.ImageSpec(2, 2, 3, "uint8"))
+    assert small.write(str(lib / "small.png"))
+    sheet = tmp_path / "sheet.html"
+    assert main(["check", str(lib), "--json", "--report", str(sheet)]) == 1
+    report = json.loads(capsys.readouterr().out)
+    jsonschema.validate(report, json_schema("check"))
+    assert (report["passed"], report["not_passed"], report["errors"]) == (1, 0, 2)
+    assert "1 passed, 0 not passed, 2 could not be judged." in sheet.read_text()
+    assert main(["check", str(lib)]) == 1
+    assert "1 of 3 passed, 2 could not be judged" in capsys.readouterr().out

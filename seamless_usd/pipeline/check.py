@@ -102,8 +102,14 @@ class CheckReport:
     def to_dict(self) -> dict:
         return {"items": [i.to_dict() for i in self.items], "unreadable": list(self.unreadable),
                 "not_judged": list(self.not_judged),
-                "passed": sum(i.passed for i in self.items), "not_passed": sum(not i.passed for i in self.items),
-                "interrupted": self.interrupted, "exit_code": self.exit_code}
+                **self.counts(), "interrupted": self.interrupted, "exit_code": self.exit_code}
+
+    def counts(self) -> dict[str, int]:
+        """Items passed, judged and not passed, and not judged for an error (a texture that could not be read, a
+        picture too small): the counts the text summary, the JSON and the contact sheet all give."""
+        errors = sum(bool(i.error) for i in self.items)
+        passed = sum(i.passed for i in self.items)
+        return {"passed": passed, "not_passed": len(self.items) - passed - errors, "errors": errors}
 
 
 def _alone(item: CheckItem, files: list) -> None:
