@@ -434,3 +434,11 @@ def test_a_library_page_the_same_as_the_one_there_is_not_drawn_again(tmp_path):
     write_library_html(library("second"), tmp_path / "lib.html")
     again = [p.stat().st_mtime_ns for p in pages]
     assert again[0] == drawn[0] and again[1] != drawn[1] and "second" in pages[1].read_text(encoding="utf-8")
+
+
+def test_an_interrupted_run_says_which_layers_it_wrote():
+    """Stopped while stages were edited, the page said 'no stage edited' over the list of layers it had written."""
+    stopped = Report(sources=["a.usda", "b.usda"], interrupted=True, layers_written=["/lib/a.seamless.usda"])
+    assert "interrupted (Ctrl-C or SIGTERM): 1 layer(s) or document(s) written" in render_html(stopped)
+    assert "no stage edited" not in render_html(stopped)
+    assert "interrupted (Ctrl-C or SIGTERM): no stage edited" in render_html(Report(sources=["a.usda"], interrupted=True))

@@ -275,7 +275,9 @@ def render_html(report: Report, title: str = "seamless-usd report", back: str | 
     summary = "".join(f"<span><b>{v}</b> {esc(k.replace('_', ' '))}</span>" for k, v in counts.items() if v)
     layers = "".join(f"<li>{esc(p)}</li>" for p in report.layers_written)
     made = counts.get(StackStatus.PASSED.value, 0) + counts.get(StackStatus.REUSED.value, 0)
-    status = ("interrupted (Ctrl-C): no stage edited" if report.interrupted else
+    edited = len(report.layers_written)
+    status = (f"interrupted (Ctrl-C or SIGTERM): {f'{edited} layer(s) or document(s) written' if edited else 'no stage edited'}"
+              if report.interrupted else
               "some stacks failed or did not pass" if not report.ok else
               "all stacks made passed" if made else
               "no stack made: each is left alone or planned" if report.stacks else "no texture stack found")
