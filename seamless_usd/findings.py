@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from enum import Enum
 
-__all__ = ["Severity", "Finding", "prim_ref", "asset_ref"]
+__all__ = ["Severity", "Finding", "prim_ref", "asset_ref", "not_found_words"]
 
 
 class Severity(str, Enum):
@@ -42,3 +42,20 @@ def prim_ref(path: object) -> str:
 def asset_ref(path: object) -> str:
     """``@path@``: how USD tools name an asset in messages."""
     return f"@{path}@"
+
+
+GLOB_CHARS = frozenset("*?[")
+
+
+def not_found_words(path: object, pictures: bool = False) -> str:
+    """Why an input named on the command line gives nothing to read: a folder with no stage or document in it, a
+    pattern that matches nothing, or a path that is not there (``pictures``: ``check``, which takes them too)."""
+    from pathlib import Path
+
+    things = "USD stage, MaterialX document or picture" if pictures else "USD stage or MaterialX document"
+    p = Path(str(path))
+    if p.is_dir():
+        return f"no {things} found in this folder"
+    if GLOB_CHARS & set(str(path)) and not p.exists():
+        return f"the pattern matches no {things}; check the pattern"
+    return "no such file; check the path"

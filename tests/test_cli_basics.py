@@ -1,3 +1,6 @@
+import json
+from pathlib import Path
+
 from seamless_usd_cli.main import main
 
 
@@ -246,3 +249,34 @@ def test_the_progress_view_keeps_a_bar_for_each_stack_made_at_once_and_no_none_c
         view(ProgressEvent("stack-done", "A", 0, 2))
         assert set(view.steps) == {"B"}
     assert "None" not in console.export_text()
+
+
+def test_a_pattern_that_matches_nothing_is_an_unreadable_input_with_its_json_report(tmp_path, capsys, monkeypatch):
+    """``process 'lib/*.usd' --json`` printed nothing on stdout where ``process missing.usda --json`` printed its
+    report: a pipeline reading stdout could rely on neither. Every command reports both as inputs it cannot read."""
+    import jsonschema
+
+    from seamless_usd_schemas import json_schema
+
+    monkeypatch.chdir(tmp_path)
+    for command, schema in (("process", "report"), ("scan", "scan"), ("check", "check")):
+        assert main([command, "nothing*.usda", "--json"]) == 2, command
+        out = capsys.readouterr()
+        payload = json.loads(out.out)
+        jsonschema.validate(payload, json_schema(schema))
+        said = json.dumps(payload)
+        assert "nothing*.usda@" in said and "the pattern matches no USD stage" in said, command
+    assert main(["process", "nowhere.usda", "--json"]) == 2
+    assert "@nowhere.usda@: no such file; check the path" in capsys.readouterr().err
+
+
+def test_check_takes_a_quoted_pattern_of_pictures(tmp_path, capsys):
+    """``check 'textures/*.png'`` (a pattern the shell does not expand: quoted, in a script or a farm's job) said
+    'no such file' for the pattern itself."""
+    import shutil
+
+    for name in ("brick_albedo.png", "wood_tileable.jpg"):
+        shutil.copy(Path(__file__).resolve().parents[1] / "sample_assets" / "textures" / name, tmp_path / name)
+    main(["check", str(tmp_path / "*.png"), "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    assert [Path(i["name"]).name for i in payload["items"]] == ["brick_albedo.png"] and not payload["unreadable"]

@@ -20,7 +20,7 @@ from seamless_usd.discover.tokens import MTLX_SUFFIX, Codes
 from seamless_usd.textures import ExploredSelection, ScanResult, TextureStack, VariantExploration, describe_selection
 from seamless_usd.discover.variants import VariantSpace
 from seamless_usd.errors import InputError
-from seamless_usd.findings import Finding, Severity, asset_ref, prim_ref
+from seamless_usd.findings import Finding, Severity, asset_ref, not_found_words, prim_ref
 
 __all__ = ["scan_paths", "scan_stage", "scan_mtlx", "open_stage"]
 
@@ -292,6 +292,8 @@ def scan_paths(paths: Sequence[str | Path], unreadable: list | None = None) -> S
     for path in paths:  # each on its own: materials of two stages that share a prim path are two materials
         scan = _Scan()
         try:
+            if Path(path).is_dir() or not Path(path).exists():  # a folder or a pattern that gave nothing
+                raise InputError(f"{asset_ref(path)}: {not_found_words(path)}")
             if str(path).lower().endswith(MTLX_SUFFIX):
                 scan.add_document(path)
             else:

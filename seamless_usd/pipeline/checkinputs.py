@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 import errno
+import glob
 import os
 from collections.abc import Sequence
 from pathlib import Path
 
 from seamless_usd.discover.images import IMAGE_SUFFIXES
-from seamless_usd.findings import asset_ref
+from seamless_usd.findings import GLOB_CHARS, asset_ref, not_found_words
 from seamless_usd.pipeline.inputs import expand_inputs, is_own_output
 
 __all__ = ["check_inputs", "folder_pictures", "missing_reason", "real_path"]
@@ -57,12 +58,20 @@ def check_inputs(paths: Sequence[str | Path]) -> tuple[list[Path], list[Path], l
                 pictures += in_folder
             else:
                 problems.append(f"{asset_ref(p)}: no USD stage, MaterialX document or picture found in this folder")
+        elif GLOB_CHARS & set(str(p)) and not p.exists():  # a pattern (quoted, or from a script): pictures and scenes
+            matched = [Path(m) for m in sorted(glob.glob(str(p), recursive=True))]
+            found_pictures = [m for m in matched if m.suffix.lower() in IMAGE_SUFFIXES and m.is_file()]
+            found_scenes = [m for m in expand_inputs([p]) if m.is_file()]
+            if not found_pictures and not found_scenes:
+                problems.append(f"{asset_ref(p)}: {not_found_words(p, pictures=True)}")
+            pictures += found_pictures
+            scenes += found_scenes
         elif p.suffix.lower() in IMAGE_SUFFIXES:
             if p.is_file():
                 pictures.append(p)
             else:  # named and not there (a link to nothing, a loop of links): a path that does not exist, exit 2
                 problems.append(f"{asset_ref(p)}: {missing_reason(p)}")
-        elif not p.exists() and not set(str(p)) & set("*?["):
+        elif not p.exists():
             problems.append(f"{asset_ref(p)}: no such file or folder")
         else:
             scenes += expand_inputs([p])

@@ -7,13 +7,11 @@ import glob
 from collections.abc import Sequence
 from pathlib import Path
 
-from seamless_usd.errors import InputError, UsageError
-from seamless_usd.findings import asset_ref
+from seamless_usd.findings import GLOB_CHARS
 
 __all__ = ["expand_inputs", "SCENE_SUFFIXES", "is_own_output"]
 
 SCENE_SUFFIXES = frozenset({".usd", ".usda", ".usdc", ".usdz", ".mtlx"})
-_GLOB_CHARS = frozenset("*?[")
 OUTPUT_MARK = ".seamless."  # scene.seamless.usda, doc.seamless.mtlx: written by this tool
 OUTPUT_DIR_NAME = "tileable"
 
@@ -86,9 +84,10 @@ def expand_inputs(items: Sequence[str | Path], outputs: bool = False, require_sc
     them; ``outputs`` (``check``): a folder walk takes each scene as this tool left it instead (its new layer or
     document where there is one; see :func:`_walk`). A glob, like a folder walk, leaves out the layers its matched
     stages compose. A file named explicitly is always taken. Duplicates are removed, order is kept.
-    A glob that matches nothing is a usage error; with ``require_scenes`` (``process``, ``scan``) a folder that holds
-    no stage or document is an :class:`InputError` (a batch pointed at the wrong folder must not read as a run that
-    went well); a missing file is left for the caller to report (it is unreadable input, not a usage error).
+    A glob that matches nothing, and with ``require_scenes`` (``process``, ``scan``) a folder that holds no stage or
+    document, is given back as it is, as a missing file is: each caller reports them as inputs that cannot be read
+    (:func:`seamless_usd.findings.not_found_words`; exit code 2, a batch pointed at the wrong folder must not read as a
+    run that went well), in its ``--json`` report as well.
 
     >>> expand_inputs([]) == []
     True
@@ -99,16 +98,15 @@ def expand_inputs(items: Sequence[str | Path], outputs: bool = False, require_sc
         path = Path(text)
         if path.is_dir():
             found = _walk(path, outputs)
-            if not found and require_scenes:
-                raise InputError(f"{asset_ref(path)}: no USD stage or MaterialX document found in this folder")
-            out.extend(found)
-        elif _GLOB_CHARS & set(text) and not path.exists():
+            out.extend(found or ([path] if require_scenes else []))
+        elif GLOB_CHARS & set(text) and not path.exists():
             matches = [
                 Path(m) for m in sorted(glob.glob(text, recursive=True))
                 if Path(m).is_file() and Path(m).suffix.lower() in SCENE_SUFFIXES and not _own_layer(Path(m))
             ]
             if not matches:
-                raise UsageError(f"the pattern {text!r} matches no USD or MaterialX file")
+                out.append(path)
+                continue
             used = _composed_by(matches)  # as a folder walk: a layer a matched stage composes goes through it
             out.extend([m for m in matches if m.resolve() not in used] or matches)
         else:

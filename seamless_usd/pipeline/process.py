@@ -23,7 +23,7 @@ from seamless_usd.discover.select import left_alone_stacks as _left_alone, share
 from seamless_usd.textures import ScanResult, TextureStack
 from seamless_usd.errors import InputError, Interrupted, SeamlessUsdError, UsageError
 from seamless_usd.fileio import folder_problem, marked_writable
-from seamless_usd.findings import Finding, Severity, asset_ref
+from seamless_usd.findings import Finding, Severity, asset_ref, not_found_words
 from seamless_usd.pipeline.cache import JobIndex, job_fingerprint
 from seamless_usd.pipeline.executors import InProcessExecutor
 from seamless_usd.pipeline.options import Options
@@ -110,8 +110,8 @@ def _scan_source(path: Path, patterns: Sequence[str], triage_dir: Path | None = 
     """Open and scan one input; InputError when it cannot be read. ``triage_dir`` keeps the triage's pixel
     figures between runs (``keep_triage`` False: only reads them); ``in_place``: where each stack's edits would land
     is noted (``_Source.sites``), while the stage is open."""
-    if not path.exists():
-        raise InputError(f"{asset_ref(path)}: the file does not exist; check the path")
+    if path.is_dir() or not path.exists():  # a folder or a pattern that gave nothing, a path that is not there
+        raise InputError(f"{asset_ref(path)}: {not_found_words(path)}")
     suffix = path.suffix.lower()
     if suffix in MTLX_SUFFIXES:
         scan, kind = scan_mtlx(path, triage_dir, keep_triage), "mtlx"
