@@ -3,7 +3,8 @@
 For each material: its maps, their roles and channels, colour space, size and UV chain; then the
 skipped items and warnings with their reasons. ``--json`` prints the scan as JSON following
 ``schemas/scan.schema.json``. Exit code 0 when the scan ran (even with skipped items), 2 for a
-stage or document that cannot be read.
+stage or document that cannot be read, 130 stopped by Ctrl-C or SIGTERM (what was scanned by then is
+said, ``interrupted`` in the JSON), 141 the reader of its output went away.
 """
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from seamless_usd.discover import ScanResult, TextureMap, TextureStack, UVChain, scan_paths
+from seamless_usd.errors import Interrupted
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.textures import describe_selection
 
@@ -31,24 +33,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _inputs(paths: list[str]) -> list[Path]:
-    """Stages and documents named, found in folders or matched by globs, as ``process`` takes them (an
-    ``InputError`` for a folder that holds none)."""
+    """Stages and documents named, found in folders or matched by globs, as ``process`` takes them (a folder that
+    holds none, or a pattern that matches none, is given back to be named as an input that cannot be read)."""
     return expand_inputs(paths, require_scenes=True)
 
 
 def run(args: argparse.Namespace) -> int:
     unreadable: list[str] = []  # named as errors; the other inputs are scanned (exit code 2)
-    result = scan_paths(_inputs(args.paths), unreadable=unreadable)
+    try:
+        result = scan_paths(_inputs(args.paths), unreadable=unreadable)
+    except Interrupted as stop:  # what was scanned by then is said (with --json, printed) before the run ends so
+        _said(stop.report, args.json)
+        raise
+    _said(result, args.json)
+    return 2 if unreadable else 0
+
+
+def _said(result: ScanResult, as_json: bool) -> None:
+    """The inputs that could not be read on stderr; the scan as JSON or as tables on stdout."""
     for f in result.findings:
         if f.code == "unreadable-input":
             print(f"seamless-usd: error: {f.where}: {f.message}", file=sys.stderr)
-    if args.json:
+    if as_json:
         print(json.dumps(result.to_dict(), indent=2))
     elif result.sources:  # when nothing could be read, the error lines above are the whole answer
         # A pipe or file gets a wide table rather than rich's 80-column fallback.
         width = None if sys.stdout.isatty() else 160
         render(result, Console(file=sys.stdout, width=width, soft_wrap=False))
-    return 2 if unreadable else 0
 
 
 def _uv_text(uv: UVChain) -> str:

@@ -28,8 +28,9 @@ class UsageError(SeamlessUsdError):
 
 
 class Interrupted(KeyboardInterrupt):
-    """A run stopped by Ctrl-C while it made tiles, carrying the report of what it had done (``report``): the tiles
-    written so far are on disk and in the cache, the stage is not edited. Caught as any KeyboardInterrupt."""
+    """A run stopped by Ctrl-C (or SIGTERM) carrying what it had done (``report``): a run's report (the tiles written
+    so far are on disk and in the cache; each stack's row says how far it got), or a scan's result (what it had
+    scanned). Caught as any KeyboardInterrupt."""
 
     def __init__(self, report):
         super().__init__("interrupted")

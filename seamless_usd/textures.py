@@ -325,6 +325,7 @@ class ScanResult:
     findings: list[Finding] = field(default_factory=list)
     materials: list[str] = field(default_factory=list)  # every material seen, even with no stack
     variants: list[VariantExploration] = field(default_factory=list)  # per stage with variant sets
+    interrupted: bool = False  # stopped by Ctrl-C or SIGTERM: what was scanned by then
 
     def to_dict(self) -> dict:
         return {
@@ -333,6 +334,7 @@ class ScanResult:
             "variants": [v.to_dict() for v in self.variants],
             "stacks": [s.to_dict() for s in self.stacks],
             "findings": [f.to_dict() for f in self.findings],
+            "interrupted": self.interrupted,
         }
 
 

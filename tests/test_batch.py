@@ -729,3 +729,17 @@ def test_two_stages_of_one_name_and_two_formats_in_one_folder_get_a_layer_each(t
         assert Sdf.Layer.FindOrOpen(str(folder / f"{name}.seamless.usda")).subLayerPaths == [f"./{name}"]
     again, repeat = _run(str(folder), "--cache-dir", str(tmp_path / "cache"), capsys=capsys)
     assert again == code and not repeat["layers_written"]
+
+
+def test_ctrl_c_while_scan_runs_says_what_was_scanned(tmp_path, capsys, monkeypatch):
+    """``scan --json`` stopped by Ctrl-C printed nothing, where ``process --json`` and ``check --json`` print what
+    they had done: the stages scanned by then, ``interrupted``, exit code 130."""
+    from seamless_usd.discover import scan as scan_module
+
+    lib = _library(tmp_path, copies=1)
+    first, second = lib / "brick0" / "scene.usda", lib / "looks" / "two.usda"
+    _stopped_at(monkeypatch, scan_module, "open_stage", 2)
+    assert main(["scan", str(first), str(second), "--json"]) == 130
+    payload = json.loads(capsys.readouterr().out)
+    jsonschema.validate(payload, json_schema("scan"))
+    assert payload["interrupted"] and payload["sources"] == [str(first.resolve())] and len(payload["stacks"]) == 1

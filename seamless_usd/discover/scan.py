@@ -19,7 +19,7 @@ from seamless_usd.discover.stacks import build_stacks
 from seamless_usd.discover.tokens import MTLX_SUFFIX, Codes
 from seamless_usd.textures import ExploredSelection, ScanResult, TextureStack, VariantExploration, describe_selection
 from seamless_usd.discover.variants import VariantSpace
-from seamless_usd.errors import InputError
+from seamless_usd.errors import InputError, Interrupted
 from seamless_usd.findings import Finding, Severity, asset_ref, not_found_words, prim_ref
 
 __all__ = ["scan_paths", "scan_stage", "scan_mtlx", "open_stage"]
@@ -285,9 +285,21 @@ def scan_paths(paths: Sequence[str | Path], unreadable: list | None = None) -> S
     """Scan USD stages and ``.mtlx`` documents by path, into one result.
 
     Raises InputError (naming the file) for a stage or document that cannot be opened; with ``unreadable`` (a
-    list), that file is appended to it instead, with an error finding, and the other inputs are scanned.
+    list), that file is appended to it instead, with an error finding, and the other inputs are scanned. Stopped by
+    Ctrl-C (or SIGTERM, which the command line raises as one), it raises :class:`.errors.Interrupted` carrying what
+    was scanned by then (``interrupted`` set).
     """
     merged = ScanResult()
+    try:
+        _scan_into(merged, paths, unreadable)
+    except KeyboardInterrupt:
+        merged.interrupted = True
+        raise Interrupted(merged) from None
+    return merged
+
+
+def _scan_into(merged: ScanResult, paths: Sequence[str | Path], unreadable: list | None) -> None:
+    """:func:`scan_paths`' work, into ``merged`` one input at a time (so an interrupted scan keeps what it found)."""
     first_by_content: dict[str, str] = {}
     for path in paths:  # each on its own: materials of two stages that share a prim path are two materials
         scan = _Scan()
@@ -316,4 +328,3 @@ def scan_paths(paths: Sequence[str | Path], unreadable: list | None = None) -> S
         merged.materials += found.materials
         merged.findings += found.findings
         merged.variants += found.variants
-    return merged
