@@ -201,6 +201,12 @@ def test_make_executor_validates_names():
             make_executor(bad)
     with pytest.raises(UsageError, match="at least 1"):
         make_executor(None, 0)
+    # --jobs beside --scheduler: accepted where they agree, refused where each would set the workers differently
+    assert make_executor("local", 2).workers == 2 and make_executor("local:2", 2).workers == 2
+    with pytest.raises(UsageError, match=re.escape("--jobs 3 and --scheduler local:2 each set the workers")):
+        make_executor("local:2", 3)
+    with pytest.raises(UsageError, match="leave --jobs out"):
+        make_executor("tcp://127.0.0.1:8786", 2)
 
 
 def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, cache, capsys, monkeypatch):

@@ -299,8 +299,14 @@ def make_executor(scheduler: str | None, jobs: int | None = None) -> Executor:
             raise UsageError(f"--scheduler {scheduler!r}: expected local:N with N a whole number") from None
         if workers < 1:
             raise UsageError(f"--scheduler {scheduler!r}: N must be at least 1")
+        if n and jobs is not None and jobs != workers:
+            raise UsageError(f"--jobs {jobs} and --scheduler {scheduler} each set the workers: give one of them "
+                             f"(--scheduler local --jobs {jobs} is the same as --scheduler local:{jobs})")
         return DaskExecutor("local", workers=workers)
     if scheduler.startswith(("tcp://", "tls://", "ucx://", "inproc://")):
+        if jobs is not None:
+            raise UsageError(f"--jobs {jobs} sets worker processes on this machine, but --scheduler {scheduler} runs "
+                             "the stacks on that cluster's workers: leave --jobs out")
         return DaskExecutor(scheduler)
     hint = f" (a scheduler's address: tcp://{scheduler})" if ":" in scheduler and "/" not in scheduler else ""
     raise UsageError(
