@@ -49,13 +49,29 @@ def run(args: argparse.Namespace) -> int:
     return 2 if unreadable else 0
 
 
+def not_made(result: ScanResult) -> dict[str, str]:
+    """Stack id -> why ``process`` will leave that stack meant to tile alone or fail it (a map inside a package, a UDIM
+    set, a texture that cannot be read), so the scan says what the run will; read where one stage or document was
+    scanned (across several, material paths may be shared, and a finding's material names no file)."""
+    from seamless_usd.discover.select import blocked_stacks, set_aside_stacks
+
+    if len(result.sources) != 1:
+        return {}
+    kept = {**set_aside_stacks(result, result.stacks, ""), **blocked_stacks(result, result.stacks, "")}
+    return {s.id: kept[("", s.id)] for s in result.stacks if s.intent == "tiling" and ("", s.id) in kept}
+
+
 def _said(result: ScanResult, as_json: bool) -> None:
     """The inputs that could not be read on stderr; the scan as JSON or as tables on stdout."""
     for f in result.findings:
         if f.code == "unreadable-input":
             print(f"seamless-usd: error: {f.where}: {f.message}", file=sys.stderr)
     if as_json:
-        print(json.dumps(result.to_dict(), indent=2))
+        payload, kept = result.to_dict(), not_made(result)
+        for row in payload["stacks"]:
+            if row["id"] in kept:
+                row["not_made"] = kept[row["id"]]
+        print(json.dumps(payload, indent=2))
     elif result.sources:  # when nothing could be read, the error lines above are the whole answer
         # A pipe or file gets a wide table rather than rich's 80-column fallback.
         width = None if sys.stdout.isatty() else 160
@@ -146,16 +162,12 @@ def render(result: ScanResult, console: Console) -> None:
         console.print(f"[bold]scanned[/bold] {len(result.sources)} files under {escape(where)}")
     else:
         console.print(f"[bold]scanned[/bold] {escape(', '.join(result.sources))}")
-    from seamless_usd.discover.select import blocked_stacks, set_aside_stacks
-
-    # one stage or document: its findings are its own (across several, material paths may be shared)
-    kept = ({**set_aside_stacks(result, result.stacks, ""), **blocked_stacks(result, result.stacks, "")}
-            if len(result.sources) == 1 else {})
+    kept = not_made(result)
     first_of: dict[str, TextureStack] = {}  # each id's first stack, which its copies name
     for stack in result.stacks:
         first_of.setdefault(stack.id, stack)
     for stack in result.stacks:
-        why = kept.get(("", stack.id), "") if stack.intent == "tiling" else ""
+        why = kept.get(stack.id, "")
         first = first_of.get(stack.duplicate_of) if stack.duplicate_of else None
         if first is not None and first.intent == stack.intent and _uv_text(first.uv) == _uv_text(stack.uv) and not why:
             console.print(_duplicate_line(stack, first, common))
@@ -187,6 +199,7 @@ def render(result: ScanResult, console: Console) -> None:
     by_intent = ", ".join(f"{n} {name}" for name, n in intents.items())
     console.print(
         f"{len(result.materials)} material(s), {len(result.stacks)} stack(s) ({n_dup} duplicate"
-        + (f"; {by_intent}" if by_intent else "") + "), "
+        + (f"; {by_intent}" if by_intent else "") + (f"; {len(kept)} that process will not make" if kept else "")
+        + "), "
         f"{sum(len(s.maps) for s in result.stacks)} map(s), {len(result.findings)} finding(s)"
     )

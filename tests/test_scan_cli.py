@@ -209,6 +209,13 @@ def test_scan_says_what_process_will_do_with_a_stack_inside_a_package(tmp_path, 
     assert main(["scan", str(package)]) == 0
     out = " ".join(capsys.readouterr().out.split())
     assert "process: left alone:" in out and "inside a .usdz package" in out, out[-600:]
+    assert "1 tiling; 1 that process will not make)" in out
+    # the JSON said nothing of it: a pipeline reading it planned a stack that process then leaves alone
+    assert main(["scan", str(package), "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    jsonschema.validate(payload, json_schema("scan"))
+    [stack] = payload["stacks"]
+    assert stack["not_made"].startswith("left alone:") and "inside a .usdz package" in stack["not_made"]
 
 
 def test_a_library_scan_lists_its_folder_and_each_copy_of_a_stack_in_one_line(tmp_path, capsys):
