@@ -37,7 +37,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--report", type=Path, metavar="HTML",
                         help="write a contact sheet: each picture repeated 2 x 2 with its seams drawn in red")
     parser.add_argument("--jobs", type=int, default=0, metavar="N",
-                        help="worker processes judging pictures (default: one per core, at most 8)")
+                        help="worker processes judging pictures (default 0: one per core, at most 8; 1: in this "
+                             "process)")
 
 
 def render(report: CheckReport, console: Console) -> None:

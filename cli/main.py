@@ -49,7 +49,24 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=module.__doc__.strip().splitlines()[0], description=module.__doc__)
         module.add_arguments(p)
         p.set_defaults(_run=module.run)
+        parser.set_defaults(**{f"_parser_{name}": p})
     return parser
+
+
+def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+    """``argv`` parsed; an option the sub-command does not know is refused by that sub-command, with its usage and
+    the option it most likely means (argparse's own refusal showed the top-level usage and guessed nothing)."""
+    import difflib
+
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        sub = getattr(args, f"_parser_{args.command}")
+        known = [o for action in sub._actions for o in action.option_strings]
+        unknown = [e for e in extra if e.startswith("-")]
+        guess = difflib.get_close_matches(unknown[0].split("=")[0], known, n=1) if unknown else []
+        hint = f" (did you mean {guess[0]}?)" if guess else ""
+        sub.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
+    return args
 
 
 def _handle_interrupt(handler) -> dict:
@@ -90,7 +107,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             # Ctrl-C while the sub-command's modules load is held until they have: raised inside USD's module
             # loader, it printed that loader's tracebacks and was swallowed; nothing is done yet (well under a second)
             parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
-            args = parser.parse_args(argv)
+            args = _parse(parser, argv)
         except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
             return int(exc.code or 0)
         starting[0] = False

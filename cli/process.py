@@ -5,7 +5,9 @@ stage (tileable/) and, by default, a new layer <scene>.seamless.usda that sublay
 original and holds the edits. A stack *passed* when its written tiles have no seam (at the wrap,
 the centre lines or inside, in any map, judged against the source's own lines) and every fidelity
 figure is inside the tolerance its source sets. Exit codes: 0 all stacks passed; 1 some stack failed
-or did not pass (the rest were written); 2 usage error or unreadable input.
+or did not pass (the rest were written); 2 usage error or unreadable input; 3 internal error (a log
+file is named); 130 stopped by Ctrl-C or SIGTERM (the report says how far each stack got); 141 the
+reader of its output went away.
 """
 from __future__ import annotations
 
@@ -57,7 +59,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cache-dir", type=Path, help="trained models and checkpoints (default: user cache dir)")
     p.add_argument("--jobs", "-j", type=int, help="stacks trained at once in local worker processes (default 1)")
     p.add_argument("--scheduler", metavar="ADDRESS",
-                   help="run stacks on Dask: local:N (a local cluster of N workers) or tcp://host:8786")
+                   help="run stacks on Dask: local:N (a local cluster of N workers) or tcp://host:8786 "
+                        "(default: inprocess, or --jobs N local worker processes without Dask)")
     p.add_argument("--refine", choices=REFINE_MODES, default="on",
                    help="on: the SeamlessGAN tile refined to the source's resolution with real source texels, "
                         "or a tile cut from the source (whole periods of a texture that repeats, one window of "

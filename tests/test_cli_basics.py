@@ -280,3 +280,13 @@ def test_check_takes_a_quoted_pattern_of_pictures(tmp_path, capsys):
     main(["check", str(tmp_path / "*.png"), "--json"])
     payload = json.loads(capsys.readouterr().out)
     assert [Path(i["name"]).name for i in payload["items"]] == ["brick_albedo.png"] and not payload["unreadable"]
+
+
+def test_a_misspelled_option_is_refused_by_its_sub_command_with_a_guess(capsys):
+    """``process X --presett tiny`` printed the top-level usage (``seamless-usd [-h] [--version] COMMAND``) and
+    guessed nothing."""
+    assert main(["process", "x.usda", "--presett", "tiny"]) == 2
+    err = capsys.readouterr().err
+    assert "usage: seamless-usd process" in err and "did you mean --preset?" in err
+    assert main(["check", "--jsn", "x.png"]) == 2
+    assert "seamless-usd check: error: unrecognized arguments: --jsn (did you mean --json?)" in capsys.readouterr().err
