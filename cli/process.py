@@ -221,9 +221,13 @@ def _counts_line(report: Report) -> str:
     """``12 stacks: 7 passed, 3 not passed, 2 left alone`` (a dry run: how many are planned, and how many of those
     reuse another stack's tiles)."""
     counts = report.counts()
-    reused = sum(1 for s in report.stacks if s.status is StackStatus.PLANNED and s.duplicate_of)
+    planned = [s for s in report.stacks if s.status is StackStatus.PLANNED]
+    reused = sum(1 for s in planned if s.duplicate_of)
+    known_bad = sum(1 for s in planned if s.verdict.get("passed") is False)  # a dry run's exit 1: say why
+    notes = [f"{reused} reusing another stack's tiles"] * bool(reused) + [
+        f"{known_bad} known from the cache not to pass"] * bool(known_bad)
     parts = [f"{counts[status.value]} {status.value.replace('-', ' ')}"
-             + (f" ({reused} reusing another stack's tiles)" if status is StackStatus.PLANNED and reused else "")
+             + (f" ({'; '.join(notes)})" if status is StackStatus.PLANNED and notes else "")
              for status in StackStatus if counts[status.value]]
     total = len(report.stacks)
     return f"{total} stack{'s' if total != 1 else ''}: {', '.join(parts)}"

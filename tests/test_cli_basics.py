@@ -226,6 +226,13 @@ def test_the_summary_ends_with_what_the_run_came_to_in_one_line():
     assert _counts_line(run) == "4 stacks: 2 passed, 1 not passed, 1 left alone"
     dry = Report(sources=["s.usda"], stacks=[row(0, StackStatus.PLANNED), row(1, StackStatus.PLANNED, "0")])
     assert _counts_line(dry) == "2 stacks: 2 planned (1 reusing another stack's tiles)"
+    # a dry run that exits 1 because the cache knows a planned stack will not pass says so in its last line
+    known = row(2, StackStatus.PLANNED)
+    known.verdict = {"passed": False}
+    dry.stacks.append(known)
+    assert dry.exit_code == 1
+    assert _counts_line(dry) == ("3 stacks: 3 planned (1 reusing another stack's tiles; 1 known from the cache not "
+                                 "to pass)")
 
 
 def test_the_progress_view_keeps_a_bar_for_each_stack_made_at_once_and_no_none_count():
