@@ -396,3 +396,22 @@ def test_an_output_layer_that_is_the_input_or_a_file_of_the_users_is_refused_bef
     out = tmp_path / "over.usda"
     assert _process(str(scene), "--max-size", "128", "-o", str(out), cache=tmp_path / "cache") == 0
     assert _process(str(scene), "--max-size", "128", "-o", str(out), cache=tmp_path / "cache") == 0  # ours: again
+    # the new layer this tool wrote over another stage: that shot's overrides were replaced without a word
+    theirs = assets / "chess" / "piece.usda"
+    assert _process(str(theirs), "--max-size", "128", "-o", str(out), cache=tmp_path / "cache") == 2
+    assert "is the new layer this tool wrote over another stage" in capsys.readouterr().err
+    assert "brick/scene.usda@" in out.read_text()
+
+
+def test_a_file_of_the_users_at_the_new_layers_default_path_is_never_replaced(assets, tmp_path, capsys):
+    """``process scene.usda`` replaced a ``scene.seamless.usda`` the user had written (a sublayer and a note of their
+    own) without a backup or a word, where ``-o`` naming the same file is refused: its stacks fail, naming it."""
+    scene = assets / "brick" / "scene.usda"
+    theirs = scene.with_name("scene.seamless.usda")
+    theirs.write_text('#usda 1.0\n(\n    subLayers = [@./scene.usda@]\n)\n\nover "World"\n{\n'
+                      '    custom string userNote = "hand work"\n}\n')
+    before = theirs.read_bytes()
+    assert _process(str(scene), "--json", cache=tmp_path / "cache") == 1
+    [row] = json.loads(capsys.readouterr().out)["stacks"]
+    assert row["status"] == "failed" and "is not a layer or document this tool wrote" in row["message"]
+    assert theirs.read_bytes() == before and not (scene.parent / "tileable").exists()

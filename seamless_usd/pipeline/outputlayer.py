@@ -1,5 +1,6 @@
-"""The one layer or document ``-o/--output-layer`` names: refused, before any work, where it would not be the new
-layer of the one input, or would replace a file this tool did not write."""
+"""The new layer or document a run writes (``-o/--output-layer``'s, or the default one beside each input): refused,
+before any work, where it would not be the new layer of its input, or would replace a file this tool did not write
+or a new layer it wrote over another stage."""
 from __future__ import annotations
 
 from collections.abc import Sequence
@@ -9,7 +10,7 @@ from seamless_usd.discover.tokens import MTLX_SUFFIX
 from seamless_usd.errors import UsageError
 from seamless_usd.findings import asset_ref
 
-__all__ = ["MTLX_SUFFIXES", "check_output_layer"]
+__all__ = ["MTLX_SUFFIXES", "check_output_layer", "replace_problem"]
 
 MTLX_SUFFIXES = {MTLX_SUFFIX}
 _LAYER_SUFFIXES = (".usda", ".usdc", ".usd")  # the layers a new layer can be written as (not a .usdz package)
@@ -29,13 +30,28 @@ def check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
     if inputs and output.resolve() == inputs[0].resolve():
         raise UsageError(f"-o/--output-layer {asset_ref(output)} is the input itself; name a new file (or use "
                          "--in-place to edit the input, with a backup)")
-    if output.exists() and not _own_output(output):
-        raise UsageError(f"-o/--output-layer {asset_ref(output)} exists and is not a layer or document this tool "
-                         "wrote: it is not replaced; name a new file, or move that one away")
+    problem = replace_problem(output, inputs[0]) if inputs else None
+    if problem:
+        raise UsageError(f"-o/--output-layer {asset_ref(output)} {problem}; name a new file, or move that one away")
 
 
-def _own_output(path: Path) -> bool:
-    """Whether ``path`` is a new layer or document this tool wrote (it records what it was made from)."""
+def replace_problem(output: Path, source: Path) -> str | None:
+    """Why the new layer or document ``output`` of the input ``source`` may not be written where it would replace a
+    file: one this tool did not write (a user's own layer of that name), or a new layer it wrote over another stage
+    (its first sublayer is not ``source``: another shot's overrides); None where it may."""
+    if not output.exists():
+        return None
+    owner = _own_output(output)
+    if owner is False:
+        return "exists and is not a layer or document this tool wrote: it is not replaced"
+    if isinstance(owner, Path) and owner.resolve() != Path(source).resolve():
+        return f"is the new layer this tool wrote over another stage ({asset_ref(owner)}): it is not replaced"
+    return None
+
+
+def _own_output(path: Path) -> bool | Path:
+    """Whether ``path`` is a new layer or document this tool wrote (it records what it was made from): for a layer,
+    the stage it was written over (its first sublayer), True where that cannot be read; False where not ours."""
     if path.suffix.lower() in MTLX_SUFFIXES:
         import MaterialX as mx
 
@@ -55,4 +71,8 @@ def _own_output(path: Path) -> bool:
         layer = Sdf.Layer.OpenAsAnonymous(str(path))
     except Tf.ErrorException:
         return False
-    return bool(layer and Names.MADE_FROM in dict(layer.customLayerData))
+    if not layer or Names.MADE_FROM not in dict(layer.customLayerData):
+        return False
+    below = list(layer.subLayerPaths)
+    return (path.parent / below[0]) if below and not Path(below[0]).is_absolute() else (
+        Path(below[0]) if below else True)
