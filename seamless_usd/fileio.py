@@ -113,14 +113,17 @@ def _remove_stale_temps(target: Path, suffix: str) -> None:
     """Remove temporary files of ``target`` left by a killed writer on this host.
 
     Temporary names carry the host and process id of their writer (``.a.host-123.x1y2.tmp.png``);
-    one whose process no longer exists is a leftover (SIGKILL, power loss) and goes. Files of
-    live processes, of other hosts (shared storage) or of other names are never touched.
+    one whose process no longer exists is a leftover (SIGKILL, power loss) and goes, with the file USD's own
+    writer makes beside a layer it saves there (the name's extension replaced by six random characters:
+    ``.a.host-123.x1y2.tmp.Hv97tP``). Files of live processes, of other hosts (shared storage) or of other names
+    are never touched.
     """
     pattern = re.compile(
-        re.escape(f".{target.stem}.") + r"(?P<owner>[A-Za-z0-9_]+)-(?P<pid>\d+)\.[^.]+" + re.escape(f".tmp{suffix}")
+        re.escape(f".{target.stem}.") + r"(?P<owner>[A-Za-z0-9_]+)-(?P<pid>\d+)\.[^.]+\.tmp"
+        + f"(?:{re.escape(suffix)}|\\.[A-Za-z0-9]{{6}})"
     )
     try:
-        siblings = list(target.parent.glob(f".{glob.escape(target.stem)}.*.tmp{glob.escape(suffix)}"))
+        siblings = list(target.parent.glob(f".{glob.escape(target.stem)}.*.tmp*"))
     except OSError:
         return
     for path in siblings:

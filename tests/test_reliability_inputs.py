@@ -382,6 +382,24 @@ def test_temporary_files_of_killed_writers_are_removed_by_the_next_write(tmp_pat
     assert alive.exists() and other_host.exists() and other_file.exists()
 
 
+def test_a_layer_left_half_saved_by_a_killed_run_is_not_taken_for_a_stage(tmp_path):
+    """A run killed while it saved a layer in place left its temporary layer (a whole copy, or empty) and USD's own
+    temporary file beside it: a folder walk took the temporary layer for a stage (its materials counted twice, or an
+    exit 2 for a stage that cannot be read), and the next write of the layer left USD's file behind."""
+    from seamless_usd.pipeline.inputs import expand_inputs
+
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    scene = write_scene(tmp_path / "looks.usda", {"M": "./m.png"})
+    ours = tmp_path / f".looks.{fileio._OWNER}-{dead.pid}.abc123.tmp.usda"
+    usds = tmp_path / f".looks.{fileio._OWNER}-{dead.pid}.abc123.tmp.Hv97tP"
+    ours.write_text(scene.read_text())
+    usds.write_text("#usda 1.0\n")
+    assert expand_inputs([tmp_path], require_scenes=True) == [scene]
+    fileio.atomic_write_text(scene, scene.read_text())
+    assert not ours.exists() and not usds.exists()
+
+
 # read-only output folder, full disk -------------------------------------------------------------
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from seamless_usd.discover.images import IMAGE_SUFFIXES
 from seamless_usd.findings import GLOB_CHARS, asset_ref, not_found_words
-from seamless_usd.pipeline.inputs import expand_inputs, is_own_output
+from seamless_usd.pipeline.inputs import expand_inputs, is_hidden, is_own_output
 
 __all__ = ["check_inputs", "folder_pictures", "missing_reason", "real_path"]
 
@@ -18,7 +18,7 @@ def folder_pictures(folder: Path) -> list[Path]:
     """The pictures in ``folder`` and below (this tool's outputs left out); a link to a picture that is gone is
     kept, and reported as missing when judged."""
     return sorted(q for q in folder.rglob("*") if (q.is_file() or q.is_symlink()) and q.suffix.lower() in IMAGE_SUFFIXES
-                  and not is_own_output(q.relative_to(folder)))
+                  and not is_own_output(q.relative_to(folder)) and not is_hidden(q.relative_to(folder)))
 
 
 def real_path(path) -> Path:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from seamless_usd.findings import GLOB_CHARS
 
-__all__ = ["expand_inputs", "SCENE_SUFFIXES", "is_own_output"]
+__all__ = ["expand_inputs", "SCENE_SUFFIXES", "is_hidden", "is_own_output"]
 
 SCENE_SUFFIXES = frozenset({".usd", ".usda", ".usdc", ".usdz", ".mtlx"})
 OUTPUT_MARK = ".seamless."  # scene.seamless.usda, doc.seamless.mtlx: written by this tool
@@ -20,6 +20,12 @@ def is_own_output(path: Path) -> bool:
     """A layer, document or tile this tool wrote (or a backup): not an input when walking folders (a picture in a
     ``tileable`` folder below is a tile, judged with the stage that uses it)."""
     return _own_layer(path) or OUTPUT_DIR_NAME in path.parent.parts
+
+
+def is_hidden(relative: Path) -> bool:
+    """A file or folder whose name starts with a dot, below the folder walked: left out of folder walks (a write's
+    temporary file, this tool's or USD's, left by a killed run; version control's and editors' own files)."""
+    return any(part.startswith(".") for part in relative.parts)
 
 
 def _own_layer(path: Path) -> bool:
@@ -38,6 +44,7 @@ def _walk(folder: Path, outputs: bool = False) -> list[Path]:
     found = sorted(
         p for p in folder.rglob("*")
         if p.is_file() and p.suffix.lower() in SCENE_SUFFIXES and (outputs or not _own_layer(p))  # .bak: no scene
+        and not is_hidden(p.relative_to(folder))
     )
     if outputs:  # a document's new document is a whole document: the one it was made from is left out
         remade = {p.with_name(p.name.replace(OUTPUT_MARK, ".", 1)) for p in found if p.suffix.lower() == ".mtlx"
