@@ -352,6 +352,20 @@ def test_in_place_edits_opinion_layers_with_backups(scene: Path):
     assert (root / "looks.usda.bak").read_bytes() == originals["looks.usda"]
 
 
+def test_an_in_place_edit_never_goes_without_a_backup_of_what_it_replaces(scene: Path):
+    """A ``looks.usda.bak`` of the user's own (or one a stopped run left, from before the layer changed) was taken
+    for the backup: the layer was edited, the JSON named that .bak, and what the edit replaced was nowhere. The edit
+    now gets a backup of its own beside it, and the .bak there is left as it was."""
+    root = scene.parent
+    theirs = b"#usda 1.0\n# the user's own notes\n"
+    (root / "looks.usda.bak").write_bytes(theirs)
+    before = (root / "looks.usda").read_bytes()
+    result = author_usd(scene, [brick_result(root)], mode=WriteMode.IN_PLACE)
+    assert result.layers_written == [root / "looks.usda"]
+    assert result.backups == [root / "looks.usda.1.bak"]
+    assert (root / "looks.usda.1.bak").read_bytes() == before and (root / "looks.usda.bak").read_bytes() == theirs
+
+
 def test_dry_run_writes_nothing(scene: Path):
     root = scene.parent
     before = hashes(root)

@@ -92,17 +92,31 @@ def layer_lock(path: Path) -> Iterator[None]:
 
 
 def backup_once(path: Path) -> Path:
-    """Copy ``path`` to ``path.bak`` unless that backup exists (it then holds the original)."""
+    """A backup of ``path`` as it is now, before it is edited in place: ``path.bak`` (made by the first run that edits
+    it, then kept: the original), or, where ``path.bak`` holds something else (the file changed since that run, or a
+    ``.bak`` of the user's own, or one a stopped run left), ``path.1.bak``, ``path.2.bak`` ...: the first that is free
+    or already holds this content. No file is edited in place without a copy of what the edit replaces, and no
+    ``.bak`` there is ever replaced."""
     path = Path(path)
-    bak = path.with_name(path.name + BACKUP_SUFFIX)
-    if not bak.exists():
-        size = path.stat().st_size
+    data = path.read_bytes()
+    for n in range(0, 1000):
+        bak = path.with_name(path.name + (f".{n}" if n else "") + BACKUP_SUFFIX)
+        if not bak.exists():
+            break
+        try:
+            if bak.is_file() and bak.stat().st_size == len(data) and bak.read_bytes() == data:
+                return bak
+        except OSError:
+            continue
+    else:
+        raise InputError(f"{asset_ref(path)}: a thousand backups of it are there already; move them away")
+    size = len(data)
 
-        def same_size(tmp: Path) -> None:
-            if tmp.stat().st_size != size:
-                raise InputError("the backup copy is incomplete")
+    def same_size(tmp: Path) -> None:
+        if tmp.stat().st_size != size:
+            raise InputError("the backup copy is incomplete")
 
-        write_atomically(bak, lambda tmp: shutil.copyfile(path, tmp), check=same_size)
+    write_atomically(bak, lambda tmp: tmp.write_bytes(data), check=same_size)
     return bak
 
 
