@@ -667,3 +667,21 @@ def test_a_materialx_image_in_usd_with_no_texcoord_gets_its_uv_scale_through_a_u
     [reader] = place.GetInput("texcoord").GetConnectedSources()[0]
     reader = UsdShade.Shader(reader.source.GetPrim())
     assert reader.GetShaderId() == "ND_texcoord_vector2" and reader.GetInput("index").Get() == 0
+
+
+def test_a_layer_reached_through_a_link_is_edited_in_the_file_it_links_to(scene: Path, tmp_path: Path):
+    """``looks.usda``, a link to a library's layer: the in-place edit replaced the link with a file of its own, so the
+    shot stopped following the library without a word. The edit is made in the linked file, the link stays, and a
+    warning says every stage that uses that file shows the tiles now."""
+    root = scene.parent
+    library = tmp_path / "library"
+    library.mkdir()
+    shutil.move(root / "looks.usda", library / "looks.usda")
+    (root / "looks.usda").symlink_to(library / "looks.usda")
+    before = (library / "looks.usda").read_bytes()
+    result = author_usd(scene, [brick_result(root)], mode=WriteMode.IN_PLACE)
+    assert (root / "looks.usda").is_symlink() and (library / "looks.usda").read_bytes() != before
+    assert result.layers_written == [library / "looks.usda"]
+    assert result.backups == [library / "looks.usda.bak"] and (library / "looks.usda.bak").read_bytes() == before
+    assert any("a link to" in f.message and "every stage that links or uses that file" in f.message
+               for f in result.findings)

@@ -17,7 +17,8 @@ from seamless_usd.errors import InputError
 from seamless_usd.fileio import atomic_write
 from seamless_usd.findings import asset_ref
 
-__all__ = ["BACKUP_SUFFIX", "write_atomically", "check_layer", "layer_lock", "backup_once", "relative_asset_path"]
+__all__ = ["BACKUP_SUFFIX", "write_atomically", "check_layer", "layer_lock", "backup_once", "linked_target",
+           "relative_asset_path"]
 
 BACKUP_SUFFIX = ".bak"
 
@@ -118,6 +119,18 @@ def backup_once(path: Path) -> Path:
 
     write_atomically(bak, lambda tmp: tmp.write_bytes(data), check=same_size)
     return bak
+
+
+def linked_target(path: Path) -> tuple[Path, str | None]:
+    """The file an in-place edit of ``path`` writes, and what to say where that is not ``path`` itself: a layer or
+    document reached through a link is edited in the file it links to, so the link (and every stage that shares that
+    file through it) stays as it was; replaced by a file of its own, the link was cut without a word."""
+    path = Path(path)
+    real = Path(os.path.realpath(path))
+    if real == path.absolute():
+        return path, None
+    return real, (f"a link to {asset_ref(real)}: edited in place there, so every stage that links or uses that file "
+                  "shows the tiles now (leave out --in-place for a layer of this stage's own)")
 
 
 def relative_asset_path(target: Path, anchor_dir: Path) -> str:

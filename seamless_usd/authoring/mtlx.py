@@ -19,8 +19,8 @@ import MaterialX as mx
 from seamless_usd.authoring.mtlxinputs import (MtlxNames, UnauthoredInput, fmt, gltf_identity, own_file_input,
                                                own_input, set_vector2, vector2)
 from seamless_usd.authoring.mtlxuv import _PlaceUV
-from seamless_usd.authoring.files import (SET_BY_HAND, backup_once, layer_lock, relative_asset_path, set_by_hand,
-                                          write_atomically)
+from seamless_usd.authoring.files import (SET_BY_HAND, backup_once, layer_lock, linked_target, relative_asset_path,
+                                          set_by_hand, write_atomically)
 from seamless_usd.authoring.mtlxtext import read_options, stated_version, with_leading_comments
 from seamless_usd.authoring.types import (TURN_NOT_AUTHORED, AuthoringResult, Codes, Provenance, StackResult, UVTurn,
                                           WriteMode, node_key, shared_with)
@@ -109,9 +109,13 @@ def author_mtlx(
     # Written through Python: MaterialX's own file writer ignores write errors (a full disk gives
     # an empty document), Python raises them.
     text = with_leading_comments(mx.writeToXmlString(doc), src)
-    with layer_lock(src):
+    if mode is WriteMode.IN_PLACE:
+        out, linked = linked_target(out)
+        if linked:
+            result.findings.append(Finding(Severity.WARNING, Codes.SHARED_LAYER_EDITED, asset_ref(src), linked))
+    with layer_lock(out):
         if mode is WriteMode.IN_PLACE:
-            result.backups.append(backup_once(src))
+            result.backups.append(backup_once(out))
         write_atomically(out, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     result.layers_written.append(out)
     return result

@@ -6,7 +6,7 @@ from typing import Sequence
 
 from pxr import Ar, Sdf, Tf, Usd
 
-from seamless_usd.authoring.files import backup_once, check_layer, write_atomically
+from seamless_usd.authoring.files import backup_once, check_layer, linked_target, write_atomically
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult
 from seamless_usd.authoring.usdedits import check_uv_composed, keep_whole_stacks
 from seamless_usd.authoring.usdplan import _Author
@@ -133,7 +133,10 @@ def _author_in_place(stage_path: Path, results: Sequence[StackResult], dry_run: 
         for layer in sorted(changed, key=lambda lay: lay.realPath):
             if layer.ExportToString() == before[layer]:  # only a stack that kept none of its edits touched it
                 continue
-            path = Path(layer.realPath)
+            path, linked = linked_target(Path(layer.realPath))
+            if linked:
+                result.findings.append(Finding(Severity.WARNING, Codes.SHARED_LAYER_EDITED,
+                                               asset_ref(layer.realPath), linked))
             result.backups.append(backup_once(path))
             args = _format_args(layer)
             write_atomically(path, lambda tmp, layer=layer: layer.Export(str(tmp), args=args), check=check_layer)
