@@ -415,3 +415,22 @@ def test_a_file_of_the_users_at_the_new_layers_default_path_is_never_replaced(as
     [row] = json.loads(capsys.readouterr().out)["stacks"]
     assert row["status"] == "failed" and "is not a layer or document this tool wrote" in row["message"]
     assert theirs.read_bytes() == before and not (scene.parent / "tileable").exists()
+
+
+def test_a_tile_painted_over_since_it_was_written_is_never_replaced(assets, tmp_path, capsys):
+    """A tile a TD touched up by hand (a square painted over, the file's record kept) went back to the cached tile on
+    the next run, without a word: its stack now fails, naming it, and the painted file stays as it is."""
+    scene = assets / "brick" / "scene.usda"
+    assert _process(str(scene), "--max-size", "128", cache=tmp_path / "cache") == 0
+    capsys.readouterr()
+    [tile] = sorted((scene.parent / "tileable").glob("brick_albedo.*.tile.png"))
+    painted = oiio.ImageBuf(str(tile))
+    pixels = painted.get_pixels(oiio.UINT8)
+    pixels[4:20, 4:20] = 0
+    painted.set_pixels(painted.roi, pixels)
+    assert painted.write(str(tile))
+    before = tile.read_bytes()
+    assert _process(str(scene), "--max-size", "128", "--json", cache=tmp_path / "cache") == 1
+    [row] = json.loads(capsys.readouterr().out)["stacks"]
+    assert row["status"] == "failed" and "was changed since this tool wrote it" in row["message"]
+    assert tile.name in row["message"] and tile.read_bytes() == before

@@ -70,6 +70,25 @@ def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str
     return stored_previews(str(pictures), info)
 
 
+def changed_outputs(entry_root: Path, out_dir: Path, stack_id: str) -> list[Path]:
+    """The tiles a previous run wrote for this stack into ``out_dir`` that are there but no longer what it wrote
+    (painted over, saved again by another program): the record keeps each one's digest as written. None is listed
+    where no record is kept (a tile is then made again, as on a first run)."""
+    try:
+        record = json.loads(record_paths(entry_root, out_dir, stack_id)[0].read_text(encoding="utf-8"))
+        outputs = [(Path(out["path"]), out["sha256"]) for out in record["outputs"].values()]
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return []
+    changed = []
+    for path, digest in outputs:
+        try:
+            if path.is_file() and file_sha256(path) != digest:
+                changed.append(path)
+        except OSError:
+            continue
+    return changed
+
+
 def verdict_elsewhere(entry_root: Path) -> dict[str, Any] | None:
     """The verdict this version gave the tiles of this cache entry when they were written into any folder (a copy of
     the library, another output folder): an entry holds one stack's tiles, made of the same source files with the
