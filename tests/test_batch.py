@@ -234,13 +234,21 @@ def test_duplicated_stacks_train_once_and_a_warm_cache_trains_nothing(tmp_path, 
     assert len(kept) == len(fresh) and not any("from the cache" in line for line in again["plan"]), again["plan"]
     assert not any(line.startswith("make tiles of") for line in again["plan"])
     assert not any("provenance" in line for line in again["plan"])  # the run's edits are there already
-    # one tile edited by hand: that stack's tiles are written again from the cache and judged again
+    # one tile gone: that stack's tiles are written again from the cache and judged again
     edited = Path(first["stacks"][0]["maps"][0]["output"])
-    edited.write_bytes(edited.read_bytes() + b"\0")
+    kept_bytes = edited.read_bytes()
+    edited.unlink()
     _, touched = _run(str(lib), "--dry-run", "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
     rewritten = [line for line in touched["plan"] if "from the cache" in line]
     assert len(rewritten) == 1 and "judged again once written" in rewritten[0], touched["plan"]
     assert len([line for line in touched["plan"] if line.startswith("keep the tiles")]) == len(fresh) - 1
+    # one tile edited by hand: the run leaves it as it is and fails that stack, and the dry run says so
+    edited.write_bytes(kept_bytes + b"\0")
+    touched_code, touched = _run(str(lib), "--dry-run", "--cache-dir", str(tmp_path / "cold"), capsys=capsys)
+    [failed] = [s for s in touched["stacks"] if s["status"] == "failed"]
+    assert touched_code == 1 and "was changed since this tool wrote it" in failed["message"]
+    assert len([line for line in touched["plan"] if line.startswith("keep the tiles")]) == len(fresh) - 1
+    edited.write_bytes(kept_bytes)  # as the run wrote it: the runs below find the library as it was
     # a copy of the library (another folder, the same cache): its tiles are written anew and judged again, and the
     # verdict they got when written before is known, so the dry run's exit code and words are the run's
     shutil.copytree(lib, tmp_path / "copy", ignore=shutil.ignore_patterns("tileable", "*.seamless.usda"))

@@ -89,6 +89,15 @@ def changed_outputs(entry_root: Path, out_dir: Path, stack_id: str) -> list[Path
     return changed
 
 
+def changed_words(changed: list) -> str:
+    """What a stack says whose tiles a TD changed since they were written (:func:`changed_outputs`)."""
+    one = len(changed) == 1
+    names = ", ".join(f"@{p}@" for p in changed)
+    return (f"{names} {'was' if one else 'were'} changed since this tool wrote {'it' if one else 'them'} (painted "
+            "over, or saved again by another program): not replaced; move or delete "
+            f"{'it' if one else 'them'} to have this stack's tiles made again")
+
+
 def verdict_elsewhere(entry_root: Path) -> dict[str, Any] | None:
     """The verdict this version gave the tiles of this cache entry when they were written into any folder (a copy of
     the library, another output folder): an entry holds one stack's tiles, made of the same source files with the

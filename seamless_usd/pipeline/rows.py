@@ -17,6 +17,7 @@ from seamless_usd.pipeline.executors import Executor
 from seamless_usd.pipeline.options import Options, ProgressEvent
 from seamless_usd.pipeline.outcome import StackOutcome, reused_message
 from seamless_usd.pipeline.planned import cached_plan, elsewhere_words, plan_line, planned_result, wrap_only_result
+from seamless_usd.pipeline.rerun import changed_words
 from seamless_usd.pipeline.stackjob import JobSettings, StackJob, run_stack
 from seamless_usd.report.model import MapReport, Report, StackReport, StackStatus
 from seamless_usd.textures import ScanResult, TextureStack, describe_selection
@@ -99,8 +100,12 @@ def stack_rows(run: Run, stacks: list[TextureStack], source_label: str, out_dir:
         elif (source_label, stack.id) in run.blocked:
             report.message = run.blocked[(source_label, stack.id)]
             run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
+        elif dry and (cached := cached_plan(stack, out_dir, run.settings, run.options.cache_dir)) is not None \
+                and cached.changed:  # tiles a TD changed since: the run leaves them and fails the stack
+            report.maps = [MapReport.for_map(m) for m in stack.maps]
+            report.message = changed_words(list(cached.changed))
+            run.report.findings.append(Finding(Severity.ERROR, "stack-blocked", where, report.message, stack.material))
         elif dry:
-            cached = cached_plan(stack, out_dir, run.settings, run.options.cache_dir)
             tiles_of = run.planned_first.setdefault((stack.content_key, out_dir), stack.id)
             duplicate_of = first_of.get(stack.content_key) or stack.duplicate_of
             if cached is not None and cached.outcome is not None:  # what the run will say, from its last result

@@ -25,7 +25,7 @@ from seamless_usd.pipeline.madefrom import (as_made, on_tile_grid, source_uv_sca
                                             uv_turn_of)
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
 from seamless_usd.naming import stack_tile_filenames
-from seamless_usd.pipeline.rerun import changed_outputs, judged_key, load_judged, save_judged
+from seamless_usd.pipeline.rerun import changed_outputs, changed_words, judged_key, load_judged, save_judged
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import Reading, Reference, judge_reading
 from seamless_usd.verdict.joins import inside_figures, join_stats
@@ -192,10 +192,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None,
                                        cache_key=key)
         changed = changed_outputs(entry.root, out_dir, judged_key(stack))
         if changed:  # a tile changed by hand since it was written is the user's now: never replaced
-            names = ", ".join(asset_ref(p) for p in changed)
-            raise InputError(f"{names} {'was' if len(changed) == 1 else 'were'} changed since this tool wrote "
-                             f"{'it' if len(changed) == 1 else 'them'} (painted over, or saved again by another "
-                             "program): not replaced; move or delete it to have this stack's tiles made again")
+            raise InputError(changed_words(changed))
         # the tile was cut from the maps turned by the turn found (made above when the tile was made)
         pixels = as_made(pixels, normals, straightened, None)
     shown = pixels.values  # the report shows the source as the user has it, its light as it was
