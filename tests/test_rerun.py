@@ -49,7 +49,7 @@ def test_an_unchanged_rerun_takes_the_judged_result_back_and_a_changed_tile_is_j
     assert not again["layers_written"] and "already has these edits; no layer written" in json.dumps(again["findings"])
     assert again["stacks"][0]["timings"] == first["stacks"][0]["timings"]  # not judged again: the same record
 
-    # a tile changed by hand (a dark stripe across it) is written and judged again, and the run says so
+    # a tile changed by hand (a dark stripe across it) is the TD's now: left as it is, its stack failing, naming it
     albedo = next(p for p in written if "albedo" in p)
     pixels = oiio.ImageBuf(albedo).get_pixels(oiio.FLOAT)
     pixels[40:48] *= 0.2
@@ -57,9 +57,15 @@ def test_an_unchanged_rerun_takes_the_judged_result_back_and_a_changed_tile_is_j
     out.open(albedo, oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], oiio.UINT8))
     out.write_image(np.ascontiguousarray(pixels))
     out.close()
+    painted = Path(albedo).read_bytes()
     third = _run(tmp_path, capsys)
-    assert _outputs(third) == written  # the tile is the cached one again, byte for byte
-    assert _judged(third) == _judged(first)
+    assert third["stacks"][0]["status"] == "failed" and "changed since this tool wrote it" in third["stacks"][0]["message"]
+    assert Path(albedo).read_bytes() == painted
+    # deleted, it is made again from the cache, the cached one byte for byte, and judged again
+    Path(albedo).unlink()
+    fourth = _run(tmp_path, capsys)
+    assert _outputs(fourth) == written
+    assert _judged(fourth) == _judged(first)
 
     # another output folder is a different set of files: written and judged there
     elsewhere = _run(tmp_path, capsys, "--output-dir", str(tmp_path / "elsewhere"))
