@@ -78,3 +78,40 @@ over "World"
     payload = json.loads(capsys.readouterr().out)
     said = [f["message"] for f in payload["findings"] if f["code"] == "edit-not-composed"]
     assert said and "variant" not in said[0] and "stronger layer than the file value" in said[0], said
+
+
+def test_opinions_a_td_added_to_the_new_layer_are_kept_aside_when_it_is_made_again(tmp_path, capsys):
+    """A light added to ``scene.seamless.usda`` after a run went without a word when a change below the stage (a
+    geometry republish) had the layer made again. It is kept in a backup of the layer, and a warning names it; a
+    layer with only this tool's opinions is made again with no backup."""
+    from pxr import Sdf
+
+    shutil.copytree(SAMPLES / "brick", tmp_path / "brick")
+    shutil.copytree(SAMPLES / "textures", tmp_path / "textures")
+    scene = tmp_path / "brick" / "scene.usda"
+    layer = scene.with_name("scene.seamless.usda")
+    run = ["process", str(scene), "--preset", "tiny", "--max-size", "128", "--cache-dir", str(tmp_path / "cache"),
+           "--json"]
+
+    def republish(name: str) -> None:  # the stage changes below the layer: an Xform added
+        stage = Usd.Stage.Open(str(scene))
+        stage.DefinePrim(f"/World/{name}", "Xform")
+        stage.GetRootLayer().Save()
+
+    main(run)
+    capsys.readouterr()
+    republish("Bolt")
+    main(run)
+    payload = json.loads(capsys.readouterr().out)
+    assert not payload["backups"] and not scene.with_name("scene.seamless.usda.bak").exists()
+    edited = Sdf.Layer.FindOrOpen(str(layer))
+    Sdf.CreatePrimInLayer(edited, "/World/KeyLight").specifier = Sdf.SpecifierDef
+    edited.Save()
+    republish("Nut")
+    main(run)
+    payload = json.loads(capsys.readouterr().out)
+    backup = scene.with_name("scene.seamless.usda.bak")
+    assert payload["backups"] == [str(backup)] and "KeyLight" in backup.read_text()
+    assert "KeyLight" not in layer.read_text()
+    [said] = [f["message"] for f in payload["findings"] if "did not write" in f["message"]]
+    assert "</World/KeyLight>" in said and "scene.seamless.usda.bak" in said
