@@ -8,6 +8,7 @@ from pathlib import Path
 __all__ = ["tile_filename", "stack_tile_filenames", "source_digest", "slug"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
+_UNSAFE_IN_STEM = re.compile(r"[^\w.-]+")  # a source's own name keeps its letters in any script
 #: What :func:`tile_filename` adds after a stem: the stack id, the source's digest, ``.tile``.
 _OWN_TILE = re.compile(r"\.[A-Za-z0-9_.-]+-[0-9a-f]{10}(\.[0-9a-f]{8})?(\.[rgba]{1,4}[0-9]*)?\.tile$")
 
@@ -35,16 +36,19 @@ def tile_filename(source_asset: str, stack_id: str, extension: str, source_diges
     The stack id keeps two materials that share one source file from overwriting each other's tiles; the source's
     digest keeps two stages whose materials share a path and a file name (``albedo.png`` of two folders) from
     overwriting each other's tiles in one output folder, while a library copied elsewhere names its tiles alike.
-    The stem keeps non-ASCII letters and spaces: only unsafe characters are replaced.
+    The stem keeps letters and digits in any script; spaces and other characters unsafe in a file name become ``_``.
 
     >>> tile_filename("tex/albedo.png", "Looks_M-1a", ".png", "5d41402abc4b2a76")
     'albedo.Looks_M-1a.5d41402a.tile.png'
+    >>> tile_filename("tex/älbedo ü.png", "Looks_M-1a", ".png"), tile_filename("木材.png", "M-1a", ".png")
+    ('älbedo_ü.Looks_M-1a.tile.png', '木材.M-1a.tile.png')
     >>> tile_filename("tileable/albedo.Looks_M-0123456789.5d41402a.tile.png", "Looks_M-abcdef0123", ".png")
     'albedo.Looks_M-abcdef0123.tile.png'
     """
     stem = _OWN_TILE.sub("", Path(source_asset.replace("\\", "/")).stem)  # a tile of a tile: the first stem
     digest = f".{slug(source_digest[:8])}" if source_digest else ""
-    return f"{slug(stem)}.{slug(stack_id, 64)}{digest}.tile{extension}"
+    safe = _UNSAFE_IN_STEM.sub("_", stem).strip("._")[:48] or "x"
+    return f"{safe}.{slug(stack_id, 64)}{digest}.tile{extension}"
 
 
 def stack_tile_filenames(maps, stack_id: str, extensions: list[str], made_with: str = "") -> list[str]:
