@@ -469,6 +469,7 @@ def test_a_scene_on_a_read_only_file_system_fails_each_stack_with_why(tmp_path, 
         assert code == 1 and len(failures) == 3, report["stacks"]
         assert all("its tiles cannot be written" in m and "tileable" in m and "internal error" not in m
                    for m in failures), failures
+        assert all("give --output-dir to write the tiles elsewhere (and -o for the new layer" in m for m in failures)
 
 
 def test_full_disk_real_small_filesystem(tmp_path, capsys, shared_cache):

@@ -290,7 +290,10 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
         for src in sources:  # a source whose tiles' folder cannot be made: its stacks fail with why, before any work
             problem = folder_problem(_output_dir(run.options, src.path))
             if problem:
-                run.blocked.update({(str(src.path), s.id): f"its tiles cannot be written: {problem}"
+                hint = "; give --output-dir to write the tiles elsewhere"
+                if mode is modes.NEW_LAYER and run.options.output_layer is None:
+                    hint += " (and -o for the new layer, which is written beside the stage)"
+                run.blocked.update({(str(src.path), s.id): f"its tiles cannot be written: {problem}{hint}"
                                     for s in src.stacks if (str(src.path), s.id) not in run.left_alone})
         try:
             _run_jobs(run, [(str(src.path), src.stacks, _output_dir(run.options, src.path)) for src in sources])
