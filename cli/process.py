@@ -144,14 +144,20 @@ class _Count(ProgressColumn):
 
 
 class _ProgressView:
-    """Rich progress bars: one for the stacks, one for each stack being made (two at once with ``--jobs 2``)."""
+    """Rich progress bars: one for the stacks, one for each stack being made (two at once with ``--jobs 2``); where
+    stderr is not a terminal (a farm's log, a file), a line as each stack starts and ends instead (a bar is drawn
+    there only once, at the end)."""
 
     def __init__(self, console: Console):
+        from seamless_usd.hooks.loglines import progress_logger
+
         self.progress = Progress(
             TextColumn("{task.description}"), BarColumn(), _Count(),
             TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn(),
-            console=console, transient=False,
+            console=console, transient=False, disable=not console.is_terminal,
         )
+        self.lines = None if console.is_terminal else progress_logger(
+            lambda line: console.print(escape(str(line)), highlight=False, soft_wrap=True))
         self.stacks = None
         self.pages = None  # the library report's pages, once they are written
         self.steps: dict[str, object] = {}  # stack id -> its bar
@@ -164,6 +170,9 @@ class _ProgressView:
         return self.progress.__exit__(*exc)
 
     def __call__(self, event: ProgressEvent) -> None:
+        if self.lines is not None:
+            self.lines(event)
+            return
         p = self.progress
         if event.kind == "report":  # the library report's pages, written after the stacks
             if self.pages is None:

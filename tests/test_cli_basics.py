@@ -245,7 +245,7 @@ def test_the_progress_view_keeps_a_bar_for_each_stack_made_at_once_and_no_none_c
     from seamless_usd.pipeline.options import ProgressEvent
     from seamless_usd_cli.process import _ProgressView
 
-    console = Console(width=140, record=True, force_terminal=False)
+    console = Console(width=140, record=True, force_terminal=True)
     with _ProgressView(console) as view:
         view(ProgressEvent("stack-start", "A", 0, 2))
         view(ProgressEvent("stack-start", "B", 1, 2))
@@ -256,6 +256,22 @@ def test_the_progress_view_keeps_a_bar_for_each_stack_made_at_once_and_no_none_c
         view(ProgressEvent("stack-done", "A", 0, 2))
         assert set(view.steps) == {"B"}
     assert "None" not in console.export_text()
+
+
+def test_progress_in_a_log_file_is_a_line_per_stack_as_it_goes():
+    """With stderr in a file (a farm's log) the bars were drawn once, at the end: a run of two hours said nothing
+    until it ended. Each stack's start and end is a line, as it happens."""
+    from rich.console import Console
+
+    from seamless_usd.pipeline.options import ProgressEvent
+    from seamless_usd_cli.process import _ProgressView
+
+    console = Console(width=140, record=True, force_terminal=False)
+    with _ProgressView(console) as view:
+        view(ProgressEvent("stack-start", "World_Looks_Brick-e1bb29ea54", 0, 2))
+        assert console.export_text(clear=False) == "seamless-usd: stack 1/2: World_Looks_Brick-e1bb29ea54\n"
+        view(ProgressEvent("stack-done", "World_Looks_Brick-e1bb29ea54", 0, 2, RuntimeError("x")))
+    assert console.export_text().splitlines()[-1] == "seamless-usd: stack 1/2 failed"
 
 
 def test_a_pattern_that_matches_nothing_is_an_unreadable_input_with_its_json_report(tmp_path, capsys, monkeypatch):
