@@ -24,6 +24,7 @@ from typing import Sequence
 from pxr import Ar, Sdf, Tf, Usd
 
 from seamless_usd.authoring.files import backup_once, check_layer, layer_lock, relative_asset_path, write_atomically
+from seamless_usd.authoring.usdforeign import not_ours, not_ours_words
 from seamless_usd.fileio import source_sha256
 from seamless_usd.authoring.types import AuthoringResult, Codes, StackResult, WriteMode, node_key
 from seamless_usd.authoring.usdedits import check_uv_composed, keep_whole_stacks, not_composed, strongest_layer
@@ -141,7 +142,7 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
                       retarget: dict[Path, Path]) -> AuthoringResult:
     source = _open_layer(stage_path)  # held while authoring: the sublayer below is this one
     made_from = composed_sha256(stage_path)
-    overrides, earlier, not_ours = _earlier_layer(out, stage_path, made_from)
+    overrides, earlier, foreign = _earlier_layer(out, stage_path, made_from)
     data = dict(overrides.customLayerData)
     data[Names.MADE_FROM] = made_from  # a later run over the same stage adds its edits to these
     overrides.customLayerData = data
@@ -175,9 +176,9 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
     before, planned = ({} if result.dry_run else {overrides: overrides.ExportToString()}), len(result.plan)
     author.apply()
     if result.dry_run:
-        if not_ours:
-            result.findings.append(Finding(Severity.WARNING, Codes.EDITS_REPLACED, asset_ref(out), _not_ours_words(
-                not_ours, "a run would make it again over the stage as it is now, without them, keeping the file as "
+        if foreign:
+            result.findings.append(Finding(Severity.WARNING, Codes.EDITS_REPLACED, asset_ref(out), not_ours_words(
+                foreign, "a run would make it again over the stage as it is now, without them, keeping the file as "
                 f"it is in {asset_ref(out.name + '.bak')} (or the next free .N.bak)")))
         return result
     check_uv_composed(author, results, result)
@@ -192,11 +193,11 @@ def _author_new_layer(stage_path: Path, results: Sequence[StackResult], out: Pat
         result.findings.append(Finding(Severity.SKIPPED, Codes.NOTHING_TO_DO, asset_ref(out),
                                        "the layer on disk already holds these edits; not written again"))
         return result
-    if not_ours:  # a TD's own opinions in this tool's layer: kept in a backup, and said
+    if foreign:  # a TD's own opinions in this tool's layer: kept in a backup, and said
         kept = backup_once(out)
         result.backups.append(kept)
-        result.findings.append(Finding(Severity.WARNING, Codes.EDITS_REPLACED, asset_ref(out), _not_ours_words(
-            not_ours, f"made again over the stage as it is now, it no longer holds them: the file as it was is "
+        result.findings.append(Finding(Severity.WARNING, Codes.EDITS_REPLACED, asset_ref(out), not_ours_words(
+            foreign, f"made again over the stage as it is now, it no longer holds them: the file as it was is "
             f"{asset_ref(kept)}")))
     write_atomically(out, lambda tmp: saved.Export(str(tmp)), check=check_layer)
     stale = Sdf.Layer.Find(str(out))
@@ -299,7 +300,7 @@ def _earlier_layer(out: Path, stage_path: Path, made_from: str) -> tuple[Sdf.Lay
     stage as it is now (its ``seamlessMadeFrom`` is ``made_from``), so the edits of materials this run does not
     process (another ``--materials`` selection) are kept; else an empty one, the texture nodes the earlier
     layer had edited (``SeamlessTileAPI``), whose edits are then not kept, and the opinions in it this tool did not
-    write (:func:`_not_ours`), which the new one does not hold."""
+    write (:func:`.usdforeign.not_ours`), which the new one does not hold."""
     from seamless_usd.authoring.schema import Schema
 
     # never saved under this name: a layer beside ``out``, so the asset paths it holds resolve as they will there
@@ -325,58 +326,7 @@ def _earlier_layer(out: Path, stage_path: Path, made_from: str) -> tuple[Sdf.Lay
             edited.append(prim_ref(path.StripAllVariantSelections()))
 
     earlier.Traverse(Sdf.Path.absoluteRootPath, visit)
-    return fresh, edited, _not_ours(earlier)
-
-
-#: Properties this tool authors in a new layer: a texture's file, wrap and UV input, a UV node's own, its record.
-_OUR_PROPERTIES = frozenset({"inputs:file", "inputs:wrapS", "inputs:wrapT", "inputs:uaddressmode", "inputs:vaddressmode",
-                             "inputs:st", "inputs:texcoord", "inputs:in", "inputs:scale", "inputs:rotation",
-                             "inputs:translation", "inputs:pivot", "inputs:rotate", "inputs:offset",
-                             "inputs:operationorder", "inputs:uvtiling", "inputs:uvoffset", "info:id",
-                             "outputs:result", "outputs:out"})
-
-
-def _not_ours(layer: Sdf.Layer) -> list[str]:
-    """The opinions in a new layer this tool wrote that it did not write itself (a prim, a property or layer
-    metadata a TD added since: a light, a note, an override of another input), by where they are."""
-    found: list[str] = []
-    if set(layer.customLayerData) - {Names.MADE_FROM} or len(layer.subLayerPaths) != 1 or layer.defaultPrim:
-        found.append("its layer metadata")
-
-    def ours(spec: Sdf.PrimSpec) -> bool:
-        return (spec.name.startswith((Names.UV_NODE, Names.UV_READER))
-                or any(str(a).startswith("Seamless") for a in spec.GetInfo("apiSchemas").GetAddedOrExplicitItems()))
-
-    def visit(spec: Sdf.PrimSpec) -> None:
-        if not ours(spec):
-            extra = [p.name for p in spec.properties if p.name not in _OUR_PROPERTIES
-                     and not p.name.startswith("seamless:") and not _a_tile(p)]
-            if spec.specifier != Sdf.SpecifierOver or extra:
-                found.append(prim_ref(spec.path.StripAllVariantSelections()) + (f" ({', '.join(extra[:3])})"
-                                                                                 if extra else ""))
-                return
-        for child in spec.nameChildren:
-            visit(child)
-        for variant_set in spec.variantSets:
-            for variant in variant_set.variants:
-                visit(variant.primSpec)
-
-    for root in layer.rootPrims:
-        visit(root)
-    return found
-
-
-def _a_tile(prop: Sdf.PropertySpec) -> bool:
-    """An asset-valued input (a material's interface input that holds a texture's file) set to one of this tool's
-    tiles."""
-    value = getattr(prop, "default", None)
-    return isinstance(value, Sdf.AssetPath) and ".tile." in value.path
-
-
-def _not_ours_words(not_ours: list[str], what: str) -> str:
-    more = f" and {len(not_ours) - 4} more" if len(not_ours) > 4 else ""
-    return (f"holds opinions this tool did not write ({', '.join(not_ours[:4])}{more}); {what}; keep your own "
-            "opinions in a layer of your own (this one is made again whenever the stage below it changes)")
+    return fresh, edited, not_ours(earlier)
 
 
 def _holds(path: Path, text: str) -> bool:

@@ -10,7 +10,7 @@ from seamless_usd.discover.tokens import MTLX_SUFFIX
 from seamless_usd.errors import UsageError
 from seamless_usd.findings import asset_ref
 
-__all__ = ["MTLX_SUFFIXES", "check_output_layer", "replace_problem"]
+__all__ = ["MTLX_SUFFIXES", "check_output_layer", "default_layer_problem", "replace_problem"]
 
 MTLX_SUFFIXES = {MTLX_SUFFIX}
 _LAYER_SUFFIXES = (".usda", ".usdc", ".usd")  # the layers a new layer can be written as (not a .usdz package)
@@ -33,6 +33,19 @@ def check_output_layer(output: Path, inputs: Sequence[Path]) -> None:
     problem = replace_problem(output, inputs[0]) if inputs else None
     if problem:
         raise UsageError(f"-o/--output-layer {asset_ref(output)} {problem}; name a new file, or move that one away")
+
+
+def default_layer_problem(source: Path) -> str | None:
+    """Why the new layer (a stage's) or document (a ``.mtlx``'s) a run writes beside ``source`` without ``-o`` cannot
+    be written (:func:`replace_problem`), in the words its stacks fail with; None where it can."""
+    from seamless_usd import authoring
+
+    out = (authoring.default_output_document(source) if source.suffix.lower() in MTLX_SUFFIXES
+           else authoring.default_output_layer(source))
+    problem = replace_problem(out, source)
+    if problem is None:
+        return None
+    return f"its new layer {asset_ref(out)} {problem}; move that file away, or name another with -o"
 
 
 def replace_problem(output: Path, source: Path) -> str | None:

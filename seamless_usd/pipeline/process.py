@@ -27,7 +27,7 @@ from seamless_usd.findings import Finding, Severity, asset_ref, not_found_words
 from seamless_usd.pipeline.cache import JobIndex, job_fingerprint
 from seamless_usd.pipeline.executors import InProcessExecutor
 from seamless_usd.pipeline.options import Options
-from seamless_usd.pipeline.outputlayer import MTLX_SUFFIXES, check_output_layer, replace_problem
+from seamless_usd.pipeline.outputlayer import MTLX_SUFFIXES, check_output_layer, default_layer_problem
 from seamless_usd.pipeline.inputs import expand_inputs
 from seamless_usd.pipeline.outcome import StackOutcome
 from seamless_usd.pipeline.rows import (Run, authoring_module, check_written, error_message, record_authoring,
@@ -47,13 +47,6 @@ def _output_dir(options: Options, source: Path | None) -> Path:
     if source is None:
         raise UsageError("the stage has no file on disk (anonymous root layer): give an output directory")
     return source.resolve().parent / "tileable"
-
-
-def _default_output(source: Path) -> Path:
-    """The new layer (a stage's) or document (a ``.mtlx``'s) a run writes beside ``source`` when ``-o`` is not given."""
-    if source.suffix.lower() in MTLX_SUFFIXES:
-        return authoring_module().default_output_document(source)
-    return authoring_module().default_output_layer(source)
 
 
 def _run_jobs(run: Run, sources: Sequence[tuple[str, list[TextureStack], Path]]) -> None:
@@ -281,10 +274,9 @@ def process_paths(paths: Sequence[str | Path] | str | Path, options: Options | N
     mode = run.options.plan_mode if run.options.mode is modes.DRY_RUN else run.options.mode
     if mode is modes.NEW_LAYER and run.options.output_layer is None:
         for src in sources:  # a file of the default new layer's name that is not this tool's: never replaced
-            problem = replace_problem(_default_output(src.path), src.path)
+            problem = default_layer_problem(src.path)
             if problem:
-                run.blocked.update({(str(src.path), s.id): f"its new layer {asset_ref(_default_output(src.path))} "
-                                    f"{problem}; move that file away, or name another with -o"
+                run.blocked.update({(str(src.path), s.id): problem
                                     for s in src.stacks if (str(src.path), s.id) not in run.left_alone})
     if run.options.mode != modes.DRY_RUN:
         for src in sources:  # a source whose tiles' folder cannot be made: its stacks fail with why, before any work
