@@ -180,7 +180,7 @@ def _rerun_completes(library: Path, cache: Path, originals: dict[str, str], kill
           "temporary files left: 0")
 
 
-def test_sigkill_during_training_and_writing_maps(twins, tmp_path):
+def test_sigkill_during_training_writing_maps_and_saving_layers(twins, tmp_path):
     library = twins
     cache = tmp_path / "cache"
     originals = hashes(library)
@@ -216,22 +216,14 @@ def test_sigkill_during_training_and_writing_maps(twins, tmp_path):
     assert _kill_when(proc, watch=tmp_path, ready=lambda: bool(_tiles(library, with_temp=False)))
     kills.append("writing maps (a tile complete)")
     check_integrity(library, cache, originals)
-    _rerun_completes(library, cache, originals, kills)
 
-
-def test_sigkill_while_saving_layers(twins, tmp_path):
-    library = twins
-    cache = tmp_path / "cache"
-    originals = hashes(library)
-    kills: list[str] = []
-
-    # 1. while saving layers (after every stack is done, before every scene has its layer)
+    # 4. while saving layers (after every stack is done, before every scene has its layer)
     proc = _start(library, cache, "--json")
     assert _kill_when(proc, watch=tmp_path, ready=lambda: bool(_layers(library)))
     kills.append("saving layers")
     check_integrity(library, cache, originals)
 
-    # 2. again while saving layers, later: once one layer is complete, before the other
+    # 5. again while saving layers, later: once one layer is complete, before the other
     for layer in _layers(library):
         layer.unlink()
     proc = _start(library, cache, "--json")
