@@ -70,7 +70,7 @@ def demo(extra: list[str]) -> int:
 
 
 def tests(extra: list[str]) -> int:
-    """The suite on two pytest-xdist workers (about 4.5 minutes on 2 cores); ``-n 0`` after
+    """The suite on two pytest-xdist workers (just under 5 minutes on 2 cores); ``-n 0`` after
     ``tests`` runs it in one process, ``-n N`` on N workers (``SEAMLESS_USD_TEST_WORKERS`` sets the default)."""
     setup()
     workers = os.environ.get("SEAMLESS_USD_TEST_WORKERS", "2")
