@@ -4,7 +4,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
-import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -126,9 +125,9 @@ def linked_target(path: Path) -> tuple[Path, str | None]:
     document reached through a link is edited in the file it links to, so the link (and every stage that shares that
     file through it) stays as it was; replaced by a file of its own, the link was cut without a word."""
     path = Path(path)
-    real = Path(os.path.realpath(path))
-    if real == path.absolute():
+    if not path.is_symlink():  # a link among its folders is no matter: the file is replaced in the folder it is in
         return path, None
+    real = Path(os.path.realpath(path))
     return real, (f"a link to {asset_ref(real)}: edited in place there, so every stage that links or uses that file "
                   "shows the tiles now (leave out --in-place for a layer of this stage's own)")
 

@@ -87,5 +87,7 @@ def _own_output(path: Path) -> bool | Path:
     if not layer or Names.MADE_FROM not in dict(layer.customLayerData):
         return False
     below = list(layer.subLayerPaths)
-    return (path.parent / below[0]) if below and not Path(below[0]).is_absolute() else (
-        Path(below[0]) if below else True)
+    if not below:
+        return True
+    first = Path(below[0])
+    return first if first.is_absolute() else path.parent / first
