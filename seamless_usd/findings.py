@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 from enum import Enum
+from pathlib import Path
 
 __all__ = ["Severity", "Finding", "prim_ref", "asset_ref", "not_found_words"]
 
@@ -50,8 +51,6 @@ GLOB_CHARS = frozenset("*?[")
 def not_found_words(path: object, pictures: bool = False) -> str:
     """Why an input named on the command line gives nothing to read: a folder with no stage or document in it, a
     pattern that matches nothing, or a path that is not there (``pictures``: ``check``, which takes them too)."""
-    from pathlib import Path
-
     things = "USD stage, MaterialX document or picture" if pictures else "USD stage or MaterialX document"
     p = Path(str(path))
     if p.is_dir():
