@@ -192,6 +192,8 @@ class _ProgressView:
         elif event.kind == "sample" and step is not None and event.detail is not None:
             d = event.detail
             p.update(step, total=d.planned, completed=d.index, rate=f"Q search, crop {_wh(d.candidate.crop_size)}")
+        elif event.kind == "stage" and step is not None:
+            p.update(step, total=None, rate=str(event.detail))
         elif event.kind == "refine" and step is not None and event.detail is not None:
             d = event.detail
             p.update(step, total=None, rate=f"refining at {d['tile'][1]}x{d['tile'][0]} ({d['seconds']:.1f}s)")

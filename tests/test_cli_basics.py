@@ -313,3 +313,18 @@ def test_a_misspelled_option_is_refused_by_its_sub_command_with_a_guess(capsys):
     assert "usage: seamless-usd process" in err and "did you mean --preset?" in err
     assert main(["check", "--jsn", "x.png"]) == 2
     assert "seamless-usd check: error: unrecognized arguments: --jsn (did you mean --json?)" in capsys.readouterr().err
+
+
+def test_a_log_file_says_each_long_stage_of_a_stack_as_it_begins(tmp_path, capsys):
+    """A 2K stack spent four minutes cutting, levelling, writing and judging with nothing in the log between its
+    start and its end line: each long stage is a line as it begins (and a bar's words on a terminal)."""
+    import shutil
+
+    samples = Path(__file__).resolve().parents[1] / "sample_assets"
+    for name in ("brick", "textures"):
+        shutil.copytree(samples / name, tmp_path / name)
+    main(["process", str(tmp_path / "brick" / "scene.usda"), "--preset", "tiny", "--max-size", "128",
+          "--cache-dir", str(tmp_path / "cache")])
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.startswith("seamless-usd: stack 1/1")]
+    assert lines[1:4] == ["seamless-usd: stack 1/1: cutting tiles from the source",
+                          "seamless-usd: stack 1/1: writing the maps", "seamless-usd: stack 1/1: judging the written maps"]

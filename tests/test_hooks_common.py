@@ -220,16 +220,17 @@ def test_report_lines_with_the_real_report_model():
     assert str(lines[-1]) == "error: seamless-usd: @x.png@: cannot read"
 
 
-def test_progress_logger_logs_stack_start_and_end_only():
+def test_progress_logger_logs_stack_start_long_stages_and_end_only():
     got = []
     progress = common.progress_logger(got.append)
     progress(SimpleNamespace(kind="stack-start", stack_id="brick", index=0, total=2))
+    progress(SimpleNamespace(kind="stage", stack_id="brick", index=0, total=2, detail="writing the maps"))
     progress(SimpleNamespace(kind="train", stack_id="brick", index=0, total=2))
     progress(SimpleNamespace(kind="stack-done", stack_id="brick", index=0, total=2,
                              detail=SimpleNamespace(passed=True)))  # the job's outcome
     progress(SimpleNamespace(kind="stack-done", stack_id="wood", index=1, total=2, detail=ValueError("broken")))
-    assert [ln.text for ln in got] == ["seamless-usd: stack 1/2: brick", "seamless-usd: stack 1/2 passed",
-                                       "seamless-usd: stack 2/2 failed"]
+    assert [ln.text for ln in got] == ["seamless-usd: stack 1/2: brick", "seamless-usd: stack 1/2: writing the maps",
+                                       "seamless-usd: stack 1/2 passed", "seamless-usd: stack 2/2 failed"]
 
 
 def test_progress_logger_forwards_every_event():

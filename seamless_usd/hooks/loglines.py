@@ -99,7 +99,7 @@ def _failed(report: object) -> bool:
 def progress_logger(
     emit: Callable[[LogLine], None], also: Callable[[Any], None] | None = None
 ) -> Callable[[Any], None]:
-    """An ``Options.progress`` callback that logs each stack's start and end (not every step),
+    """An ``Options.progress`` callback that logs each stack's start, its long stages and its end (not every step),
     and hands every event to ``also`` (a DCC's progress bar) when given."""
 
     def progress(event: Any) -> None:
@@ -108,6 +108,8 @@ def progress_logger(
         kind = getattr(event, "kind", "")
         if kind == "stack-start":
             emit(LogLine(Level.INFO, f"{PREFIX}: stack {event.index + 1}/{event.total}: {event.stack_id}"))
+        elif kind == "stage":  # a step that may take minutes on a large stack (cutting tiles, writing, judging)
+            emit(LogLine(Level.INFO, f"{PREFIX}: stack {event.index + 1}/{event.total}: {event.detail}"))
         elif kind == "stack-done":
             emit(LogLine(Level.INFO, f"{PREFIX}: stack {event.index + 1}/{event.total} "
                                      f"{_done(getattr(event, 'detail', None))}"))

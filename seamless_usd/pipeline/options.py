@@ -17,7 +17,8 @@ __all__ = ["Options", "ProgressEvent", "REFINE_MODES", "TILE_SIZES", "check_devi
 class ProgressEvent:
     """What a long run reports: a stack starting/finishing, or training/sampling progress."""
 
-    kind: str  # "stack-start", "train", "sample", "stack-done"; "report": a library report's page written
+    kind: str  # "stack-start", "stage" (``detail``: a long step begins, in words), "train", "sample", "stack-done";
+    #            "report": a library report's page written
     #            (``index``: pages written, ``total``: pages, ``stack_id`` empty)
     stack_id: str
     index: int  # 0-based index of the stack among the stacks to process

@@ -229,6 +229,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None,
     if stopped is not None and stopped():
         raise RunStopped(f"{stack.material}: the run was stopped before its tiles were written")
     out_dir.mkdir(parents=True, exist_ok=True)
+    emit("stage", "writing the maps")
     tile_hw = tuple(int(v) for v in next(iter(tiles.values())).shape[:2])
     uv_scale = tuple(float(v) for v in meta["uv_scale"])
     # the sources on the tile's texel grid: a GAN tile that was not refined is at the working resolution
@@ -256,6 +257,7 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None,
     t4 = time.perf_counter()
     # the written maps read against the sources once, for the verdict and the join figures alike
     assets = [m.asset for m in stack.maps]
+    emit("stage", "judging the written maps")
     reading = Reading(written_values, normals, assets, Reference(sources, normals, assets, keep_index=False),
                       [e.network_code for e in pixels.encodings])
     verdict = judge_reading(reading)

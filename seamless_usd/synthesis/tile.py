@@ -136,7 +136,7 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     if refine_config is not None:
         small = min(H, W) < GAN_MIN_SIDE  # too small to train on: the cut is the tile, passed or not
         cutting = small or (refine_config.lattice and tile_size == "source")
-        cut, made_so = best_cut(maps, cutting, seed, timings)
+        cut, made_so = best_cut(maps, cutting, seed, timings, stage=lambda what: emit("stage", what))
         if made_so:  # the cut of the maps with their light levelled, or their lattice evened, passes
             how = "its light levelled" if "levelled" in made_so else "its lattice evened"
             made = _made_from_cut(cut, (H, W), structure, f, work_hw, timings,
@@ -154,6 +154,8 @@ def make_tile(maps: list[MapInput], config: SynthesisConfig, *, refine_config: R
     working = downsample_maps(maps, work_hw)
 
     t1 = time.perf_counter()
+    emit("stage", f"no cut passed: training SeamlessGAN ({config.iterations} iterations at "
+                  f"{work_hw[1]}x{work_hw[0]} px)")
     models = train_seeds(working, config, seed, device=device, checkpoint_dir=checkpoint_dir,
                          progress=lambda p: emit("train", p))
     timings["train"] = time.perf_counter() - t1
