@@ -705,8 +705,8 @@ def test_worker_processes_stop_at_once_when_the_run_stops(tmp_path):
         signal.signal(signal.SIGINT, previous)
     assert stopped < 25, stopped
     workers = set(multiprocessing.active_children()) - before
-    for w in workers:  # ended, not waited for: each exits within moments (on a busy machine, after this line ran)
-        w.join(5)
+    for w in workers:  # ended, not waited for: each exits within moments (on a busy machine, after this line ran;
+        w.join(20)  # a worker left running would train on for minutes: 20000 iterations)
     alive = [(w.name, w.pid) for w in workers if w.is_alive()]
     assert not alive, alive
     assert not list((tmp_path / "out").glob("*.tile.*"))  # stopped before any tile: none written after
