@@ -7,6 +7,7 @@ from pxr import Sdf
 
 from seamless_usd.authoring.usdnodes import Names
 from seamless_usd.findings import prim_ref
+from seamless_usd.naming import is_tile_name
 
 __all__ = ["not_ours", "not_ours_words"]
 
@@ -52,7 +53,7 @@ def _a_tile(prop: Sdf.PropertySpec) -> bool:
     """An asset-valued input (a material's interface input that holds a texture's file) set to one of this tool's
     tiles."""
     value = getattr(prop, "default", None)
-    return isinstance(value, Sdf.AssetPath) and ".tile." in value.path
+    return isinstance(value, Sdf.AssetPath) and is_tile_name(value.path)
 
 
 def not_ours_words(not_ours: list[str], what: str) -> str:

@@ -40,7 +40,7 @@ class CachedPlan:
     #: (a copy of the library), which the run will give them again once written; None when none is kept
     verdict_elsewhere: dict | None = None
     #: the tiles written into this folder that a TD changed since (painted over): the run leaves them and fails the
-    #: stack (:func:`.rerun.changed_outputs`)
+    #: stack (:func:`.rerun.written_state`)
     changed: tuple[str, ...] = ()
 
 
@@ -52,8 +52,7 @@ def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> Cach
     from seamless_usd.pipeline.cache import MANIFEST, JobIndex, job_fingerprint
     from seamless_usd.pipeline.madefrom import source_uv_scale
     from seamless_usd.pipeline.outcome import outcome_from_record
-    from seamless_usd.pipeline.rerun import changed_outputs, judged_key, record_paths, verdict_elsewhere
-    from seamless_usd.fileio import file_sha256
+    from seamless_usd.pipeline.rerun import judged_key, read_record, verdict_elsewhere, written_state
     from seamless_usd.report.model import Previews
     from seamless_usd.version import __version__ as version
 
@@ -76,10 +75,11 @@ def cached_plan(stack: TextureStack, out_dir: Path, settings, cache_dir) -> Cach
         return dataclasses.replace(plan, verdict_elsewhere=verdict_elsewhere(folder))
 
     try:
-        record = json.loads(record_paths(folder, out_dir, judged_key(stack))[0].read_text(encoding="utf-8"))
-        if record.get("version") != version or not all(file_sha256(Path(o["path"])) == o["sha256"]
-                                                       for o in record["outputs"].values()):
-            changed = changed_outputs(folder, out_dir, judged_key(stack))
+        record = read_record(folder, out_dir, judged_key(stack))
+        if record is None:
+            return anew()
+        same, changed = written_state(record)
+        if record.get("version") != version or not same:
             return dataclasses.replace(anew(), changed=tuple(str(p) for p in changed))
         outcome = outcome_from_record(stack, meta, None, record, Previews(), True, out_dir, folder.name)
         return dataclasses.replace(plan, outcome=outcome)

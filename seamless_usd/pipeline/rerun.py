@@ -25,7 +25,8 @@ from seamless_usd.report.model import Previews
 from seamless_usd.report.stored import previews_to_arrays, stored_previews
 from seamless_usd.version import __version__
 
-__all__ = ["JUDGED", "judged_key", "record_paths", "save_judged", "load_judged", "verdict_elsewhere"]
+__all__ = ["JUDGED", "judged_key", "record_paths", "read_record", "written_state", "save_judged", "load_judged",
+           "changed_words", "verdict_elsewhere"]
 
 #: Folder of an entry that holds the judged records.
 JUDGED = "judged"
@@ -70,27 +71,35 @@ def save_judged(entry_root: Path, out_dir: Path, stack_id: str, record: dict[str
     return stored_previews(str(pictures), info)
 
 
-def changed_outputs(entry_root: Path, out_dir: Path, stack_id: str) -> list[Path]:
-    """The tiles a previous run wrote for this stack into ``out_dir`` that are there but no longer what it wrote
-    (painted over, saved again by another program): the record keeps each one's digest as written. None is listed
-    where no record is kept (a tile is then made again, as on a first run)."""
+def read_record(entry_root: Path, out_dir: Path, stack_id: str) -> dict[str, Any] | None:
+    """The record a previous run kept of this stack's tiles written into ``out_dir``, None where none is kept (or it
+    does not read as one)."""
     try:
         record = json.loads(record_paths(entry_root, out_dir, stack_id)[0].read_text(encoding="utf-8"))
-        outputs = [(Path(out["path"]), out["sha256"]) for out in record["outputs"].values()]
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return []
-    changed = []
-    for path, digest in outputs:
+    except (OSError, ValueError):
+        return None
+    return record if isinstance(record, dict) else None
+
+
+def written_state(record: dict[str, Any]) -> tuple[bool, list[Path]]:
+    """Whether every tile the record names is on disk as it was written, and the ones that are there but no longer
+    what was written (painted over, saved again by another program): each tile's file read once."""
+    same, changed = True, []
+    for out in record["outputs"].values():
+        path = Path(out["path"])
         try:
-            if path.is_file() and file_sha256(path) != digest:
-                changed.append(path)
-        except OSError:
+            digest = file_sha256(path)
+        except OSError:  # gone (or unreadable): made again, as on a first run
+            same = False
             continue
-    return changed
+        if digest != out["sha256"]:
+            same = False
+            changed.append(path)
+    return same, changed
 
 
 def changed_words(changed: list) -> str:
-    """What a stack says whose tiles a TD changed since they were written (:func:`changed_outputs`)."""
+    """What a stack says whose tiles a TD changed since they were written (:func:`written_state`)."""
     one = len(changed) == 1
     names = ", ".join(f"@{p}@" for p in changed)
     return (f"{names} {'was' if one else 'were'} changed since this tool wrote {'it' if one else 'them'} (painted "
@@ -112,20 +121,22 @@ def verdict_elsewhere(entry_root: Path) -> dict[str, Any] | None:
     return None
 
 
-def load_judged(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[dict[str, Any], Previews] | None:
+def load_judged(entry_root: Path, out_dir: Path, stack_id: str) -> tuple[tuple[dict[str, Any], Previews] | None,
+                                                                         list[Path]]:
     """The record and previews of a previous run, when every output it names is still on disk unchanged (and
-    the record is this version's and whole); else None."""
+    the record is this version's and whole), else None; and the outputs that are there but changed since they were
+    written (:func:`written_state`; none where no record is kept)."""
     paths = record_paths(entry_root, out_dir, stack_id)
+    record = read_record(entry_root, out_dir, stack_id)
     try:
-        record = json.loads(paths[0].read_text(encoding="utf-8"))
+        if record is None:
+            return None, []
+        same, changed = written_state(record)
         pictures = paths[0].parent / str(record.get("pictures_file", paths[1].name))
-        if record.get("version") != __version__ or file_sha256(pictures) != record["pictures"]:
-            return None
-        for out in record["outputs"].values():
-            if file_sha256(Path(out["path"])) != out["sha256"]:
-                return None
+        if not same or record.get("version") != __version__ or file_sha256(pictures) != record["pictures"]:
+            return None, changed
         previews = stored_previews(str(pictures), record["previews"])  # read when the report draws them (its
         #                                                                     digest, just checked, says they are whole)
     except (OSError, ValueError, KeyError, TypeError, AttributeError, SafetensorError):  # AttributeError: JSON of
-        return None  # another shape (a list where the record is a mapping): judged again
-    return record, previews
+        return None, []  # another shape (a list where the record is a mapping): judged again
+    return (record, previews), []

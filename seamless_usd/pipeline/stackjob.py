@@ -25,7 +25,7 @@ from seamless_usd.pipeline.madefrom import (as_made, on_tile_grid, source_uv_sca
                                             uv_turn_of)
 from seamless_usd.pipeline.outcome import MapOutcome, StackOutcome, map_identity, outcome_from_record
 from seamless_usd.naming import stack_tile_filenames
-from seamless_usd.pipeline.rerun import changed_outputs, changed_words, judged_key, load_judged, save_judged
+from seamless_usd.pipeline.rerun import changed_words, judged_key, load_judged, save_judged
 from seamless_usd.report.previews import stack_previews
 from seamless_usd.verdict import Reading, Reference, judge_reading
 from seamless_usd.verdict.joins import inside_figures, join_stats
@@ -210,11 +210,10 @@ def run_stack(job: StackJob, progress: Callable[[str, Any], None] | None = None,
     out_dir = Path(job.output_dir)
     normals = [m.is_normal for m in stack.maps]
     if cached is not None:  # an unchanged rerun: the tiles written last time are still there, byte for byte
-        again = load_judged(entry.root, out_dir, judged_key(stack))
+        again, changed = load_judged(entry.root, out_dir, judged_key(stack))
         if again is not None:
             return outcome_from_record(stack, meta, pixels, again[0], again[1], cached=True, out_dir=out_dir,
                                        cache_key=key)
-        changed = changed_outputs(entry.root, out_dir, judged_key(stack))
         if changed:  # a tile changed by hand since it was written is the user's now: never replaced
             raise InputError(changed_words(changed))
         # the tile was cut from the maps turned by the turn found (made above when the tile was made)
