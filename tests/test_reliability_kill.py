@@ -31,7 +31,8 @@ from runchecks import PLUMBING
 from test_reliability_inputs import hashes, image_size
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_assets"
-ITERATIONS = 6  # tiny preset checkpoints every 2 iterations: a kill at the first checkpoint is mid-training
+ITERATIONS = 12  # tiny preset checkpoints every 2 iterations: a kill at the first checkpoint is mid-training, with
+#               ten iterations to spare (at 6 a busy machine finished training before the kill landed)
 ARGS = (*PLUMBING, "--iterations", str(ITERATIONS), "--max-size", "112")
 
 
